@@ -1,0 +1,170 @@
+"""Options and helpers shared by the CLI command groups."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..core import TIRE_FIELDS, OperatingPoint, TireParameters, build_model, validate
+from ..core.parameters import ParameterError, operating_point_problems, tire_problems
+
+
+class CliError(Exception):
+    """A problem with the command line the user can fix; printed as one line."""
+
+
+@dataclass
+class Output:
+    """What a command produced: text for a terminal, data for --json, files written."""
+
+    text: str = ""
+    data: Any = None
+    written: list[Path] = field(default_factory=list)
+
+
+def to_jsonable(value: Any) -> Any:
+    """Plain JSON types; nan and inf become null (JSON has neither)."""
+    if isinstance(value, dict):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [to_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return to_jsonable(value.tolist())
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        number = float(value)
+        return number if math.isfinite(number) else None
+    if isinstance(value, (np.bool_,)):
+        return bool(value)
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
+    parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
+    if plot:
+        parser.add_argument("--plot", metavar="FILE", type=Path,
+                            help="write a figure (format from the extension: .png, .pdf, .svg)")
+
+
+def add_tire_options(parser: argparse.ArgumentParser) -> None:
+    names = ", ".join(f"{name} [{spec.unit}]" for name, spec in TIRE_FIELDS.items())
+    parser.add_argument(
+        "--tire", metavar="NAME=VALUE", action="append", default=[],
+        help=f"override a tire parameter (repeatable); defaults are the GL073A tire. Names: {names}",
+    )
+    parser.add_argument("--inflation-pressure", metavar="PA", type=float,
+                        help="inflation pressure in Pa (default 7.9e5)")
+
+
+def add_mesh_option(parser: argparse.ArgumentParser, default: int = 100) -> None:
+    parser.add_argument("--elements", metavar="N", type=int, default=default,
+                        help=f"number of elements around the ring (default {default})")
+
+
+def add_contact_options(parser: argparse.ArgumentParser, default_text: str) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--patch-length", metavar="M", type=float,
+                       help=f"contact patch length in m ({default_text})")
+    group.add_argument("--load", metavar="N", type=float,
+                       help="static vertical load in N; the patch length is computed from it")
+
+
+def add_speed_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
+                        help="forward speed in m/s (default 0; spin = speed / R)")
+    parser.add_argument("--allow-supercritical", action="store_true",
+                        help="run at or above the mesh's critical (standing-wave) speed")
+
+
+def parse_tire_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    values: dict[str, Any] = {}
+    for item in getattr(args, "tire", []) or []:
+        name, sep, text = item.partition("=")
+        if not sep:
+            raise CliError(f"--tire {item!r}: expected NAME=VALUE, e.g. --tire k_r1=7e6")
+        try:
+            values[name.strip()] = float(text)
+        except ValueError:
+            values[name.strip()] = text  # validation names it with its allowed range
+    if getattr(args, "inflation_pressure", None) is not None:
+        values["inflation_pressure"] = args.inflation_pressure
+    return values
+
+
+def tire_from_args(args: argparse.Namespace) -> TireParameters:
+    values = parse_tire_overrides(args)
+    problems = tire_problems(values)
+    if problems:
+        raise ParameterError(problems)
+    return TireParameters(**values)
+
+
+def operating_point_values(args: argparse.Namespace, undeformed_default: bool) -> dict[str, Any]:
+    values: dict[str, Any] = {"n_elements": getattr(args, "elements", 100)}
+    if getattr(args, "load", None) is not None:
+        values["load_n"] = args.load
+    elif getattr(args, "patch_length", None) is not None:
+        values["patch_length_m"] = args.patch_length
+    elif undeformed_default:
+        values["patch_length_m"] = 0.0
+    if getattr(args, "speed", None) is not None:
+        values["speed_m_s"] = args.speed
+    if getattr(args, "allow_supercritical", False):
+        values["allow_supercritical"] = True
+    return values
+
+
+def model_from_args(args: argparse.Namespace, undeformed_default: bool = True):
+    """Tire data and operating point from the options, every problem reported at once."""
+    tire_values = parse_tire_overrides(args)
+    op_values = operating_point_values(args, undeformed_default)
+    tire, op = validate(tire_values, op_values)
+    return build_model(tire, op)
+
+
+def check_operating_point(values: dict[str, Any], tire: TireParameters) -> OperatingPoint:
+    problems = operating_point_problems(values, tire)
+    if problems:
+        raise ParameterError(problems)
+    return OperatingPoint(**values)
+
+
+def write_plot(args: argparse.Namespace, output: Output, draw: Callable[[Path], Path]) -> None:
+    """Call ``draw(path)`` when --plot was given and record the file."""
+    path = getattr(args, "plot", None)
+    if path is None:
+        return
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as error:
+        raise CliError("--plot needs matplotlib: pip install 'tire_fmu[plot]'") from error
+    if path.parent and not path.parent.exists():
+        raise CliError(f"--plot {path}: folder {path.parent} does not exist")
+    output.written.append(draw(path))
+
+
+def table(rows: list[list[Any]], header: list[str]) -> str:
+    """A plain aligned text table."""
+    text_rows = [[_cell(v) for v in row] for row in rows]
+    widths = [max(len(h), *(len(r[i]) for r in text_rows)) if text_rows else len(h)
+              for i, h in enumerate(header)]
+    lines = ["  ".join(h.rjust(w) for h, w in zip(header, widths)),
+             "  ".join("-" * w for w in widths)]
+    lines += ["  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in text_rows]
+    return "\n".join(lines)
+
+
+def _cell(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, (float, np.floating)):
+        return f"{value:.4g}" if abs(value) < 1e5 else f"{value:.4e}"
+    return str(value)

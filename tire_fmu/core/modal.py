@@ -1,0 +1,210 @@
+"""Real modal analysis of the tire at rest: frequencies, shapes, damping and mode labels.
+
+At V = 0 the model is symmetric about the patch centre (θ -> -θ), so the problem splits exactly
+into a symmetric and an antisymmetric subspace (cos nθ- and sin nθ-like shapes about the
+contact centre). Each subspace is solved on its own, which gives every mode a clean symmetry
+label even for the undeformed tire, where cos and sin partners are degenerate.
+
+Labels follow each mode continuously from the undeformed tire: adding the patch stiffness only
+adds a positive semi-definite term, and within one symmetry class eigenvalues of a one-parameter
+symmetric family do not cross, so the i-th mode of a class descends from the i-th undeformed
+mode of that class, whose order n and in/out-of-phase branch are known exactly from the FDM
+symbols. The dominant Fourier harmonic alone would be ambiguous: the patch mixes neighbouring
+orders. The same monotonicity bounds how many modes lie below a frequency, which sizes the
+sparse shift-invert solve for large meshes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .analytic import two_mass_eigenvalues
+from .dispersion import per_order_matrices, order_symbols
+from .discretisation import Grid
+from .model import TireModel
+
+#: Above this many DOFs per symmetry class the sparse shift-invert solver is the default.
+DENSE_CLASS_LIMIT = 1200
+
+SYMMETRIC, ANTISYMMETRIC = "symmetric", "antisymmetric"
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One mode's labels and scalars (shape lives in :class:`ModalResult`)."""
+
+    frequency_hz: float
+    order: int
+    phase: str  # "in" or "out": tread and sidewall moving together or against each other
+    symmetry: str | None  # about the patch centre; None when rolling
+    damping_ratio: float
+    direction: str | None = None  # rolling only: "forward" (with the rotation) or "backward"
+    body_frequency_hz: float | None = None  # rolling, undeformed: co-rotating-frame frequency
+
+    def to_dict(self) -> dict:
+        out = {
+            "frequency_hz": self.frequency_hz,
+            "order": self.order,
+            "phase": self.phase,
+            "symmetry": self.symmetry,
+            "damping_ratio": self.damping_ratio,
+        }
+        if self.direction is not None or self.body_frequency_hz is not None:
+            out["direction"] = self.direction
+            out["body_frequency_hz"] = self.body_frequency_hz
+        return out
+
+
+@dataclass(frozen=True, eq=False)
+class ModalResult:
+    """Modes of one model, ascending in frequency. ``shapes[:, i]`` is mode i on the 2N DOFs
+    (tread then sidewall), mass-normalised; complex when rolling."""
+
+    modes: tuple[Mode, ...]
+    shapes: np.ndarray
+    grid: Grid
+    model_summary: dict = field(default_factory=dict)
+    eigenvalues: np.ndarray | None = None  # state-space eigenvalues s (rolling analysis)
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        return np.array([m.frequency_hz for m in self.modes])
+
+    @property
+    def damping_ratios(self) -> np.ndarray:
+        return np.array([m.damping_ratio for m in self.modes])
+
+    @property
+    def orders(self) -> np.ndarray:
+        return np.array([m.order for m in self.modes], dtype=int)
+
+    def tread(self, index: int) -> np.ndarray:
+        return self.shapes[: self.grid.n_elements, index]
+
+    def sidewall(self, index: int) -> np.ndarray:
+        return self.shapes[self.grid.n_elements :, index]
+
+    def select(self, *, order: int | None = None, phase: str | None = None,
+               symmetry: str | None = None) -> list[int]:
+        """Indices of the modes matching every label given."""
+        return [
+            i for i, m in enumerate(self.modes)
+            if (order is None or m.order == order)
+            and (phase is None or m.phase == phase)
+            and (symmetry is None or m.symmetry == symmetry)
+        ]
+
+    def to_dict(self) -> dict:
+        return {**self.model_summary, "modes": [m.to_dict() for m in self.modes]}
+
+
+def symmetry_bases(grid: Grid) -> dict[str, sp.csr_matrix]:
+    """Orthonormal bases (2N × k) of the DOF vectors even / odd under θ -> -θ."""
+    n = grid.n_elements
+    mirror = grid.mirror_index
+    bases = {}
+    for name, sign in ((SYMMETRIC, 1.0), (ANTISYMMETRIC, -1.0)):
+        rows, cols, vals = [], [], []
+        column = 0
+        for offset in (0, n):  # tread block, then sidewall block
+            for j in range(n):
+                partner = mirror[j]
+                if partner < j:
+                    continue
+                if partner == j:  # node on the symmetry axis: only even vectors live there
+                    if sign > 0:
+                        rows.append(offset + j)
+                        cols.append(column)
+                        vals.append(1.0)
+                        column += 1
+                    continue
+                rows += [offset + j, offset + partner]
+                cols += [column, column]
+                vals += [np.sqrt(0.5), sign * np.sqrt(0.5)]
+                column += 1
+        bases[name] = sp.csr_matrix((vals, (rows, cols)), shape=(2 * n, column))
+    return bases
+
+
+def undeformed_class_labels(model: TireModel) -> dict[str, list[tuple[float, int, str]]]:
+    """(frequency, order, branch) of every undeformed mode in each symmetry class, ascending.
+
+    The symmetric class holds cos nθ for 0 <= n <= N/2, the antisymmetric class sin nθ for
+    0 < n < N/2; each order has an in-phase and an out-of-phase member.
+    """
+    n_el = model.n_elements
+    orders = np.arange(0, n_el // 2 + 1)
+    tire = model.tire
+    sym = order_symbols(orders, n_el)
+    (k_tt, k_ss, k_ts), _ = per_order_matrices(tire, sym, 0.0)
+    low, high = two_mass_eigenvalues(k_tt, k_ss, k_ts, tire.rhoA, tire.m_s)
+    labels: dict[str, list[tuple[float, int, str]]] = {SYMMETRIC: [], ANTISYMMETRIC: []}
+    for n, lo, hi in zip(orders, low, high):
+        classes = [SYMMETRIC]
+        if 0 < n and 2 * n != n_el:
+            classes.append(ANTISYMMETRIC)
+        for name in classes:
+            labels[name] += [(float(np.sqrt(lo)), int(n), "in"), (float(np.sqrt(hi)), int(n), "out")]
+    for name in labels:
+        labels[name].sort()
+    return labels
+
+
+def _class_eigen(stiffness, mass_diag, count, method):
+    """Lowest ``count`` eigenpairs of (K, diag(m)); dense or sparse shift-invert."""
+    size = stiffness.shape[0]
+    if method == "dense" or (method == "auto" and size <= DENSE_CLASS_LIMIT) or count >= size - 1:
+        values, vectors = sla.eigh(stiffness.toarray(), np.diag(mass_diag),
+                                   subset_by_index=[0, min(count, size) - 1])
+        return values, vectors
+    values, vectors = spla.eigsh(stiffness.tocsc(), k=count, M=sp.diags(mass_diag).tocsc(),
+                                 sigma=0.0, which="LM")
+    order = np.argsort(values)
+    return values[order], vectors[:, order]
+
+
+def real_modes(model: TireModel, fmax_hz: float | None = None, method: str = "auto") -> ModalResult:
+    """Modes of the tire at rest, up to ``fmax_hz`` (all modes when None), ascending.
+
+    ``method``: "dense" (LAPACK), "sparse" (ARPACK shift-invert around 0) or "auto".
+    """
+    if model.speed_m_s != 0.0:
+        raise ValueError("real_modes is for V = 0; use complex_modes for a rolling tire")
+    if method not in ("auto", "dense", "sparse"):
+        raise ValueError(f"method = {method!r}: must be 'auto', 'dense' or 'sparse'")
+    stiffness = model.stiffness
+    damping = model.damping
+    mass_diag = model.mass.diagonal()
+    loaded = model.patch.in_contact
+    labels = undeformed_class_labels(model)
+    found = []
+    for name, basis in symmetry_bases(model.grid).items():
+        reference = labels[name]
+        if fmax_hz is None:
+            count = len(reference)
+        else:
+            # Contact only raises eigenvalues: the undeformed count below fmax bounds ours.
+            count = sum(1 for w, _, _ in reference if w <= 2 * np.pi * fmax_hz * (1 + 1e-9))
+        if count == 0:
+            continue
+        k_class = (basis.T @ stiffness @ basis).tocsr()
+        m_class = basis.multiply(basis).T @ mass_diag  # BᵀMB is diagonal: pairs share a mass
+        values, vectors = _class_eigen(k_class, m_class, count, method)
+        shapes = basis @ vectors
+        for rank, (value, shape) in enumerate(zip(values, shapes.T)):
+            omega = float(np.sqrt(max(value, 0.0)))
+            _, order, branch = reference[rank]
+            zeta = float(shape @ (damping @ shape)) / (2.0 * omega) if omega > 0 else np.nan
+            mode = Mode(omega / (2 * np.pi), order, branch, name if loaded else None, zeta)
+            found.append((mode, shape))
+    found.sort(key=lambda item: item[0].frequency_hz)
+    if fmax_hz is not None:
+        found = [item for item in found if item[0].frequency_hz <= fmax_hz]
+    modes = tuple(m for m, _ in found)
+    shapes = np.column_stack([s for _, s in found]) if found else np.zeros((model.n_dof, 0))
+    return ModalResult(modes, shapes, model.grid, model.summary())
