@@ -8,14 +8,13 @@ Modules, in the order they build on each other:
 - :mod:`.contact`: patch weights, load-patch geometry, road delays
 - :mod:`.rotation`: ground-frame rolling terms
 - :mod:`.model`: assembly at an operating point, static vertical stiffness
-- :mod:`.dispersion`, :mod:`.critical_speed`: undeformed rolling ring per order
+- :mod:`.dispersion`, :mod:`.standing_waves`: undeformed rolling ring per order
 - :mod:`.modal`, :mod:`.complex_modal`: modal analysis and mode labels
 """
 
 from .analytic import AnalyticModes, analytic_modes
 from .complex_modal import complex_modes, modal_analysis
-from .critical_speed import CriticalSpeed, critical_speed
-from .dispersion import Dispersion, dispersion
+from .dispersion import Dispersion, dispersion_relation
 from .modal import ModalResult, Mode, real_modes
 from .model import SupercriticalSpeedWarning, TireModel, build_model, undeformed
 from .parameters import (
@@ -26,6 +25,7 @@ from .parameters import (
     TireParameters,
     validate,
 )
+from .standing_waves import CriticalSpeed, critical_speed
 
 __all__ = [
     "AnalyticModes",
@@ -44,7 +44,7 @@ __all__ = [
     "build_model",
     "complex_modes",
     "critical_speed",
-    "dispersion",
+    "dispersion_relation",
     "modal_analysis",
     "real_modes",
     "undeformed",

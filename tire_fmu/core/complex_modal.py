@@ -96,7 +96,9 @@ def complex_modes(model: TireModel, fmax_hz: float | None = None) -> ModalResult
     return ModalResult(tuple(modes), shapes_array, model.grid, model.summary(), values)
 
 
-def modal_analysis(model: TireModel, fmax_hz: float | None = None, method: str = "auto") -> ModalResult:
+def modal_analysis(
+    model: TireModel, fmax_hz: float | None = None, method: str = "auto"
+) -> ModalResult:
     """Real modes at rest (with symmetry labels), complex modes when rolling."""
     from .modal import real_modes
 

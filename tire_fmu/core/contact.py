@@ -23,8 +23,9 @@ from .discretisation import Grid
 def patch_weights(grid: Grid, patch_length_m: float) -> np.ndarray:
     """Fraction of each node's arc inside the patch (0..1), symmetric about node 0."""
     half_angle = 0.5 * patch_length_m / grid.radius_m
-    lo = grid.theta - 0.5 * grid.dtheta
-    hi = grid.theta + 0.5 * grid.dtheta
+    distance = np.abs(grid.theta)  # |θ| makes the weights exactly mirror-symmetric
+    lo = distance - 0.5 * grid.dtheta
+    hi = distance + 0.5 * grid.dtheta
     overlap = np.minimum(hi, half_angle) - np.maximum(lo, -half_angle)
     return np.clip(overlap / grid.dtheta, 0.0, 1.0)
 

@@ -40,8 +40,9 @@ class Grid:
     @cached_property
     def theta(self) -> np.ndarray:
         """Node angles from the contact centre, wrapped to (-π, π]."""
-        raw = np.arange(self.n_elements) * self.dtheta
-        return np.where(raw > np.pi + 1e-12, raw - 2.0 * np.pi, raw)
+        # j·δθ for j <= N/2 and -(N - j)·δθ beyond, so mirror nodes are exact negatives
+        j = np.arange(self.n_elements)
+        return np.where(2 * j <= self.n_elements, j, j - self.n_elements) * self.dtheta
 
     @cached_property
     def mirror_index(self) -> np.ndarray:

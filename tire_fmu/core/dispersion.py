@@ -106,7 +106,9 @@ class Dispersion:
         }
 
 
-def dispersion(tire: TireParameters, orders, spin_rad_s: float, n_elements=None) -> Dispersion:
+def dispersion_relation(
+    tire: TireParameters, orders, spin_rad_s: float, n_elements=None
+) -> Dispersion:
     """Undamped ground-frame dispersion ω(n) = ω_b(|n|, Ω) - κ_n Ω of the undeformed ring."""
     n = np.asarray(orders, dtype=int)
     low, high = body_frequencies(tire, np.abs(n), spin_rad_s, n_elements)

@@ -24,8 +24,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .analytic import two_mass_eigenvalues
-from .dispersion import per_order_matrices, order_symbols
 from .discretisation import Grid
+from .dispersion import order_symbols, per_order_matrices
 from .model import TireModel
 
 #: Above this many DOFs per symmetry class the sparse shift-invert solver is the default.
@@ -149,7 +149,8 @@ def undeformed_class_labels(model: TireModel) -> dict[str, list[tuple[float, int
         if 0 < n and 2 * n != n_el:
             classes.append(ANTISYMMETRIC)
         for name in classes:
-            labels[name] += [(float(np.sqrt(lo)), int(n), "in"), (float(np.sqrt(hi)), int(n), "out")]
+            labels[name] += [(float(np.sqrt(lo)), int(n), "in"),
+                             (float(np.sqrt(hi)), int(n), "out")]
     for name in labels:
         labels[name].sort()
     return labels

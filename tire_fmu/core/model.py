@@ -60,14 +60,17 @@ class StructuralMatrices:
 
     @property
     def stiffness(self) -> sp.csr_matrix:
-        return (self.stiffness_at_rest + self.tension_stiffness_from_spin + self.rolling.stiffness).tocsr()
+        total = self.stiffness_at_rest + self.tension_stiffness_from_spin + self.rolling.stiffness
+        return total.tocsr()
 
     @property
     def damping(self) -> sp.csr_matrix:
         return (self.material_damping + self.rolling.gyroscopic).tocsr()
 
 
-def structural_matrices(tire: TireParameters, grid: Grid, spin_rad_s: float = 0.0) -> StructuralMatrices:
+def structural_matrices(
+    tire: TireParameters, grid: Grid, spin_rad_s: float = 0.0
+) -> StructuralMatrices:
     """Mass, stiffness and damping of tread + sidewall (no contact), node-scaled."""
     n = grid.n_elements
     ops = RingOperators(grid)
@@ -240,7 +243,7 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
     ``op.allow_supercritical``, a speed at or above the mesh's critical speed; warns
     (SupercriticalSpeedWarning) above 80 % of it.
     """
-    from .critical_speed import critical_speed  # rolling module builds on this one
+    from .standing_waves import critical_speed  # rolling module builds on this one
 
     tire = tire or TireParameters()
     op = op or OperatingPoint()

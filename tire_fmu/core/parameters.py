@@ -13,8 +13,9 @@ ranges live in one place.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
-from typing import Any, Mapping
+from typing import Any
 
 GRAVITY_M_S2 = 9.80665
 QUARTER_CAR_MASS_KG = 2500.0 + 320.0

@@ -1,0 +1,206 @@
+"""The assembled FDM ring against the closed-form ring, and the contact patch."""
+
+import numpy as np
+import pytest
+
+from tire_fmu.core import (
+    OperatingPoint,
+    analytic_modes,
+    build_model,
+    real_modes,
+    undeformed,
+)
+from tire_fmu.core.contact import (
+    deflection_from_patch_length,
+    patch_length_from_deflection,
+    patch_weights,
+)
+from tire_fmu.core.discretisation import Grid
+
+ORDERS = np.arange(0, 11)
+
+
+def fdm_frequencies(tire, n_elements, orders=ORDERS):
+    """FDM (in-phase, out-of-phase) frequency per order, read off the assembled model."""
+    model = build_model(tire, OperatingPoint(n_elements=n_elements, patch_length_m=0.0))
+    result = real_modes(model, fmax_hz=400.0)
+    out = {}
+    for phase in ("in", "out"):
+        out[phase] = np.array([result.frequencies_hz[result.select(order=int(n), phase=phase)[0]]
+                               for n in orders])
+    return out
+
+
+def test_analytic_roots_solve_eq12(tire):
+    modes = analytic_modes(tire, ORDERS)
+    a = tire.EI * ORDERS**4 / tire.R**4 + tire.inflation_pressure * tire.b * ORDERS**2 / tire.R \
+        + tire.k_r1
+    for hz in (modes.in_phase_hz, modes.out_of_phase_hz):
+        w2 = (2 * np.pi * hz) ** 2
+        det = (a - tire.rhoA * w2) * (tire.k_r1 + tire.k_r2 - tire.m_s * w2) - tire.k_r1**2
+        assert np.all(np.abs(det) <= 1e-9 * a * (tire.k_r1 + tire.k_r2))
+    assert np.all(modes.in_phase_ratio > 0) and np.all(modes.out_of_phase_ratio < 0)
+
+
+def test_analytic_table_matches_the_design_reference(tire):
+    # Reference values of the design brief (exact roots of eq. 12, default data).
+    orders = [0, 1, 2, 3, 4, 5, 6, 8, 10, 12]
+    ref_in = [53.41, 57.43, 67.95, 82.18, 97.91, 113.54, 127.67, 147.45, 156.77, 161.03]
+    ref_out = [184.20, 184.48, 185.37, 187.03, 189.80, 194.23, 201.18, 225.64, 262.54, 306.11]
+    modes = analytic_modes(tire, orders)
+    np.testing.assert_allclose(modes.in_phase_hz, ref_in, atol=0.006)
+    np.testing.assert_allclose(modes.out_of_phase_hz, ref_out, atol=0.006)
+
+
+def test_fdm_converges_at_second_order_in_dtheta(tire):
+    exact = analytic_modes(tire, ORDERS)
+    coarse, fine = fdm_frequencies(tire, 100), fdm_frequencies(tire, 200)
+    for phase, ref in (("in", exact.in_phase_hz), ("out", exact.out_of_phase_hz)):
+        err_coarse = np.abs(coarse[phase] - ref)[1:]  # n = 0 is exact on any grid
+        err_fine = np.abs(fine[phase] - ref)[1:]
+        rate = np.log2(err_coarse / err_fine)
+        np.testing.assert_allclose(rate, 2.0, atol=0.05)
+    # n = 0 has no θ-derivatives: exact to rounding on every mesh
+    assert coarse["in"][0] == pytest.approx(exact.in_phase_hz[0], rel=1e-12)
+
+
+def test_fdm_at_400_elements_within_half_a_percent(tire):
+    exact = analytic_modes(tire, ORDERS)
+    fdm = fdm_frequencies(tire, 400)
+    assert np.max(np.abs(fdm["in"] / exact.in_phase_hz - 1)) < 0.005
+    assert np.max(np.abs(fdm["out"] / exact.out_of_phase_hz - 1)) < 0.005
+
+
+def test_undeformed_modes_are_degenerate_pairs_with_clean_symmetry(tire):
+    result = real_modes(build_model(tire, OperatingPoint(n_elements=60, patch_length_m=0.0)),
+                        fmax_hz=150)
+    for n in range(1, 6):
+        pair = result.select(order=n, phase="in")
+        assert len(pair) == 2
+        assert result.frequencies_hz[pair[0]] == pytest.approx(result.frequencies_hz[pair[1]],
+                                                               rel=1e-10)
+    # in-phase: tread and sidewall move the same way
+    i = result.select(order=3, phase="in")[0]
+    assert result.tread(i) @ result.sidewall(i) > 0
+
+
+def test_patch_splits_pairs_symmetric_member_rises_most(tire):
+    loaded = real_modes(build_model(tire, OperatingPoint(n_elements=100, patch_length_m=0.204)),
+                        fmax_hz=200)
+    free = analytic_modes(tire, [2, 3, 4])
+    free_fdm = fdm_frequencies(tire, 100, orders=[2, 3, 4])["in"]
+    rises_sym = []
+    for k, n in enumerate([2, 3, 4]):
+        [sym] = loaded.select(order=n, phase="in", symmetry="symmetric")
+        [anti] = loaded.select(order=n, phase="in", symmetry="antisymmetric")
+        rise_sym = loaded.frequencies_hz[sym] / free_fdm[k] - 1
+        rise_anti = loaded.frequencies_hz[anti] / free_fdm[k] - 1
+        assert 0.09 <= rise_sym <= 0.13, (n, rise_sym)
+        assert 0.01 <= rise_anti <= 0.03, (n, rise_anti)
+        rises_sym.append(rise_sym)
+        # the symmetric member is cos nθ-like: an antinode at the patch centre when free,
+        # the antisymmetric one a node there (Kindt's "extr" and "0")
+        assert abs(loaded.tread(anti)[0]) < 1e-12 * np.abs(loaded.tread(anti)).max() + 1e-15
+        assert free.in_phase_hz[k] > 0
+    assert rises_sym[2] < rises_sym[1]  # the stiffened member's rise falls off for higher n
+
+
+def test_patch_weights_are_fractional_and_sum_to_the_patch(tire):
+    grid = Grid(100, tire.R)
+    for length in (0.0, 0.01, 0.05, 0.204, 0.333):
+        weights = patch_weights(grid, length)
+        assert np.all((weights >= 0) & (weights <= 1))
+        assert weights.sum() * grid.node_arc_m == pytest.approx(length, abs=1e-12)
+        np.testing.assert_array_equal(weights, weights[grid.mirror_index])
+    assert np.count_nonzero(patch_weights(grid, 0.204) > 0.99) == 5  # the paper's 5 nodes
+
+
+def test_frequencies_vary_continuously_with_patch_length(tire):
+    def symmetric_n2(length):
+        r = real_modes(build_model(tire, OperatingPoint(n_elements=100, patch_length_m=length)),
+                       fmax_hz=80)
+        return r.frequencies_hz[r.select(order=2, phase="in", symmetry="symmetric")[0]]
+
+    node = 2 * np.pi * tire.R / 100  # 4.08 cm
+    # whole-node patches of 3 and 5 nodes: the staircase step a node-count patch would take
+    staircase_step = symmetric_n2(5 * node) - symmetric_n2(3 * node)
+    freqs = np.array([symmetric_n2(x) for x in np.linspace(3 * node, 5 * node, 17)])
+    steps = np.diff(freqs)
+    assert np.all(steps > 0)  # stiffer with every millimetre, no plateaus
+    # A near-rigid k_cw makes a node bite hard as soon as it enters, so the curve has kinks
+    # there, but no node-sized jumps: continuous at the entry, and each 2.5 mm step well
+    # below the staircase step.
+    assert steps.max() < 0.4 * staircase_step
+    entry = 3 * node
+    assert symmetric_n2(entry + 1e-4) - symmetric_n2(entry) < 0.05 * staircase_step
+
+
+def test_vertical_stiffness_grows_with_patch_length(tire):
+    lengths = [0.02, 0.05, 0.1, 0.2, 0.3, 0.4]
+    k_v = [build_model(tire, OperatingPoint(patch_length_m=x)).static_vertical_stiffness_n_per_m
+           for x in lengths]
+    assert np.all(np.diff(k_v) > 0)
+    assert 1e6 < k_v[3] < 3e6  # N/m: a plausible truck tire
+
+
+def test_load_and_patch_length_round_trip(tire):
+    by_load = build_model(tire, OperatingPoint(load_n=27_700.0))
+    assert by_load.patch.load_n == pytest.approx(27_700.0, rel=1e-9)
+    by_patch = build_model(tire, OperatingPoint(patch_length_m=by_load.patch.length_m))
+    assert by_patch.patch.load_n == pytest.approx(27_700.0, rel=1e-9)
+    assert by_patch.patch.deflection_m == pytest.approx(by_load.patch.deflection_m, rel=1e-12)
+    # the secant relation: load = vertical stiffness x chord deflection
+    p = by_load.patch
+    assert p.load_n == pytest.approx(p.vertical_stiffness_n_per_m * p.deflection_m, rel=1e-12)
+    assert patch_length_from_deflection(tire.R, deflection_from_patch_length(tire.R, 0.3)) == \
+        pytest.approx(0.3, rel=1e-12)
+
+
+def test_vertical_stiffness_is_the_rim_force_per_rim_travel(tire):
+    model = build_model(tire, OperatingPoint(patch_length_m=0.25))
+    t = model.translation
+    z_rim = -1e-3  # rim 1 mm down, road fixed
+    u = np.linalg.solve(model.stiffness.toarray(), model.structure.stiffness @ (t * z_rim))
+    rim_force = t @ (model.structure.stiffness @ (u - t * z_rim))
+    contact_force = -(t @ (model.contact_stiffness @ u))
+    assert rim_force == pytest.approx(-model.static_vertical_stiffness_n_per_m * z_rim, rel=1e-9)
+    assert contact_force == pytest.approx(rim_force, rel=1e-9)  # statics: what goes in comes out
+
+
+@pytest.mark.parametrize("speed", [0.0, 25.0])
+def test_rim_and_road_moving_together_change_no_force(tire, speed):
+    model = build_model(tire, OperatingPoint(patch_length_m=0.204, speed_m_s=speed))
+    t = model.translation
+    z = 0.01
+    k_s, k_c = model.structure.stiffness, model.contact_stiffness
+    # static: internal forces on u - T z_rim, contact forces on u - T z_road
+    u = np.linalg.solve(model.stiffness.toarray(), k_s @ (t * z) + k_c @ (t * z))
+    np.testing.assert_allclose(u, t * z, atol=1e-12 * z)
+    assert np.abs(k_s @ (u - t * z)).max() < 1e-6
+    assert np.abs(k_c @ (u - t * z)).max() < 1e-6
+    # whereas an absolute coupling (K on u, rim ignored) would feel a spurious spring
+    spurious = t @ (k_s @ t)
+    assert spurious > 1e5
+
+
+def test_sparse_shift_invert_matches_dense(tire):
+    model = build_model(tire, OperatingPoint(n_elements=200, patch_length_m=0.204))
+    dense = real_modes(model, fmax_hz=250, method="dense")
+    sparse = real_modes(model, fmax_hz=250, method="sparse")
+    np.testing.assert_allclose(sparse.frequencies_hz, dense.frequencies_hz, rtol=1e-9)
+    assert [m.order for m in sparse.modes] == [m.order for m in dense.modes]
+
+
+def test_damping_ratio_is_proportional_damping(tire):
+    model = build_model(tire, OperatingPoint(n_elements=80, patch_length_m=0.204))
+    result = real_modes(model, fmax_hz=300)
+    omega = 2 * np.pi * result.frequencies_hz
+    np.testing.assert_allclose(result.damping_ratios,
+                               tire.alpha / (2 * omega) + tire.beta * omega / 2, rtol=1e-9)
+
+
+def test_undeformed_helper_drops_the_patch(tire):
+    model = build_model(tire, OperatingPoint(patch_length_m=0.2))
+    bare = undeformed(model)
+    assert bare.patch.length_m == 0 and bare.contact_stiffness.nnz == 0 or \
+        not bare.contact_stiffness.diagonal().any()
