@@ -54,8 +54,267 @@ def plot_mode_shapes(result, path: Path, max_modes: int = 12, scale: float = 0.2
         ax.set_title(f"{m.frequency_hz:.1f} Hz  n={m.order} {m.phase} {label}".strip(),
                      fontsize=9)
     axes.ravel()[0].legend(loc="upper left", fontsize=7, bbox_to_anchor=(-0.15, 1.15))
+    summary = result.model_summary or {}
+    fig.suptitle(
+        f"Mode shapes (radial, real part; contact centre θ = 0 at the bottom): "
+        f"N = {result.grid.n_elements}, patch length "
+        f"{summary.get('patch_length_m', 0.0) * 100:.3g} cm, "
+        f"speed {summary.get('speed_m_s', 0.0):g} m/s",
+        fontsize=11,
+    )
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+# --------------------------------------------------------------------------------------------
+# Study figures. Each takes a result object from :mod:`tire_fmu.core.studies` (or the core's
+# dispersion and modal results) and writes one file; colours follow the order |n| throughout.
+
+
+def _order_colours(plt, orders):
+    top = max(int(np.max(np.abs(orders))), 1)
+    cmap = plt.get_cmap("viridis")
+    return lambda n: cmap(0.9 * abs(int(n)) / top)
+
+
+def _order_colourbar(plt, fig, ax, top: int) -> None:
+    from matplotlib.colors import Normalize
+
+    # Same mapping as _order_colours: |n| -> viridis(0.9 |n| / top).
+    mappable = plt.cm.ScalarMappable(norm=Normalize(0.0, top / 0.9), cmap="viridis")
+    bar = fig.colorbar(mappable, ax=ax, pad=0.01, fraction=0.04)
+    bar.set_ticks(range(0, top + 1))
+    bar.ax.set_ylim(0, top)
+    bar.set_label("order |n|")
+
+
+def _save(fig, plt, path) -> Path:
+    path = Path(path)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def _span(values) -> str:
+    values = np.asarray(values)
+    low, high = values.min(), values.max()
+    return f"{low:g}" if low == high else f"{low:g}-{high:g}"
+
+
+def plot_convergence(result, path: Path) -> Path:
+    """The paper's Fig. 14: FDM frequencies against N with the exact roots as horizontal lines
+    (in-phase, out-of-phase), and the relative error on log-log axes with a δθ² guide."""
+    plt = _pyplot()
+    colour = _order_colours(plt, result.orders)
+    counts = result.element_counts
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5))
+    for ax, phase, name in zip(axes[:2], ("in", "out"), ("in-phase", "out-of-phase")):
+        fdm, exact = result.frequencies_hz(phase), result.exact_hz(phase)
+        for j, n in enumerate(result.orders):
+            ax.axhline(exact[j], color=colour(n), lw=0.8, ls=":")
+            ax.plot(counts, fdm[:, j], "o-", color=colour(n), ms=3.5, lw=1.2, label=f"n = {n}")
+        ax.set_xscale("log")
+        ax.set_xticks(counts, [str(c) for c in counts], fontsize=8)
+        ax.minorticks_off()
+        ax.set_xlabel("number of elements N")
+        ax.set_ylabel("natural frequency [Hz]")
+        ax.set_title(f"{name}: FDM (o) and exact eq. 12 (dotted)", fontsize=10)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=2, loc="lower right")
+    ax = axes[2]
+    for phase, style in (("in", "o-"), ("out", "s--")):
+        error = np.abs(result.relative_error(phase)) * 100.0
+        for j, n in enumerate(result.orders):
+            shown = np.isfinite(error[:, j]) & (error[:, j] > 1e-9)
+            if shown.any():
+                ax.loglog(counts[shown], error[shown, j], style, color=colour(n), ms=3, lw=1)
+    # δθ² guide drawn above every curve, anchored at the finest mesh's largest error.
+    finest = np.nanmax(np.abs(np.r_[result.relative_error("in")[-1],
+                                    result.relative_error("out")[-1]])) * 100.0
+    if np.isfinite(finest) and finest > 0:
+        guide = 3.0 * finest * (counts[-1] / counts.astype(float)) ** 2
+        ax.loglog(counts, guide, "k-", lw=2.2, alpha=0.6, label="slope 2 in δθ (∝ N⁻²)")
+    ax.plot([], [], "o-", color="0.4", label="in-phase")
+    ax.plot([], [], "s--", color="0.4", label="out-of-phase")
+    slopes = [s for p in ("in", "out") for s in result.convergence_order(p) if np.isfinite(s)]
+    if slopes:
+        ax.text(0.03, 0.03, f"observed order {min(slopes):.2f}-{max(slopes):.2f}",
+                transform=ax.transAxes, fontsize=9)
+    ax.set_xticks(counts, [str(c) for c in counts], fontsize=8)
+    ax.minorticks_off()
+    ax.set_xlabel("number of elements N")
+    ax.set_ylabel("|FDM - exact| / exact [%]")
+    ax.set_title("relative error", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle(
+        f"FDM convergence, undeformed tire at rest (N = {_span(counts)}, "
+        f"patch length 0 cm, speed 0 m/s, orders n = {_span(result.orders)})"
+    )
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def plot_patch_sweep(result, path: Path) -> Path:
+    """The paper's Fig. 17: rise of each split member over the undeformed tire against patch
+    length; symmetric (antinode at the patch centre) solid, antisymmetric (node there) dashed."""
+    plt = _pyplot()
+    colour = _order_colours(plt, result.orders)
+    phases = result.phases
+    fig, axes = plt.subplots(1, len(phases), figsize=(7.5 * len(phases), 5.2), squeeze=False)
+    length_cm = result.lengths_m * 100.0
+    for ax, phase in zip(axes[0], phases):
+        sym = result.shift_percent("symmetric", phase)
+        anti = result.shift_percent("antisymmetric", phase)
+        for j, n in enumerate(result.orders):
+            f0 = result.undeformed_hz[phase][j]
+            ax.plot(length_cm, sym[:, j], "-", color=colour(n), lw=1.6,
+                    label=f"n = {n} ({f0:.1f} Hz)")
+            ax.plot(length_cm, anti[:, j], "--", color=colour(n), lw=1.3)
+        ax.plot([], [], "-", color="0.3", label="symmetric (extr)")
+        ax.plot([], [], "--", color="0.3", label="antisymmetric (0)")
+        if length_cm.min() <= 20.4 <= length_cm.max():
+            ax.axvline(20.4, color="0.5", lw=0.8, ls=":")
+            ax.text(20.9, ax.get_ylim()[1] * 0.97, "20.4 cm (paper)", fontsize=8, va="top",
+                    color="0.4")
+        ax.set_xlabel("contact patch length [cm]")
+        ax.set_ylabel("frequency shift over the undeformed tire [%]")
+        branch = "in-phase" if phase == "in" else "out-of-phase"
+        ax.set_title(f"{branch} modes", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    fig.suptitle(
+        f"Split of the mode pairs by the contact patch\nN = {result.n_elements}, patch length "
+        f"{_span(np.round(length_cm, 2))} cm, speed 0 m/s", fontsize=11,
+    )
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def _modes_by_order(modes, n_limit):
+    """(k-index order, frequency, phase) of the complex modes with |order| <= n_limit."""
+    rows = [(m.order, m.frequency_hz, m.phase) for m in modes.modes if abs(m.order) <= n_limit]
+    return rows, len(modes.modes) - len(rows)
+
+
+def plot_dispersion(dispersion, loaded=None, path: Path = Path("dispersion.png"),
+                    reference=None) -> Path:
+    """The paper's Fig. 18: ground-frame frequency against signed wavenumber k = n/R.
+
+    ``dispersion`` is the undeformed tire at the spin (lines); ``loaded`` (a ModalResult of the
+    loaded rolling model, or None) is drawn as markers at each mode's dominant signed order;
+    ``reference`` (optional, the same at rest) is drawn in grey to show the asymmetry.
+    n > 0 travels against the rotation (backward), n < 0 with it (forward).
+    """
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 5.8))
+    k = dispersion.wavenumber_per_m
+    nonzero = dispersion.orders != 0
+    radius = float(np.median(dispersion.orders[nonzero] / k[nonzero])) if nonzero.any() else 1.0
+    if reference is not None:
+        for values in (reference.in_phase_hz, reference.out_of_phase_hz):
+            ax.plot(reference.wavenumber_per_m, values, "-", color="0.75", lw=1.0)
+        ax.plot([], [], "-", color="0.75", label="undeformed, at rest")
+    ax.plot(k, dispersion.in_phase_hz, ".-", color="C0", lw=1.4, label="undeformed, in-phase")
+    ax.plot(k, dispersion.out_of_phase_hz, ".-", color="C1", lw=1.4,
+            label="undeformed, out-of-phase")
+    title_patch = "patch length 0 cm (undeformed)"
+    if loaded is not None:
+        n_limit = int(np.max(np.abs(dispersion.orders)))
+        rows, outside = _modes_by_order(loaded, n_limit)
+        for phase, marker, colour, name in (("in", "o", "C0", "in-phase"),
+                                            ("out", "s", "C1", "out-of-phase")):
+            picked = [(n, f) for n, f, p in rows if p == phase]
+            if picked:
+                n, f = np.array(picked).T
+                ax.plot(n / radius, f, marker, mfc="none", mec=colour, mew=1.3, ms=7,
+                        label=f"loaded, {name} (dominant order)")
+        patch = loaded.model_summary.get("patch_length_m", 0.0)
+        title_patch = f"patch length {patch * 100:.3g} cm (markers) and 0 cm (lines)"
+        if outside:
+            ax.text(0.99, 0.01, f"{outside} loaded modes with |n| > {n_limit} not shown",
+                    transform=ax.transAxes, ha="right", fontsize=8, color="0.4")
+    ax.axvline(0.0, color="0.6", lw=0.6)
+    ax.set_ylim(bottom=min(0.0, float(np.nanmin(dispersion.in_phase_hz))))
+    spin = dispersion.spin_rad_s
+    ax.set_xlabel("signed wavenumber k = n/R [1/m]  (k > 0: backward wave, k < 0: forward)")
+    ax.set_ylabel("ground-frame frequency [Hz]")
+    mesh = "continuum" if dispersion.n_elements is None else f"N = {dispersion.n_elements}"
+    ax.set_title(
+        f"Dispersion of the rolling tire: {mesh}, {title_patch}, speed {spin * radius:.4g} m/s "
+        f"(Ω = {spin:.4g} rad/s)", fontsize=10,
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper center", ncol=2)
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def plot_speed_sweep(result, path: Path) -> Path:
+    """The paper's Fig. 19: ground-frame frequencies against speed.
+
+    Undeformed orders as lines (backward n > 0 solid, falling; forward n < 0 dashed, rising;
+    out-of-phase branch faint), loaded in-phase modes as markers coloured by their dominant
+    order, the rest of the loaded spectrum in grey, and the mesh's critical (standing-wave)
+    speed as a vertical line.
+    """
+    plt = _pyplot()
+    colour = _order_colours(plt, result.orders)
+    fig, ax = plt.subplots(figsize=(9.5, 6.2))
+    v = result.speeds_m_s
+    for j, n in enumerate(result.orders):
+        style = "-" if n >= 0 else "--"
+        ax.plot(v, result.undeformed_in_phase_hz[:, j], style, color=colour(n), lw=1.3)
+        ax.plot(v, result.undeformed_out_of_phase_hz[:, j], style, color=colour(n), lw=0.6,
+                alpha=0.35)
+    n_limit = int(np.max(np.abs(result.orders)))
+    if result.loaded is not None:
+        picked, rest = [], []
+        for speed, modes in zip(v, result.loaded):
+            for m in modes.modes:
+                if abs(m.order) <= n_limit and m.phase == "in":
+                    picked.append((speed, m.frequency_hz, colour(m.order)))
+                else:
+                    rest.append((speed, m.frequency_hz))
+        if rest:
+            ax.scatter(*zip(*rest), s=4, color="0.7", zorder=2,
+                       label=f"loaded, out-of-phase or |n| > {n_limit}")
+        if picked:
+            speeds, freqs, cols = zip(*picked)
+            ax.scatter(speeds, freqs, s=16, c=list(cols), edgecolors="k", linewidths=0.3,
+                       zorder=3, label=f"loaded in-phase, |n| <= {n_limit} (colour = |n|)")
+    ax.plot([], [], "-", color="0.3", label="undeformed, n > 0 (backward)")
+    ax.plot([], [], "--", color="0.3", label="undeformed, n < 0 (forward)")
+    critical = result.critical_speed_m_s
+    right = v.max()
+    if np.isfinite(critical) and critical <= 1.15 * v.max():
+        right = max(right, critical) * 1.02
+        ax.axvline(critical, color="C3", lw=1.4, ls="-.")
+        ax.text(critical, 0.985 * result.fmax_hz, f"critical speed {critical:.3g} m/s ",
+                color="C3", fontsize=8, va="top", ha="right",
+                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1})
+    else:
+        ax.text(0.99, 0.985, f"critical speed {critical:.3g} m/s (off scale)", ha="right",
+                va="top", transform=ax.transAxes, fontsize=8, color="C3")
+    ax.set_xlim(v.min(), right)
+    ax.set_ylim(0.0, result.fmax_hz)
+    ax.set_xlabel("speed V [m/s]")
+    ax.set_ylabel("ground-frame frequency [Hz]")
+    radius = result.radius_m
+    secondary = ax.secondary_xaxis("top", functions=(lambda x: x / radius, lambda w: w * radius))
+    secondary.set_xlabel("spin Ω [rad/s]")
+    patch = (f"patch {result.patch_length_m * 100:.3g} cm (markers) and undeformed (lines)"
+             if result.loaded is not None else "undeformed")
+    damping = "damped" if result.damped else "undamped"
+    ax.set_title(
+        f"Ground-frame frequencies vs speed ({damping}): N = {result.n_elements}, {patch}, "
+        f"speed {_span(np.round(v, 2))} m/s", fontsize=10,
+    )
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
+    _order_colourbar(plt, fig, ax, n_limit)
+    fig.tight_layout()
+    return _save(fig, plt, path)

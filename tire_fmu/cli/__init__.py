@@ -11,7 +11,7 @@ import argparse
 import json
 import sys
 import warnings
-from typing import Sequence
+from collections.abc import Sequence
 
 from ..core import ParameterError
 from .common import CliError, Output, to_jsonable
@@ -19,13 +19,21 @@ from .common import CliError, Output, to_jsonable
 COMMAND_MODULES = ("ring", "rolling")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a bad command line in one line (usage stays in --help)."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's signature
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="tire-fmu",
         description="Modal ring tire model (in-plane, 0-300 Hz): analysis, reduction, FMU.",
     )
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
-    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
+                                       parser_class=_Parser)
     import importlib
 
     for name in COMMAND_MODULES:

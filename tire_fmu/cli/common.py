@@ -4,14 +4,22 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from collections.abc import Callable, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-from ..core import TIRE_FIELDS, OperatingPoint, TireParameters, build_model, validate
-from ..core.parameters import ParameterError, operating_point_problems, tire_problems
+from ..core import TIRE_FIELDS, TireParameters, build_model, validate
+from ..core.parameters import (
+    MAX_ELEMENTS,
+    MAX_PATCH_FRACTION,
+    MIN_ELEMENTS,
+    tire_problems,
+)
 
 
 class CliError(Exception):
@@ -58,7 +66,8 @@ def add_tire_options(parser: argparse.ArgumentParser) -> None:
     names = ", ".join(f"{name} [{spec.unit}]" for name, spec in TIRE_FIELDS.items())
     parser.add_argument(
         "--tire", metavar="NAME=VALUE", action="append", default=[],
-        help=f"override a tire parameter (repeatable); defaults are the GL073A tire. Names: {names}",
+        help="override a tire parameter (repeatable); defaults are the GL073A tire. "
+        f"Names: {names}",
     )
     parser.add_argument("--inflation-pressure", metavar="PA", type=float,
                         help="inflation pressure in Pa (default 7.9e5)")
@@ -99,14 +108,6 @@ def parse_tire_overrides(args: argparse.Namespace) -> dict[str, Any]:
     return values
 
 
-def tire_from_args(args: argparse.Namespace) -> TireParameters:
-    values = parse_tire_overrides(args)
-    problems = tire_problems(values)
-    if problems:
-        raise ParameterError(problems)
-    return TireParameters(**values)
-
-
 def operating_point_values(args: argparse.Namespace, undeformed_default: bool) -> dict[str, Any]:
     values: dict[str, Any] = {"n_elements": getattr(args, "elements", 100)}
     if getattr(args, "load", None) is not None:
@@ -128,13 +129,6 @@ def model_from_args(args: argparse.Namespace, undeformed_default: bool = True):
     op_values = operating_point_values(args, undeformed_default)
     tire, op = validate(tire_values, op_values)
     return build_model(tire, op)
-
-
-def check_operating_point(values: dict[str, Any], tire: TireParameters) -> OperatingPoint:
-    problems = operating_point_problems(values, tire)
-    if problems:
-        raise ParameterError(problems)
-    return OperatingPoint(**values)
 
 
 def write_plot(args: argparse.Namespace, output: Output, draw: Callable[[Path], Path]) -> None:
@@ -168,3 +162,101 @@ def _cell(value: Any) -> str:
     if isinstance(value, (float, np.floating)):
         return f"{value:.4g}" if abs(value) < 1e5 else f"{value:.4e}"
     return str(value)
+
+
+# ------------------------------------------------------------------------------------------
+# Option checks: every problem with the command line, the tire and the operating point is
+# collected and reported in one line, so a user fixes them all in one go.
+
+
+def range_problem(option: str, value: Any, low: float, high: float, unit: str = "",
+                  integer: bool = False) -> str | None:
+    """Message naming the option, its value and the closed range [low, high], or None."""
+    kind = "an integer" if integer else "a number"
+    text_unit = f" {unit}" if unit else ""
+    if value is None or not np.isfinite(value) or not low <= value <= high:
+        return f"{option} = {value!r}{text_unit}: must be {kind} in [{low:g}, {high:g}]{text_unit}"
+    return None
+
+
+def positive_problem(option: str, value: Any, unit: str) -> str | None:
+    if value is None or not np.isfinite(value) or not value > 0:
+        return f"{option} = {value!r} {unit}: must be a finite number > 0 {unit}"
+    return None
+
+
+def elements_problem(value: int) -> str | None:
+    return range_problem("--elements", value, MIN_ELEMENTS, MAX_ELEMENTS, integer=True)
+
+
+def raise_problems(problems: Sequence[str | None]) -> None:
+    found = [p for p in problems if p]
+    if len(found) == 1:
+        raise CliError(found[0])
+    if found:
+        raise CliError(f"{len(found)} problems: " + "; ".join(found))
+
+
+def patch_length_problem(option: str, value: float, tire: TireParameters,
+                         positive: bool = False) -> str | None:
+    """A patch length checked against the tire's credible limit (a fraction of its
+    circumference), named after the command's own option."""
+    high = tire.max_patch_length_m
+    low_ok = value > 0 if positive else value >= 0
+    if value is None or not np.isfinite(value) or not low_ok or value > high:
+        left = "(" if positive else "["
+        return (f"{option} = {value!r} m: must be in {left}0, {high:.4g}] m, at most "
+                f"{MAX_PATCH_FRACTION:g} of the circumference, beyond which the linear ring is "
+                "not credible")
+    return None
+
+
+def checked_tire(args: argparse.Namespace, problems: Sequence[str | None] = (),
+                 tire_checks: Callable[[TireParameters], Sequence[str | None]] | None = None,
+                 ) -> TireParameters:
+    """The tire from --tire/--inflation-pressure. Raises once with the option problems given,
+    the tire's own, and those ``tire_checks(tire)`` finds for a valid tire."""
+    values = parse_tire_overrides(args)
+    own = tire_problems(values)
+    tire = None if own else TireParameters(**values)
+    found = list(problems) + own
+    if tire is not None and tire_checks is not None:
+        found += list(tire_checks(tire))
+    raise_problems(found)
+    return tire
+
+
+@contextmanager
+def progress_bar(description: str):
+    """A ``progress(done, total)`` callback drawing a tqdm bar on a terminal, else None."""
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        tqdm = None
+    if tqdm is None or not sys.stderr.isatty():
+        yield None
+        return
+    bar = None
+
+    def update(done: int, total: int) -> None:
+        nonlocal bar
+        if bar is None:
+            bar = tqdm(total=total, desc=description, leave=False, file=sys.stderr)
+        bar.update(done - bar.n)
+
+    try:
+        yield update
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def plot_with(function_name: str, *args: Any, **kwargs: Any) -> Callable:
+    """A ``draw(path)`` for :func:`write_plot` that imports the plots module only when used."""
+
+    def draw(path):
+        from .. import plots
+
+        return getattr(plots, function_name)(*args, path, **kwargs)
+
+    return draw

@@ -1,4 +1,5 @@
-"""Ring-model commands: modes, analytic, patch."""
+"""Ring-model commands at rest: modes, analytic, patch, and the studies convergence and
+patch-sweep (the paper's Figs. 14 and 17)."""
 
 from __future__ import annotations
 
@@ -7,6 +8,8 @@ import argparse
 import numpy as np
 
 from ..core import analytic_modes, modal_analysis
+from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
+from ..core.studies import convergence_study, patch_sweep
 from .common import (
     Output,
     add_contact_options,
@@ -14,9 +17,16 @@ from .common import (
     add_output_options,
     add_speed_options,
     add_tire_options,
+    checked_tire,
+    elements_problem,
     model_from_args,
+    patch_length_problem,
+    plot_with,
+    positive_problem,
+    progress_bar,
+    raise_problems,
+    range_problem,
     table,
-    tire_from_args,
     write_plot,
 )
 
@@ -64,12 +74,49 @@ def register(subparsers) -> None:
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_patch)
 
+    p = subparsers.add_parser(
+        "convergence",
+        help="FDM frequencies vs number of elements against the exact ones (Fig. 14)",
+        description="Undeformed tire at rest: in-phase and out-of-phase frequency of each order "
+        "from the assembled FDM model on each mesh, against the exact roots of eq. 12, with "
+        "the observed convergence order (log-log slope of the error against δθ = 2π/N, "
+        "fitted over meshes with N >= 8n; 2 expected).",
+    )
+    p.add_argument("--elements-list", metavar="N1,N2,...", default=DEFAULT_ELEMENT_LIST,
+                   help=f"meshes to solve, comma separated (default {DEFAULT_ELEMENT_LIST})")
+    p.add_argument("--nmax", metavar="N", type=int, default=10,
+                   help="highest circumferential order n (default 10)")
+    add_tire_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_convergence)
+
+    p = subparsers.add_parser(
+        "patch-sweep",
+        help="split of the mode pairs vs contact-patch length (Fig. 17)",
+        description="Tire at rest: frequency of the symmetric member (antinode at the patch "
+        "centre, Kindt's 'extr', the one the patch stiffens) and the antisymmetric member "
+        "(node there, '0', barely moves) of each order, against patch length, as a shift over "
+        "the undeformed tire of the same mesh.",
+    )
+    add_mesh_option(p)
+    p.add_argument("--max-length", metavar="M", type=float, default=0.40,
+                   help="longest patch in m (default 0.40)")
+    p.add_argument("--steps", metavar="K", type=int, default=41,
+                   help="number of patch lengths from 0 to --max-length (default 41: 1 cm steps)")
+    p.add_argument("--nmax", metavar="N", type=int, default=6,
+                   help="orders 1..N (default 6)")
+    p.add_argument("--out-of-phase", action="store_true",
+                   help="sweep the out-of-phase members too")
+    add_tire_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_patch_sweep)
+
+
+DEFAULT_ELEMENT_LIST = "20,40,60,80,100,150,200,300,400"
+
 
 def run_modes(args: argparse.Namespace) -> Output:
-    if args.fmax is not None and not args.fmax > 0:
-        from .common import CliError
-
-        raise CliError(f"--fmax = {args.fmax:g} Hz: must be > 0")
+    raise_problems([positive_problem("--fmax", args.fmax, "Hz")])
     model = model_from_args(args, undeformed_default=True)
     result = modal_analysis(model, fmax_hz=args.fmax)
     rolling = model.speed_m_s > 0
@@ -87,21 +134,12 @@ def run_modes(args: argparse.Namespace) -> Output:
     )
     output = Output(text=head + "\n" + table(rows, header), data=result.to_dict())
 
-    def draw(path):
-        from ..plots import plot_mode_shapes
-
-        return plot_mode_shapes(result, path)
-
-    write_plot(args, output, draw)
+    write_plot(args, output, plot_with("plot_mode_shapes", result))
     return output
 
 
 def run_analytic(args: argparse.Namespace) -> Output:
-    from .common import CliError
-
-    if args.nmax < 0 or args.nmax > 10_000:
-        raise CliError(f"--nmax = {args.nmax}: must be in [0, 10000]")
-    tire = tire_from_args(args)
+    tire = checked_tire(args, [range_problem("--nmax", args.nmax, 0, 10_000, integer=True)])
     result = analytic_modes(tire, np.arange(args.nmax + 1))
     rows = [[n, f_in, f_out] for n, f_in, f_out in
             zip(result.orders, result.in_phase_hz, result.out_of_phase_hz)]
@@ -120,3 +158,77 @@ def run_patch(args: argparse.Namespace) -> Output:
         f"vertical stiffness  {data['vertical_stiffness_n_per_m'] / 1e6:.4g} MN/m",
     ])
     return Output(text=text, data=data)
+
+
+def _element_list(text: str) -> tuple[list[int], str | None]:
+    try:
+        counts = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        counts = []
+    bad = [n for n in counts if not MIN_ELEMENTS <= n <= MAX_ELEMENTS]
+    if not counts or bad:
+        return [], (f"--elements-list = {text!r}: must be comma-separated integers in "
+                    f"[{MIN_ELEMENTS}, {MAX_ELEMENTS}], e.g. {DEFAULT_ELEMENT_LIST}")
+    return sorted(set(counts)), None
+
+
+def run_convergence(args: argparse.Namespace) -> Output:
+    counts, problem = _element_list(args.elements_list)
+    tire = checked_tire(args, [problem, range_problem("--nmax", args.nmax, 1, 200, integer=True)])
+    with progress_bar("meshes") as progress:
+        result = convergence_study(tire, counts, range(0, args.nmax + 1), progress=progress)
+    lines = [
+        f"FDM vs exact (eq. 12), undeformed tire at rest; N = {', '.join(map(str, counts))}.",
+        "Error = FDM / exact - 1 in %; p = observed order of |error| ~ δθ^p "
+        f"(fit over N >= 8n; assembled model vs FDM symbols within "
+        f"{result.model_symbol_difference:.1e}).",
+    ]
+    for phase, name in (("in", "in-phase"), ("out", "out-of-phase")):
+        error = 100.0 * result.relative_error(phase)
+        slopes = result.convergence_order(phase)
+        rows = [[n, result.exact_hz(phase)[j], *error[:, j], slopes[j]]
+                for j, n in enumerate(result.orders)]
+        header = ["n", "exact [Hz]", *(f"N={c}" for c in counts), "p"]
+        lines += ["", f"{name} error [%]", table(rows, header)]
+    output = Output(text="\n".join(lines), data=result.to_dict())
+    write_plot(args, output, plot_with("plot_convergence", result))
+    return output
+
+
+def run_patch_sweep(args: argparse.Namespace) -> Output:
+    problems = [
+        elements_problem(args.elements),
+        range_problem("--steps", args.steps, 2, 1000, integer=True),
+        range_problem("--nmax", args.nmax, 1, 50, integer=True),
+    ]
+    tire = checked_tire(args, problems, lambda t: [
+        patch_length_problem("--max-length", args.max_length, t, positive=True)])
+    phases = ("in", "out") if args.out_of_phase else ("in",)
+    lengths = np.linspace(0.0, args.max_length, args.steps)
+    with progress_bar("patch lengths") as progress:
+        result = patch_sweep(tire, args.elements, lengths, range(1, args.nmax + 1), phases,
+                             progress=progress)
+    # A compact view: the shifts at a quarter, half and all of the longest patch.
+    picks = sorted({result.at_length(f * args.max_length) for f in (0.25, 0.5, 1.0)})
+    lines = [f"Frequency shift over the undeformed tire in % (N = {result.n_elements}, at rest); "
+             "sym = symmetric member (antinode at the patch centre), anti = antisymmetric."]
+    for phase in phases:
+        sym = result.shift_percent("symmetric", phase)
+        anti = result.shift_percent("antisymmetric", phase)
+        header = ["n", "f0 [Hz]"]
+        for i in picks:
+            label = f"{result.lengths_m[i] * 100:.3g}cm"
+            header += [f"sym {label}", f"anti {label}"]
+        rows = []
+        for j, n in enumerate(result.orders):
+            row = [n, result.undeformed_hz[phase][j]]
+            for i in picks:
+                row += [sym[i, j], anti[i, j]]
+            rows.append(row)
+        loads = ", ".join(f"{result.lengths_m[i] * 100:.3g} cm: {result.loads_n[i] / 1e3:.3g} kN"
+                          for i in picks)
+        branch = "in-phase" if phase == "in" else "out-of-phase"
+        lines += ["", f"{branch} (static loads {loads})", table(rows, header)]
+    output = Output(text="\n".join(lines), data=result.to_dict())
+    write_plot(args, output, plot_with("plot_patch_sweep", result))
+    return output

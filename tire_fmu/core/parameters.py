@@ -17,6 +17,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
+import numpy as np
+
 GRAVITY_M_S2 = 9.80665
 QUARTER_CAR_MASS_KG = 2500.0 + 320.0
 DEFAULT_LOAD_N = QUARTER_CAR_MASS_KG * GRAVITY_M_S2  # the quarter car's weight, ~27.7 kN
@@ -209,7 +211,9 @@ def operating_point_problems(
     if unknown:
         problems.append(f"unknown operating-point setting(s) {unknown}; known: {sorted(known)}")
     n = values.get("n_elements", 100)
-    integral = isinstance(n, int) or (isinstance(n, float) and n.is_integer())
+    if isinstance(n, np.integer):
+        n = int(n)
+    integral = isinstance(n, int) or (isinstance(n, (float, np.floating)) and float(n).is_integer())
     if isinstance(n, bool) or not integral:
         problems.append(
             f"n_elements = {n!r}: must be an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]"
