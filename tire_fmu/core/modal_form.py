@@ -1,0 +1,110 @@
+"""Diagonal modal form shared by every reduced model: q̇ = Λq + B r, y = Re(C q) + D r + E ṙ.
+
+Of each complex-conjugate pair of eigenvalues only the member with Im λ > 0 is kept; for real
+input signals its partner's state is its conjugate, so the pair's output is 2·Re(c q) and C
+carries that factor 2 (1 for real eigenvalues, whose eigenvectors are real).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+
+@dataclass(frozen=True, eq=False)
+class ModalForm:
+    eigenvalues: np.ndarray  # (k,) complex, ascending |λ|
+    b: np.ndarray  # (k, n_inputs) complex
+    c: np.ndarray  # (n_outputs, k) complex, pair factor included
+
+
+def diagonalise(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> ModalForm:
+    """Modal form of a real (A, B, C): eigenvectors V, B_q = V⁻¹B (one solve), C_q = C V."""
+    values, vectors = sla.eig(a)
+    b_modal = sla.solve(vectors, b)
+    c_modal = c @ vectors
+    real = values.imag == 0
+    keep = (values.imag > 0) | real
+    b_modal[real] = b_modal[real].real  # real eigenvalue, real eigenvector: drop rounding dust
+    c_modal[:, real] = c_modal[:, real].real
+    factor = np.where(real, 1.0, 2.0)[keep]
+    order = np.argsort(np.abs(values[keep]), kind="stable")
+    return ModalForm(
+        eigenvalues=values[keep][order],
+        b=b_modal[keep][order],
+        c=(c_modal[:, keep] * factor[None, :])[:, order],
+    )
+
+
+def diagonalise_proportional(stiffness, mass_diag, alpha, beta, b_disp, b_vel, out_disp,
+                             out_vel) -> ModalForm:
+    """Modal form of M ü + (αM + βK) u̇ + K u = B_z r + B_v ṙ from the real modes of (K, M).
+
+    Proportional damping decouples the real modes, so the state-space modes follow from one
+    symmetric eigenproblem of half the size: per mode (unit modal mass) η̈ + c η̇ + ω² η = ...
+    with c = α + βω², written in the same momentum-like state as the full model,
+    p = η̇ - φᵀB_v r:  [η̇, ṗ] = [[0, 1], [-ω², -c]] [η, p] + [φᵀB_v, φᵀB_z - c φᵀB_v] r,
+    whose 2×2 eigenproblem is solved in closed form.
+    """
+    import scipy.sparse as sp
+
+    dense = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness)
+    omega2, phi = sla.eigh(dense, np.diag(mass_diag))
+    omega2 = np.clip(omega2, 0.0, None)
+    c = alpha + beta * omega2
+    beta_v = phi.T @ b_vel
+    beta_z = phi.T @ b_disp
+    in_1, in_2 = beta_v, beta_z - c[:, None] * beta_v  # the mode's [η, p] input rows
+    out_1, out_2 = out_disp @ phi, out_vel @ phi  # outputs from η and p
+    root = np.sqrt((c * c - 4 * omega2).astype(complex))
+    lam_a, lam_b = (-c + root) / 2, (-c - root) / 2  # lam_a: Im >= 0 (numpy's principal root)
+    real = (c * c - 4 * omega2) > 0
+    values, rows, cols = [], [], []
+    # eigenvector of [[0,1],[-ω²,-c]] for λ is [1, λ]; left rows from the 2×2 inverse
+    for lam, other, keep_all in ((lam_a, lam_b, True), (lam_b, lam_a, False)):
+        use = np.ones_like(real) if keep_all else real  # the Im < 0 member only when real
+        gap = (other - lam)[use]
+        values.append(lam[use])
+        rows.append((other[use, None] * in_1[use] - in_2[use]) / gap[:, None])
+        factor = np.where(real[use], 1.0, 2.0)
+        cols.append((out_1[:, use] + lam[use][None, :] * out_2[:, use]) * factor[None, :])
+    values = np.concatenate(values)
+    b = np.vstack(rows)
+    c_out = np.hstack(cols)
+    b[values.imag == 0] = b[values.imag == 0].real
+    c_out[:, values.imag == 0] = c_out[:, values.imag == 0].real
+    order = np.argsort(np.abs(values), kind="stable")
+    return ModalForm(eigenvalues=values[order], b=b[order], c=c_out[:, order])
+
+
+def real_block_form(eigenvalues, b, c, d, e):
+    """Real (A, B, C, D, E) of a diagonal model whose outputs are Re(C q)."""
+    blocks, rows_b, cols_c = [], [], []
+    for lam, b_row, c_col in zip(eigenvalues, b, c.T):
+        if lam.imag == 0.0:
+            blocks.append(np.array([[lam.real]]))
+            rows_b.append(b_row.real[None, :])
+            cols_c.append(c_col.real[:, None])
+        else:
+            # q = ξ1 + iξ2: ξ̇ = [[σ, -ω], [ω, σ]] ξ + [Re b; Im b] r, Re(c q) = Re c ξ1 - Im c ξ2
+            blocks.append(np.array([[lam.real, -lam.imag], [lam.imag, lam.real]]))
+            rows_b.append(np.vstack([b_row.real, b_row.imag]))
+            cols_c.append(np.column_stack([c_col.real, -c_col.imag]))
+    a = sla.block_diag(*blocks) if blocks else np.zeros((0, 0))
+    b_real = np.vstack(rows_b) if rows_b else np.zeros((0, b.shape[1]))
+    c_real = np.hstack(cols_c) if cols_c else np.zeros((c.shape[0], 0))
+    return a, b_real, c_real, np.array(d, dtype=float), np.array(e, dtype=float)
+
+
+def modal_frequency_response(eigenvalues, b, c, d, e, r, omega) -> np.ndarray:
+    """Y(ω) of q̇ = Λq + B r, y = Re(C q) + D r + E ṙ for real signals with spectra r(ω)."""
+    omega = np.asarray(omega, dtype=float)
+    iw = 1j * omega[None, :]
+    modal = (b @ r) / (iw - eigenvalues[:, None])
+    # Re(C q) = (C q + conj(C q)) / 2 and conj(q) has the spectrum conj(B) r / (iω - conj(λ)).
+    partner = (np.conj(b) @ r) / (iw - np.conj(eigenvalues)[:, None])
+    return 0.5 * (c @ modal + np.conj(c) @ partner) + d @ r + iw * (e @ r)
+
+

@@ -1,0 +1,339 @@
+"""Reduced-order models of the tire: modal truncation (with static correction) or balanced
+truncation, always delivered in diagonal modal form with an accuracy report.
+
+Modal form: the first-order model ẋ = A x + B r is diagonalised, A = V Λ V⁻¹, q = V⁻¹ x. Of
+each complex-conjugate pair only the member with Im λ > 0 is kept: for real inputs its partner
+is its conjugate, so the pair's output is 2·Re(c q). The reduced model is therefore
+
+    q̇ = Λ q + B_q r,     y = Re(C_q q) + D r + E ṙ,
+
+with C_q already carrying that factor 2 (1 for real eigenvalues). It works unchanged for the
+rolling (gyroscopic, non-symmetric) model.
+
+Which modes to keep, in terms a user can reason about (:class:`ReductionSettings`):
+- ``f_max_hz``: modes whose natural frequency |λ|/2π is at most this;
+- ``contribution_threshold``: of those, the modes whose largest contribution to any
+  input/output pair over the error band, relative to that pair's peak, reaches the threshold
+  (the dense sidewall band near 160-168 Hz barely moves the rim and drops out here);
+- ``n_modes``: at most this many, the largest contributions first;
+- ``static_correction``: add the dropped modes' static (DC) response as a feedthrough, so the
+  DC gain is exact (python-control calls this 'matchdc').
+``method="balanced"`` instead balances a generous modal pre-reduction and truncates it to
+``n_states`` states (see :mod:`tire_fmu.core.balanced`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .io_model import OUTPUTS, PHYSICAL_INPUTS, InputOutputModel, build_io_model, physical_input
+from .modal_form import (
+    ModalForm,
+    diagonalise,
+    diagonalise_proportional,
+    modal_frequency_response,
+    real_block_form,
+)
+from .model import TireModel
+
+METHODS = ("modal", "balanced")
+
+
+@dataclass(frozen=True)
+class ReductionSettings:
+    """How to reduce; see the module docstring. Frequencies in Hz."""
+
+    method: str = "modal"
+    f_max_hz: float = 3000.0
+    contribution_threshold: float = 3e-4
+    n_modes: int | None = None
+    static_correction: bool = True
+    n_states: int | None = None  # balanced: states kept (None: smallest meeting the tolerance)
+    balanced_tolerance: float = 2e-3  # balanced: Hankel tail bound relative to the largest
+    error_band_hz: tuple[float, float] = (1.0, 300.0)
+    error_points: int = 400
+
+    def __post_init__(self) -> None:
+        problems = []
+        if self.method not in METHODS:
+            problems.append(f"method = {self.method!r}: must be one of {METHODS}")
+        if not (isinstance(self.f_max_hz, (int, float)) and 0 < self.f_max_hz <= 1e6):
+            problems.append(f"f_max_hz = {self.f_max_hz!r}: must be in (0, 1e6] Hz")
+        if not (0 <= self.contribution_threshold < 1):
+            problems.append(
+                f"contribution_threshold = {self.contribution_threshold!r}: must be in [0, 1)"
+            )
+        for name in ("n_modes", "n_states"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int)
+                                      or not 1 <= value <= 100_000):
+                problems.append(f"{name} = {value!r}: must be an integer in [1, 100000] or None")
+        low, high = self.error_band_hz
+        if not 0 <= low < high:
+            problems.append(f"error_band_hz = {self.error_band_hz!r}: must be (low, high) Hz "
+                            "with 0 <= low < high")
+        if not 0 < self.balanced_tolerance < 1:
+            problems.append(f"balanced_tolerance = {self.balanced_tolerance!r}: must be in (0, 1)")
+        if not 10 <= self.error_points <= 100_000:
+            problems.append(f"error_points = {self.error_points!r}: must be in [10, 100000]")
+        if problems:
+            from .parameters import ParameterError
+
+            raise ParameterError(problems)
+
+    def error_frequencies_hz(self) -> np.ndarray:
+        low, high = self.error_band_hz
+        return np.geomspace(max(low, 1e-3), high, self.error_points)
+
+
+@dataclass(frozen=True)
+class ErrorReport:
+    """Accuracy of a reduced model against the full model over a band."""
+
+    band_hz: tuple[float, float]
+    max_relative_error: float  # over every input/output pair with a non-zero response
+    per_pair: dict[str, float]  # "road->rim_Fz": max_ω |H_red - H_full| / |H_full|
+    dc_relative_error: dict[str, float]
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedModel:
+    """A reduced tire model in diagonal modal form, with what it came from and how good it is.
+
+    Inputs r = [rim_z, road_z at each patch node] (road nodes delayed by ``input_delays_s``),
+    their velocities ṙ feed only the direct term E. Outputs: rim_Fz, rim_Fx, contact_Fz,
+    deflection (deviations from the static values in ``static_outputs``).
+    """
+
+    eigenvalues: np.ndarray  # (k,) complex
+    b: np.ndarray  # (k, n_inputs) complex
+    c: np.ndarray  # (n_outputs, k) complex, pair factor 2 included
+    d: np.ndarray  # (n_outputs, n_inputs) real
+    e: np.ndarray  # (n_outputs, n_inputs) real, on ṙ
+    input_delays_s: np.ndarray
+    static_outputs: dict[str, float]
+    settings: ReductionSettings
+    metadata: dict  # tire data, operating point, states kept, timing
+    report: ErrorReport | None = None
+    output_names: tuple[str, ...] = OUTPUTS
+
+    @property
+    def n_inputs(self) -> int:
+        return self.b.shape[1]
+
+    @property
+    def n_states(self) -> int:
+        """Real states: 2 per complex mode, 1 per real one."""
+        return int(np.sum(np.where(self.eigenvalues.imag != 0, 2, 1)))
+
+    @property
+    def n_modes(self) -> int:
+        return self.eigenvalues.size
+
+    def frequency_response(self, r: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        """Y(ω) (n_outputs, n_freqs) for internal input vectors r(ω) (n_inputs, n_freqs)."""
+        return modal_frequency_response(self.eigenvalues, self.b, self.c, self.d, self.e, r, omega)
+
+    def physical_frequency_response(self, name: str, freqs_hz) -> np.ndarray:
+        """FRF for a unit harmonic of a physical input, "rim" or "road" (leading edge)."""
+        omega = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
+        return self.frequency_response(physical_input(name, self.input_delays_s, omega), omega)
+
+    def real_form(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Real block-diagonal (A, B, C, D, E): [[σ, -ω], [ω, σ]] per complex mode."""
+        return real_block_form(self.eigenvalues, self.b, self.c, self.d, self.e)
+
+    def summary(self) -> dict:
+        return {
+            "method": self.settings.method,
+            "settings": asdict(self.settings),
+            "n_states": self.n_states,
+            "n_modes": self.n_modes,
+            "n_inputs": self.n_inputs,
+            "report": self.report.to_dict() if self.report else None,
+            **self.metadata,
+        }
+
+
+
+
+def modal_decomposition(io: InputOutputModel) -> ModalForm:
+    """Every mode of the full first-order model, one member per conjugate pair.
+
+    At rest the damping is proportional and a symmetric eigenproblem of half the size gives
+    the same modes several times faster; rolling needs the general (dense LAPACK) one.
+    """
+    model = io.model
+    if model.speed_m_s == 0.0:
+        return diagonalise_proportional(
+            model.stiffness, model.mass.diagonal(), model.tire.alpha, model.tire.beta,
+            io.b_disp, io.b_vel, io.out_disp, io.out_vel,
+        )
+    return diagonalise(io.a.toarray(), io.b, io.c)
+
+
+def contributions(decomp: ModalForm, io: InputOutputModel, settings: ReductionSettings,
+                  full: dict[tuple[str, int], np.ndarray]) -> np.ndarray:
+    """Each mode's largest relative share of any input/output response over the error band.
+
+    For every physical input and output the mode's own term (minus its static part when the
+    static correction will restore it) is divided, frequency by frequency, by the full model's
+    response, so a mode that matters only in an anti-resonance dip still counts. The largest
+    ratio over frequencies and pairs is the mode's contribution; pairs that are zero by
+    symmetry (rim_Fx at rest) are skipped.
+    """
+    omega = 2 * np.pi * settings.error_frequencies_hz()
+    lam = decomp.eigenvalues[:, None]
+    iw = 1j * omega[None, :]
+    score = np.zeros(lam.shape[0])
+    dyn = 1.0 / (iw - lam)
+    dyn_partner = 1.0 / (iw - np.conj(lam))
+    if settings.static_correction:
+        dyn = dyn + 1.0 / lam
+        dyn_partner = dyn_partner + 1.0 / np.conj(lam)
+    for name in {key[0] for key in full}:
+        r = physical_input(name, io.input_delays_s, omega)
+        forced = (decomp.b @ r) * dyn
+        forced_partner = (np.conj(decomp.b) @ r) * dyn_partner
+        for (input_name, row), h_full in full.items():
+            if input_name != name:
+                continue
+            c = decomp.c[row][:, None]
+            term = 0.5 * (c * forced + np.conj(c) * forced_partner)
+            score = np.maximum(score, (np.abs(term) / np.abs(h_full)[None, :]).max(axis=1))
+    return score
+
+
+def _relative_errors(full: dict, reduced: dict) -> tuple[float, dict[str, float]]:
+    per_pair = {}
+    for (name, row), h_full in full.items():
+        h_red = reduced[(name, row)]
+        per_pair[f"{name}->{OUTPUTS[row]}"] = float(np.max(np.abs(h_red - h_full) / np.abs(h_full)))
+    return (max(per_pair.values()) if per_pair else 0.0), per_pair
+
+
+#: A response below this fraction of the largest force response is zero by symmetry.
+ZERO_RESPONSE = 1e-8
+
+
+def full_responses(io: InputOutputModel, freqs_hz) -> dict[tuple[str, int], np.ndarray]:
+    """Full-model FRFs keyed by (physical input, output row), leaving out the responses that
+    vanish by symmetry (rim_Fx at rest), where a relative error means nothing."""
+    out = {}
+    for name in PHYSICAL_INPUTS:
+        if name == "road" and io.n_inputs == 1:
+            continue  # no patch, no road input
+        h = io.frequency_response(name, freqs_hz)
+        for row in range(len(OUTPUTS)):
+            out[(name, row)] = h[row]
+    forces = [np.abs(h).max() for (_, row), h in out.items() if OUTPUTS[row] != "deflection"]
+    floor = ZERO_RESPONSE * max(forces)
+    return {key: h for key, h in out.items()
+            if OUTPUTS[key[1]] == "deflection" or np.abs(h).max() > floor}
+
+
+def error_report(reduced: ReducedModel, io: InputOutputModel,
+                 full: dict | None = None) -> ErrorReport:
+    """Maximum relative FRF error of ``reduced`` against the full model over the band."""
+    freqs = reduced.settings.error_frequencies_hz()
+    full = full if full is not None else full_responses(io, freqs)
+    red = {}
+    for name in {k[0] for k in full}:
+        h = reduced.physical_frequency_response(name, freqs)
+        for row in range(len(OUTPUTS)):
+            red[(name, row)] = h[row]
+    worst, per_pair = _relative_errors(full, red)
+    dc_full = io.static_gain()
+    dc_red = reduced.d + np.real(-(reduced.c / reduced.eigenvalues[None, :]) @ reduced.b)
+    dc_rel = {}
+    for row, out_name in enumerate(OUTPUTS):
+        ref = np.abs(dc_full[row]).max()
+        if ref > 0 and ref > 1e-9 * np.abs(dc_full).max():
+            dc_rel[out_name] = float(np.abs(dc_red[row] - dc_full[row]).max() / ref)
+    return ErrorReport(tuple(reduced.settings.error_band_hz), worst, per_pair, dc_rel)
+
+
+def static_correction_matrix(io: InputOutputModel, eigenvalues, b, c) -> np.ndarray:
+    """Feedthrough that restores the exact DC gain: full DC minus the kept modes' DC."""
+    kept_dc = np.real(-(c / eigenvalues[None, :]) @ b) if eigenvalues.size else 0.0
+    return io.static_gain() - io.d - kept_dc
+
+
+def static_outputs(model: TireModel) -> dict[str, float]:
+    """Output values at the static equilibrium the deviations are measured from."""
+    t, s = model.translation, model.horizontal
+    z_rim = -model.patch.deflection_m  # rim below its unloaded height, road at 0
+    k_s = model.structure.stiffness
+    if model.patch.in_contact:
+        import scipy.sparse.linalg as spla
+
+        u = spla.splu(model.stiffness.tocsc()).solve(k_s @ (t * z_rim))
+    else:
+        u = t * z_rim
+    internal = k_s @ (u - t * z_rim)
+    contact = -(t @ (model.contact_stiffness @ u))
+    return {
+        "rim_Fz": float(t @ internal),
+        "rim_Fx": float(s @ internal),
+        "contact_Fz": float(contact),
+        "deflection": float(model.patch.deflection_m),
+    }
+
+
+def reduce(model: TireModel, settings: ReductionSettings | None = None,
+           report: bool = True) -> ReducedModel:
+    """Reduce the tire at its operating point; ``report`` adds the FRF error against the full
+    model over ``settings.error_band_hz``."""
+    settings = settings or ReductionSettings()
+    started = time.perf_counter()
+    io = build_io_model(model)
+    freqs = settings.error_frequencies_hz()
+    full = full_responses(io, freqs)
+    decomp = modal_decomposition(io)
+    if settings.method == "modal":
+        lam, b, c = _select_modes(decomp, io, settings, full)
+        d = io.d + (static_correction_matrix(io, lam, b, c) if settings.static_correction else 0)
+    else:
+        from .balanced import balanced_reduction
+
+        lam, b, c, d = balanced_reduction(decomp, io, settings)
+    metadata = {
+        "tire": model.tire.as_dict(),
+        "operating_point": model.summary(),
+        "full_states": io.n_states,
+        "build_seconds": None,
+    }
+    reduced = ReducedModel(
+        eigenvalues=lam, b=b, c=c, d=np.asarray(d, dtype=float), e=io.e.copy(),
+        input_delays_s=io.input_delays_s.copy(), static_outputs=static_outputs(model),
+        settings=settings, metadata=metadata,
+    )
+    if report:
+        reduced = _with_report(reduced, error_report(reduced, io, full))
+    reduced.metadata["build_seconds"] = time.perf_counter() - started
+    return reduced
+
+
+def _with_report(reduced: ReducedModel, report: ErrorReport) -> ReducedModel:
+    from dataclasses import replace
+
+    return replace(reduced, report=report)
+
+
+def _select_modes(decomp: ModalForm, io, settings: ReductionSettings, full):
+    lam = decomp.eigenvalues
+    in_band = np.abs(lam) <= 2 * np.pi * settings.f_max_hz
+    score = contributions(decomp, io, settings, full)
+    candidates = np.flatnonzero(in_band & (score >= settings.contribution_threshold))
+    ranked = candidates[np.argsort(-score[candidates])]
+    if settings.n_modes is not None:
+        ranked = ranked[: settings.n_modes]
+    chosen = np.sort(ranked)
+    chosen = chosen[np.argsort(np.abs(lam[chosen]), kind="stable")]
+    return lam[chosen], decomp.b[chosen], decomp.c[:, chosen]
