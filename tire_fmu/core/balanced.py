@@ -19,6 +19,11 @@ import scipy.linalg as sla
 from .io_model import InputOutputModel
 from .modal_form import diagonalise, real_block_form
 
+#: Hankel singular values below this fraction of the largest are treated as zero: their
+#: states barely touch the transfer function, and balancing them needs σ^(-1/2) scalings
+#: that amplify rounding until the reduced model can turn unstable.
+MINIMAL_RELATIVE_HSV = 1e-9
+
 
 def _psd_factor(gramian: np.ndarray) -> np.ndarray:
     """A factor L with L Lᵀ = G for a symmetric positive semi-definite G (eigh: robust where
@@ -35,45 +40,53 @@ def hankel_singular_values(a, b, c):
     return sigma, lp, lq, u, vt
 
 
-def balanced_reduction(decomp, io: InputOutputModel, settings):
-    """(eigenvalues, B, C, D) of the balanced reduced model in diagonal modal form."""
-    from .reduction import static_correction_matrix
+class BalancedRealization:
+    """The balanced realisation of a generous modal pre-reduction, ready to truncate.
 
-    lam = decomp.eigenvalues
-    keep = np.abs(lam) <= 2 * np.pi * settings.f_max_hz
-    lam, b, c = lam[keep], decomp.b[keep], decomp.c[:, keep]
-    d = io.d + static_correction_matrix(io, lam, b, c)
-    a_r, b_r, c_r, _, _ = real_block_form(lam, b, c, d, io.e)
+    ``full`` holds the full model's responses over the error band, keyed (input, output row);
+    each output is weighted by the inverse of its peak, and outputs that are zero by symmetry
+    (absent from ``full``) get no weight at all, so rounding noise is never balanced.
+    """
 
-    dc = io.static_gain()
-    scale = np.maximum(np.abs(dc).max(axis=1), 1e-300)  # per output, its static magnitude
-    c_scaled = c_r / scale[:, None]
-    sigma, lp, lq, u, vt = hankel_singular_values(a_r, b_r, c_scaled)
-    count = settings.n_states
-    if count is None:
-        tail = 2.0 * np.cumsum(sigma[::-1])[::-1]  # tail[k] = 2 Σ_{i>=k} σ_i, the H∞ bound
-        ok = np.flatnonzero(tail <= settings.balanced_tolerance * sigma[0])
-        count = int(ok[0]) if ok.size else sigma.size
-    # States with σ ~ 0 are uncontrollable or unobservable (e.g. the antisymmetric modes at
-    # rest): drop them exactly before balancing, they do not touch the transfer function.
-    minimal = int(np.count_nonzero(sigma > sigma[0] * 1e-12))
-    count = max(1, min(count, minimal))
-    s_inv_half = 1.0 / np.sqrt(sigma[:minimal])
-    t = lp @ vt[:minimal].T * s_inv_half[None, :]  # x ≈ T x̃
-    t_inv = (s_inv_half[:, None] * u[:, :minimal].T) @ lq.T
-    a_b, b_b, c_b = t_inv @ a_r @ t, t_inv @ b_r, c_r @ t
+    def __init__(self, decomp, io: InputOutputModel, settings, full: dict):
+        from .reduction import static_correction_matrix
 
-    k = count
-    if settings.static_correction and k < a_b.shape[0]:
-        a11, a12, a21, a22 = a_b[:k, :k], a_b[:k, k:], a_b[k:, :k], a_b[k:, k:]
-        solve = sla.lu_factor(a22)
-        a_k = a11 - a12 @ sla.lu_solve(solve, a21)
-        b_k = b_b[:k] - a12 @ sla.lu_solve(solve, b_b[k:])
-        c_k = c_b[:, :k] - c_b[:, k:] @ sla.lu_solve(solve, a21)
-        d_k = d - c_b[:, k:] @ sla.lu_solve(solve, b_b[k:])
-    else:
-        a_k, b_k, c_k, d_k = a_b[:k, :k], b_b[:k], c_b[:, :k], d
+        lam = decomp.eigenvalues
+        keep = np.abs(lam) <= 2 * np.pi * settings.f_max_hz
+        lam, b, c = lam[keep], decomp.b[keep], decomp.c[:, keep]
+        self.d = io.d + static_correction_matrix(io, lam, b, c)
+        a_r, b_r, c_r, _, _ = real_block_form(lam, b, c, self.d, io.e)
+        weight = np.zeros(c_r.shape[0])
+        for (_, row), response in full.items():
+            weight[row] = max(weight[row], np.abs(response).max())
+        weight = np.divide(1.0, weight, out=np.zeros_like(weight), where=weight > 0)
+        sigma, lp, lq, u, vt = hankel_singular_values(a_r, b_r, c_r * weight[:, None])
+        # States with σ ~ 0 are uncontrollable or unobservable (e.g. the antisymmetric modes
+        # at rest): drop them before balancing, they do not touch the transfer function.
+        minimal = int(np.count_nonzero(sigma > sigma[0] * MINIMAL_RELATIVE_HSV))
+        s_inv_half = 1.0 / np.sqrt(sigma[:minimal])
+        t = lp @ vt[:minimal].T * s_inv_half[None, :]  # x ≈ T x̃
+        t_inv = (s_inv_half[:, None] * u[:, :minimal].T) @ lq.T
+        self.a, self.b, self.c = t_inv @ a_r @ t, t_inv @ b_r, c_r @ t
+        self.hankel_singular_values = sigma[:minimal]
+        self.static_correction = settings.static_correction
 
-    form = diagonalise(a_k, b_k, c_k)
-    return form.eigenvalues, form.b, form.c, d_k
+    @property
+    def order(self) -> int:
+        return self.a.shape[0]
 
+    def truncate(self, n_states: int):
+        """(eigenvalues, B, C, D) in diagonal modal form keeping ``n_states`` states:
+        residualised (DC exact) with static correction, plainly truncated without."""
+        k = max(1, min(int(n_states), self.order))
+        a, b, c, d = self.a, self.b, self.c, self.d
+        if self.static_correction and k < self.order:
+            solve = sla.lu_factor(a[k:, k:])
+            a12, c2 = a[:k, k:], c[:, k:]
+            a21_s, b2_s = sla.lu_solve(solve, a[k:, :k]), sla.lu_solve(solve, b[k:])
+            a_k, b_k = a[:k, :k] - a12 @ a21_s, b[:k] - a12 @ b2_s
+            c_k, d_k = c[:, :k] - c2 @ a21_s, d - c2 @ b2_s
+        else:
+            a_k, b_k, c_k, d_k = a[:k, :k], b[:k], c[:, :k], d
+        form = diagonalise(a_k, b_k, c_k)
+        return form.eigenvalues, form.b, form.c, d_k

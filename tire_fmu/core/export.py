@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import zipfile
 from dataclasses import asdict, fields
 from pathlib import Path
 
@@ -77,7 +78,7 @@ def load_npz(path) -> ReducedModel:
     try:
         with np.load(path, allow_pickle=False) as archive:
             contents = {name: archive[name] for name in archive.files}
-    except (OSError, ValueError, EOFError) as error:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
         raise ModelFileError(f"{path}: not a readable .npz model file ({error})") from error
     missing = [name for name in ("metadata",) + ARRAYS if name not in contents]
     if missing:

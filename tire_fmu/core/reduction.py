@@ -12,9 +12,10 @@ rolling (gyroscopic, non-symmetric) model.
 
 Which modes to keep, in terms a user can reason about (:class:`ReductionSettings`):
 - ``f_max_hz``: modes whose natural frequency |λ|/2π is at most this;
-- ``contribution_threshold``: of those, the modes whose largest contribution to any
-  input/output pair over the error band, relative to that pair's peak, reaches the threshold
-  (the dense sidewall band near 160-168 Hz barely moves the rim and drops out here);
+- ``contribution_threshold``: of those, the least contributing modes are dropped as long as
+  the sum of their contributions, each relative to the full response frequency by frequency
+  over the error band, stays within the threshold: a bound on the relative FRF error they
+  leave (the dense sidewall band near 160-168 Hz barely moves the rim and drops out here);
 - ``n_modes``: at most this many, the largest contributions first;
 - ``static_correction``: add the dropped modes' static (DC) response as a feedthrough, so the
   DC gain is exact (python-control calls this 'matchdc').
@@ -48,11 +49,11 @@ class ReductionSettings:
 
     method: str = "modal"
     f_max_hz: float = 3000.0
-    contribution_threshold: float = 3e-4
+    contribution_threshold: float = 5e-3
     n_modes: int | None = None
     static_correction: bool = True
-    n_states: int | None = None  # balanced: states kept (None: smallest meeting the tolerance)
-    balanced_tolerance: float = 2e-3  # balanced: Hankel tail bound relative to the largest
+    n_states: int | None = None  # balanced: states kept (None: fewest meeting target_error)
+    target_error: float = 5e-3  # balanced with n_states None: max relative FRF error allowed
     error_band_hz: tuple[float, float] = (1.0, 300.0)
     error_points: int = 400
 
@@ -75,8 +76,8 @@ class ReductionSettings:
         if not 0 <= low < high:
             problems.append(f"error_band_hz = {self.error_band_hz!r}: must be (low, high) Hz "
                             "with 0 <= low < high")
-        if not 0 < self.balanced_tolerance < 1:
-            problems.append(f"balanced_tolerance = {self.balanced_tolerance!r}: must be in (0, 1)")
+        if not 0 < self.target_error < 1:
+            problems.append(f"target_error = {self.target_error!r}: must be in (0, 1)")
         if not 10 <= self.error_points <= 100_000:
             problems.append(f"error_points = {self.error_points!r}: must be in [10, 100000]")
         if problems:
@@ -178,36 +179,35 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     return diagonalise(io.a.toarray(), io.b, io.c)
 
 
-def contributions(decomp: ModalForm, io: InputOutputModel, settings: ReductionSettings,
-                  full: dict[tuple[str, int], np.ndarray]) -> np.ndarray:
-    """Each mode's largest relative share of any input/output response over the error band.
+def relative_contributions(decomp: ModalForm, io: InputOutputModel,
+                           settings: ReductionSettings, full: dict) -> np.ndarray:
+    """|mode term(ω)| / |H_full(ω)| for every input/output pair, mode and band frequency.
 
-    For every physical input and output the mode's own term (minus its static part when the
-    static correction will restore it) is divided, frequency by frequency, by the full model's
-    response, so a mode that matters only in an anti-resonance dip still counts. The largest
-    ratio over frequencies and pairs is the mode's contribution; pairs that are zero by
-    symmetry (rim_Fx at rest) are skipped.
+    Shape (pairs, modes, frequencies). The mode's term is taken without its static part when
+    the static correction will restore it, and relative to the full response frequency by
+    frequency, so a mode that matters only in an anti-resonance dip still counts. By the
+    triangle inequality the relative FRF error of dropping a set of modes is at most the sum
+    of their rows.
     """
     omega = 2 * np.pi * settings.error_frequencies_hz()
     lam = decomp.eigenvalues[:, None]
     iw = 1j * omega[None, :]
-    score = np.zeros(lam.shape[0])
     dyn = 1.0 / (iw - lam)
     dyn_partner = 1.0 / (iw - np.conj(lam))
     if settings.static_correction:
         dyn = dyn + 1.0 / lam
         dyn_partner = dyn_partner + 1.0 / np.conj(lam)
-    for name in {key[0] for key in full}:
-        r = physical_input(name, io.input_delays_s, omega)
-        forced = (decomp.b @ r) * dyn
-        forced_partner = (np.conj(decomp.b) @ r) * dyn_partner
-        for (input_name, row), h_full in full.items():
-            if input_name != name:
-                continue
-            c = decomp.c[row][:, None]
-            term = 0.5 * (c * forced + np.conj(c) * forced_partner)
-            score = np.maximum(score, (np.abs(term) / np.abs(h_full)[None, :]).max(axis=1))
-    return score
+    forced = {}
+    rows = []
+    for (name, row), h_full in full.items():
+        if name not in forced:
+            r = physical_input(name, io.input_delays_s, omega)
+            forced[name] = ((decomp.b @ r) * dyn, (np.conj(decomp.b) @ r) * dyn_partner)
+        own, partner = forced[name]
+        c = decomp.c[row][:, None]
+        term = 0.5 * (c * own + np.conj(c) * partner)
+        rows.append(np.abs(term) / np.abs(h_full)[None, :])
+    return np.stack(rows)
 
 
 def _relative_errors(full: dict, reduced: dict) -> tuple[float, dict[str, float]]:
@@ -300,9 +300,7 @@ def reduce(model: TireModel, settings: ReductionSettings | None = None,
         lam, b, c = _select_modes(decomp, io, settings, full)
         d = io.d + (static_correction_matrix(io, lam, b, c) if settings.static_correction else 0)
     else:
-        from .balanced import balanced_reduction
-
-        lam, b, c, d = balanced_reduction(decomp, io, settings)
+        lam, b, c, d = _balanced(decomp, io, settings, full, model)
     metadata = {
         "tire": model.tire.as_dict(),
         "operating_point": model.summary(),
@@ -320,6 +318,33 @@ def reduce(model: TireModel, settings: ReductionSettings | None = None,
     return reduced
 
 
+def _balanced(decomp, io, settings: ReductionSettings, full, model):
+    """Balanced truncation to ``n_states``, or to the fewest states whose FRF error over the
+    band meets ``target_error`` (bisection: the error falls as states are added)."""
+    from .balanced import BalancedRealization
+
+    realization = BalancedRealization(decomp, io, settings, full)
+    if settings.n_states is not None:
+        return realization.truncate(settings.n_states)
+
+    def error(k):
+        lam, b, c, d = realization.truncate(k)
+        trial = ReducedModel(lam, b, c, np.asarray(d, float), io.e, io.input_delays_s, {},
+                             settings, {})
+        return error_report(trial, io, full).max_relative_error
+
+    low, high = 1, realization.order
+    if error(high) > settings.target_error:
+        return realization.truncate(high)  # the report will say the target was missed
+    while low < high:
+        middle = (low + high) // 2
+        if error(middle) <= settings.target_error:
+            high = middle
+        else:
+            low = middle + 1
+    return realization.truncate(high)
+
+
 def _with_report(reduced: ReducedModel, report: ErrorReport) -> ReducedModel:
     from dataclasses import replace
 
@@ -327,13 +352,20 @@ def _with_report(reduced: ReducedModel, report: ErrorReport) -> ReducedModel:
 
 
 def _select_modes(decomp: ModalForm, io, settings: ReductionSettings, full):
+    """Modes to keep: drop those above f_max, then the least contributing ones while the
+    bound on the error they leave (the sum of their relative contributions) stays within
+    ``contribution_threshold``; finally cap at ``n_modes``, largest contributions first."""
     lam = decomp.eigenvalues
-    in_band = np.abs(lam) <= 2 * np.pi * settings.f_max_hz
-    score = contributions(decomp, io, settings, full)
-    candidates = np.flatnonzero(in_band & (score >= settings.contribution_threshold))
-    ranked = candidates[np.argsort(-score[candidates])]
+    shares = relative_contributions(decomp, io, settings, full)
+    score = shares.max(axis=(0, 2))
+    above = np.abs(lam) > 2 * np.pi * settings.f_max_hz
+    dropped = shares[:, above, :].sum(axis=1)  # f_max's share of the budget comes first
+    candidates = np.flatnonzero(~above)
+    order = candidates[np.argsort(score[candidates], kind="stable")]
+    bound = (dropped[:, None, :] + np.cumsum(shares[:, order, :], axis=1)).max(axis=(0, 2))
+    droppable = int(np.searchsorted(bound, settings.contribution_threshold, side="right"))
+    kept = order[droppable:]
     if settings.n_modes is not None:
-        ranked = ranked[: settings.n_modes]
-    chosen = np.sort(ranked)
-    chosen = chosen[np.argsort(np.abs(lam[chosen]), kind="stable")]
-    return lam[chosen], decomp.b[chosen], decomp.c[:, chosen]
+        kept = kept[::-1][: settings.n_modes]
+    kept = kept[np.argsort(np.abs(lam[kept]), kind="stable")]
+    return lam[kept], decomp.b[kept], decomp.c[:, kept]
