@@ -318,3 +318,36 @@ def plot_speed_sweep(result, path: Path) -> Path:
     _order_colourbar(plt, fig, ax, n_limit)
     fig.tight_layout()
     return _save(fig, plt, path)
+
+
+def plot_bode(responses, path: Path, title: str = "") -> Path:
+    """Bode plot (magnitude, log-log, and phase) of frequency responses of one input/output
+    pair, overlaid; with a reference first and others after, a third panel shows their
+    relative error to it."""
+    plt = _pyplot()
+    reference = responses[0]
+    panels = 3 if len(responses) > 1 else 2
+    fig, axes = plt.subplots(panels, 1, figsize=(8, 2.6 * panels + 0.6), sharex=True)
+    for k, frf in enumerate(responses):
+        style = {"lw": 2.2, "color": "0.2"} if k == 0 else {"lw": 1.2, "ls": "--"}
+        axes[0].loglog(frf.frequencies_hz, frf.magnitude, label=frf.label, **style)
+        axes[1].semilogx(frf.frequencies_hz, frf.phase_deg, **style)
+        if k > 0:
+            axes[2].loglog(frf.frequencies_hz, frf.relative_error_to(reference),
+                           label=frf.label, lw=1.2)
+    axes[0].set_ylabel(f"|{reference.output} / {reference.input}| [{reference.unit}]")
+    axes[1].set_ylabel("phase [deg]")
+    if panels == 3:
+        axes[2].set_ylabel("relative error [-]")
+        axes[2].axhline(0.01, color="0.5", lw=0.8, ls=":")
+        axes[2].text(reference.frequencies_hz[0], 0.0105, " 1 %", fontsize=8, color="0.4")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("frequency [Hz]")
+    fig.suptitle(title or f"{reference.input} -> {reference.output}", fontsize=10)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

@@ -52,7 +52,7 @@ class BalancedRealization:
         from .reduction import static_correction_matrix
 
         lam = decomp.eigenvalues
-        keep = np.abs(lam) <= 2 * np.pi * settings.f_max_hz
+        keep = ~settings.above_f_max(lam)
         lam, b, c = lam[keep], decomp.b[keep], decomp.c[:, keep]
         self.d = io.d + static_correction_matrix(io, lam, b, c)
         a_r, b_r, c_r, _, _ = real_block_form(lam, b, c, self.d, io.e)

@@ -59,13 +59,17 @@ def _normalise(model: TireModel, shape: np.ndarray) -> np.ndarray:
 
 
 def complex_modes(model: TireModel, fmax_hz: float | None = None) -> ModalResult:
-    """All modes of the rolling (or resting) tire with 0 <= Im(s)/2π <= fmax_hz, ascending."""
+    """Oscillating modes of the rolling (or resting) tire with natural frequency |s|/2π up to
+    ``fmax_hz``, ascending in ground-frame frequency Im(s)/2π."""
     n = model.n_dof
     values, vectors = sla.eig(state_matrix(model))
-    keep = values.imag >= -1e-9 * np.abs(values)
+    # One member per conjugate pair; real eigenvalues (overdamped, non-oscillating) are no
+    # vibration modes and are left out. The band is on the natural frequency |s|/2π, as for
+    # real_modes, so modes overdamped in the body frame do not enter at their Doppler shift.
+    keep = values.imag > 1e-9 * np.abs(values)
     values, vectors = values[keep], vectors[:n, keep]
     if fmax_hz is not None:
-        inside = values.imag <= 2 * np.pi * fmax_hz
+        inside = np.abs(values) <= 2 * np.pi * fmax_hz
         values, vectors = values[inside], vectors[:, inside]
     order = np.argsort(values.imag)
     values, vectors = values[order], vectors[:, order]

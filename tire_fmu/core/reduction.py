@@ -11,7 +11,9 @@ with C_q already carrying that factor 2 (1 for real eigenvalues). It works uncha
 rolling (gyroscopic, non-symmetric) model.
 
 Which modes to keep, in terms a user can reason about (:class:`ReductionSettings`):
-- ``f_max_hz``: modes whose natural frequency |λ|/2π is at most this;
+- ``f_max_hz``: modes whose natural frequency |λ|/2π is at most this (default: no cut;
+  modes far above the band still shape it, the contact patch's stiff modes most of all, and
+  the budget below already drops what does not matter);
 - ``contribution_threshold``: of those, the least contributing modes are dropped as long as
   the sum of their contributions, each relative to the full response frequency by frequency
   over the error band, stays within the threshold: a bound on the relative FRF error they
@@ -26,6 +28,7 @@ Which modes to keep, in terms a user can reason about (:class:`ReductionSettings
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -43,12 +46,16 @@ from .model import TireModel
 METHODS = ("modal", "balanced")
 
 
+class ReductionWarning(UserWarning):
+    """The reduction settings leave more error than they were asked to."""
+
+
 @dataclass(frozen=True)
 class ReductionSettings:
     """How to reduce; see the module docstring. Frequencies in Hz."""
 
     method: str = "modal"
-    f_max_hz: float = 3000.0
+    f_max_hz: float | None = None  # None: no frequency cut, the contribution budget decides
     contribution_threshold: float = 5e-3
     n_modes: int | None = None
     static_correction: bool = True
@@ -61,8 +68,11 @@ class ReductionSettings:
         problems = []
         if self.method not in METHODS:
             problems.append(f"method = {self.method!r}: must be one of {METHODS}")
-        if not (isinstance(self.f_max_hz, (int, float)) and 0 < self.f_max_hz <= 1e6):
-            problems.append(f"f_max_hz = {self.f_max_hz!r}: must be in (0, 1e6] Hz")
+        if self.f_max_hz is not None and not (
+            isinstance(self.f_max_hz, (int, float)) and 0 < self.f_max_hz <= 1e7
+        ):
+            problems.append(f"f_max_hz = {self.f_max_hz!r}: must be in (0, 1e7] Hz, or None "
+                            "for no frequency cut")
         if not (0 <= self.contribution_threshold < 1):
             problems.append(
                 f"contribution_threshold = {self.contribution_threshold!r}: must be in [0, 1)"
@@ -84,6 +94,12 @@ class ReductionSettings:
             from .parameters import ParameterError
 
             raise ParameterError(problems)
+
+    def above_f_max(self, eigenvalues: np.ndarray) -> np.ndarray:
+        """Which modes lie above f_max (natural frequency |λ|/2π); none without a cut."""
+        if self.f_max_hz is None:
+            return np.zeros(eigenvalues.shape, dtype=bool)
+        return np.abs(eigenvalues) > 2 * np.pi * self.f_max_hz
 
     def error_frequencies_hz(self) -> np.ndarray:
         low, high = self.error_band_hz
@@ -181,13 +197,13 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
 
 def relative_contributions(decomp: ModalForm, io: InputOutputModel,
                            settings: ReductionSettings, full: dict) -> np.ndarray:
-    """|mode term(ω)| / |H_full(ω)| for every input/output pair, mode and band frequency.
+    """Each mode's term relative to the full response: term(ω) / |H_full(ω)|, complex.
 
-    Shape (pairs, modes, frequencies). The mode's term is taken without its static part when
-    the static correction will restore it, and relative to the full response frequency by
-    frequency, so a mode that matters only in an anti-resonance dip still counts. By the
-    triangle inequality the relative FRF error of dropping a set of modes is at most the sum
-    of their rows.
+    Shape (pairs, modes, frequencies) over every input/output pair in ``full`` and the error
+    band. The mode's term is taken without its static part when the static correction will
+    restore it, and relative to the full response frequency by frequency, so a mode that
+    matters only in an anti-resonance dip still counts. The relative FRF error of dropping a
+    set of modes is the magnitude of the sum of their rows.
     """
     omega = 2 * np.pi * settings.error_frequencies_hz()
     lam = decomp.eigenvalues[:, None]
@@ -198,16 +214,15 @@ def relative_contributions(decomp: ModalForm, io: InputOutputModel,
         dyn = dyn + 1.0 / lam
         dyn_partner = dyn_partner + 1.0 / np.conj(lam)
     forced = {}
-    rows = []
-    for (name, row), h_full in full.items():
+    rows = np.empty((len(full), lam.shape[0], omega.size), dtype=complex)
+    for k, ((name, row), h_full) in enumerate(full.items()):
         if name not in forced:
             r = physical_input(name, io.input_delays_s, omega)
             forced[name] = ((decomp.b @ r) * dyn, (np.conj(decomp.b) @ r) * dyn_partner)
         own, partner = forced[name]
         c = decomp.c[row][:, None]
-        term = 0.5 * (c * own + np.conj(c) * partner)
-        rows.append(np.abs(term) / np.abs(h_full)[None, :])
-    return np.stack(rows)
+        rows[k] = 0.5 * (c * own + np.conj(c) * partner) / np.abs(h_full)[None, :]
+    return rows
 
 
 def _relative_errors(full: dict, reduced: dict) -> tuple[float, dict[str, float]]:
@@ -282,7 +297,9 @@ def static_outputs(model: TireModel) -> dict[str, float]:
         "rim_Fz": float(t @ internal),
         "rim_Fx": float(s @ internal),
         "contact_Fz": float(contact),
-        "deflection": float(model.patch.deflection_m),
+        # the model's own compression of the tread at the patch centre, as the dynamic output
+        # measures it: the chord deflection less the contact spring's small give
+        "deflection": float(-(u[0] - t[0] * z_rim)),
     }
 
 
@@ -352,17 +369,32 @@ def _with_report(reduced: ReducedModel, report: ErrorReport) -> ReducedModel:
 
 
 def _select_modes(decomp: ModalForm, io, settings: ReductionSettings, full):
-    """Modes to keep: drop those above f_max, then the least contributing ones while the
-    bound on the error they leave (the sum of their relative contributions) stays within
-    ``contribution_threshold``; finally cap at ``n_modes``, largest contributions first."""
+    """Modes to keep: drop those above f_max, then the least contributing ones while a bound
+    on the relative FRF error left behind stays within ``contribution_threshold``; finally
+    cap at ``n_modes``, largest contributions first.
+
+    The bound is |Σ above-f_max terms| (summed coherently: they are known exactly) plus
+    Σ |dropped in-band terms| (triangle inequality), the worst over frequencies and pairs.
+    """
     lam = decomp.eigenvalues
     shares = relative_contributions(decomp, io, settings, full)
-    score = shares.max(axis=(0, 2))
-    above = np.abs(lam) > 2 * np.pi * settings.f_max_hz
-    dropped = shares[:, above, :].sum(axis=1)  # f_max's share of the budget comes first
+    magnitude = np.abs(shares)
+    score = magnitude.max(axis=(0, 2))
+    above = settings.above_f_max(lam)
+    cut = np.abs(shares[:, above, :].sum(axis=1))
+    if cut.size and cut.max() > settings.contribution_threshold:
+        warnings.warn(
+            f"f_max_hz = {settings.f_max_hz:g} Hz drops modes that alone leave a relative FRF "
+            f"error up to {cut.max():.3g} over {settings.error_band_hz[0]:g}-"
+            f"{settings.error_band_hz[1]:g} Hz (budget {settings.contribution_threshold:g}); "
+            "raise f_max_hz or leave it unset (the stiff contact-patch modes near 1 kHz matter "
+            "most)",
+            ReductionWarning,
+            stacklevel=3,
+        )
     candidates = np.flatnonzero(~above)
     order = candidates[np.argsort(score[candidates], kind="stable")]
-    bound = (dropped[:, None, :] + np.cumsum(shares[:, order, :], axis=1)).max(axis=(0, 2))
+    bound = (cut[:, None, :] + np.cumsum(magnitude[:, order, :], axis=1)).max(axis=(0, 2))
     droppable = int(np.searchsorted(bound, settings.contribution_threshold, side="right"))
     kept = order[droppable:]
     if settings.n_modes is not None:

@@ -1,0 +1,81 @@
+"""CLI of the reduced-order model: frf, reduce, export."""
+
+import json
+
+import numpy as np
+import pytest
+
+from tire_fmu.cli import main
+from tire_fmu.core import OperatingPoint, build_model
+from tire_fmu.core.export import load_mat, load_npz
+from tire_fmu.core.frequency_response import full_frequency_response
+from tire_fmu.core.reduction import ReductionSettings, reduce
+
+MODEL = ["--elements", "40", "--patch-length", "0.204"]
+
+
+def run_json(capsys, *argv):
+    assert main([*argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_reduce_json_is_the_report_of_the_python_api(capsys, tire):
+    data = run_json(capsys, "reduce", *MODEL, "--threshold", "0.01")
+    reduced = reduce(build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.204)),
+                     ReductionSettings(contribution_threshold=0.01))
+    assert data["n_states"] == reduced.n_states
+    assert data["report"]["max_relative_error"] == pytest.approx(
+        reduced.report.max_relative_error, rel=1e-9)
+    assert data["settings"]["contribution_threshold"] == 0.01
+
+
+def test_frf_json_matches_the_full_model_and_reports_the_reduced_error(capsys, tire):
+    data = run_json(capsys, "frf", *MODEL, "--input", "rim", "--output", "rim_fz", "--reduced",
+                    "--points", "50", "--fmin", "1", "--fmax", "300")
+    full, reduced = data["responses"]
+    model = build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.204))
+    ref = full_frequency_response(model, "rim", "rim_Fz", np.geomspace(1, 300, 50))
+    np.testing.assert_allclose(full["magnitude"], ref.magnitude, rtol=1e-12)
+    error = np.abs(np.array(reduced["magnitude"]) / ref.magnitude - 1).max()
+    assert error <= data["max_relative_error"] + 1e-12  # the magnitude error is bounded by it
+    assert data["max_relative_error"] < 0.01
+    # static vertical stiffness: the rim force falls by K_v per metre of rim rise at DC
+    assert full["magnitude"][0] == pytest.approx(model.static_vertical_stiffness_n_per_m,
+                                                 rel=1e-3)
+
+
+def test_frf_plot_is_written(tmp_path, capsys):
+    path = tmp_path / "bode.png"
+    assert main(["frf", *MODEL, "--reduced", "--points", "40", "--plot", str(path)]) == 0
+    assert path.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("suffix", ["npz", "mat"])
+def test_export_writes_a_file_that_loads(tmp_path, capsys, suffix):
+    path = tmp_path / f"tire.{suffix}"
+    data = run_json(capsys, "export", str(path), *MODEL, "--method", "balanced",
+                    "--n-states", "24")
+    assert data["n_states"] == 24 and data["file"] == str(path)
+    if suffix == "npz":
+        assert load_npz(path).n_states == 24
+    else:
+        assert load_mat(path)["A"].shape == (24, 24)
+
+
+def test_bad_reduction_settings_are_all_reported_on_one_line(capsys):
+    code = main(["reduce", *MODEL, "--threshold", "2", "--f-max", "-5", "--n-modes", "0"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1
+    for fragment in ("contribution_threshold = 2", "f_max_hz = -5", "n_modes = 0"):
+        assert fragment in err
+
+
+def test_road_input_needs_a_patch(capsys):
+    assert main(["frf", "--elements", "40", "--patch-length", "0"]) == 2
+    assert "needs a contact patch" in capsys.readouterr().err
+
+
+def test_export_refuses_an_unknown_format(tmp_path, capsys):
+    assert main(["export", str(tmp_path / "model.txt"), *MODEL]) == 2
+    assert "--format = 'txt'" in capsys.readouterr().err

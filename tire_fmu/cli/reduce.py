@@ -1,0 +1,212 @@
+"""Reduced-order model commands: frf (Bode, full and reduced), reduce (the report), export."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from ..core.frequency_response import full_frequency_response, reduced_frequency_response
+from ..core.reduction import ReductionSettings, reduce
+from .common import (
+    CliError,
+    Output,
+    add_contact_options,
+    add_mesh_option,
+    add_output_options,
+    add_speed_options,
+    add_tire_options,
+    model_from_args,
+    plot_with,
+    raise_problems,
+    range_problem,
+    table,
+    write_plot,
+)
+
+#: CLI spelling -> output name of the core
+OUTPUT_CHOICES = {"rim_fz": "rim_Fz", "rim_fx": "rim_Fx", "contact_fz": "contact_Fz",
+                  "deflection": "deflection"}
+_DEFAULTS = ReductionSettings()
+
+
+def add_reduction_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("reduction settings")
+    g.add_argument("--method", choices=("modal", "balanced"), default=_DEFAULTS.method,
+                   help="modal truncation (default) or balanced truncation")
+    g.add_argument("--f-max", metavar="HZ", type=float, default=None,
+                   help="keep only modes with natural frequency up to this, Hz; the rest "
+                   "enter statically (default: no cut, the threshold decides)")
+    g.add_argument("--threshold", metavar="X", type=float,
+                   default=_DEFAULTS.contribution_threshold,
+                   help="modal: drop the least contributing modes while their summed relative "
+                   f"contribution stays below X (default {_DEFAULTS.contribution_threshold:g})")
+    g.add_argument("--n-modes", metavar="K", type=int, default=None,
+                   help="modal: keep at most K modes (complex pairs), largest contributions first")
+    g.add_argument("--no-static-correction", action="store_true",
+                   help="do not add the dropped modes' static response (DC gain then inexact)")
+    g.add_argument("--n-states", metavar="K", type=int, default=None,
+                   help="balanced: states to keep (default: fewest meeting --target-error)")
+    g.add_argument("--target-error", metavar="X", type=float, default=_DEFAULTS.target_error,
+                   help="balanced: largest relative FRF error allowed over the band "
+                   f"(default {_DEFAULTS.target_error:g})")
+    g.add_argument("--band", metavar="LOW,HIGH", default="1,300",
+                   help="band of the error report in Hz (default 1,300)")
+
+
+def _band(text: str) -> tuple[float, float]:
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError as error:
+        raise CliError(f"--band = {text!r}: expected LOW,HIGH in Hz, e.g. 1,300") from error
+    return low, high
+
+
+def settings_from_args(args: argparse.Namespace) -> ReductionSettings:
+    """Reduction settings from the options; ReductionSettings lists every problem at once."""
+    return ReductionSettings(
+        method=args.method,
+        f_max_hz=args.f_max,
+        contribution_threshold=args.threshold,
+        n_modes=args.n_modes,
+        static_correction=not args.no_static_correction,
+        n_states=args.n_states,
+        target_error=args.target_error,
+        error_band_hz=_band(args.band),
+    )
+
+
+def _add_model_options(p: argparse.ArgumentParser) -> None:
+    add_mesh_option(p)
+    add_contact_options(p, "default: from the load")
+    add_speed_options(p)
+    add_tire_options(p)
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "frf",
+        help="frequency response of the full model, and of a reduced one (Bode plot)",
+        description="Frequency response from rim displacement or road height (at the leading "
+        "edge of the patch) to a force or the deflection. With --reduced the reduced model "
+        "built with the reduction settings is overlaid, with its relative error.",
+    )
+    p.add_argument("--input", choices=("road", "rim"), default="road",
+                   help="excitation: road height or rim displacement (default road)")
+    p.add_argument("--output", choices=tuple(OUTPUT_CHOICES), default="rim_fz",
+                   help="response (default rim_fz, the force on the rim)")
+    p.add_argument("--reduced", action="store_true", help="overlay the reduced model")
+    p.add_argument("--fmin", metavar="HZ", type=float, default=0.5,
+                   help="lowest frequency in Hz (default 0.5)")
+    p.add_argument("--fmax", metavar="HZ", type=float, default=300.0,
+                   help="highest frequency in Hz (default 300)")
+    p.add_argument("--points", metavar="K", type=int, default=600,
+                   help="frequencies, log-spaced (default 600)")
+    _add_model_options(p)
+    add_reduction_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_frf)
+
+    p = subparsers.add_parser(
+        "reduce",
+        help="build a reduced model and report its size and accuracy",
+        description="Reduce the tire at its operating point and report the states kept, the "
+        "settings and the maximum relative FRF error against the full model over the band.",
+    )
+    _add_model_options(p)
+    add_reduction_options(p)
+    add_output_options(p, plot=False)
+    p.set_defaults(handler=run_reduce)
+
+    p = subparsers.add_parser(
+        "export",
+        help="write a reduced model: .npz (with metadata) or MATLAB .mat (A, B, C, D)",
+        description="Export the reduced model. npz: diagonal modal form, JSON metadata, "
+        "checksums (load with tire_fmu.core.export.load_npz). mat: real A, B, C, D for "
+        "ss(A, B, C, D), inputs [r; dr/dt].",
+    )
+    p.add_argument("out", metavar="OUT", type=Path, help="file to write")
+    p.add_argument("--format", choices=("npz", "mat"), default=None,
+                   help="file format (default: from the extension of OUT)")
+    _add_model_options(p)
+    add_reduction_options(p)
+    add_output_options(p, plot=False)
+    p.set_defaults(handler=run_export)
+
+
+def run_frf(args: argparse.Namespace) -> Output:
+    raise_problems([
+        range_problem("--fmin", args.fmin, 1e-3, 1e5, "Hz"),
+        range_problem("--fmax", args.fmax, 1e-3, 1e5, "Hz"),
+        range_problem("--points", args.points, 2, 100_000, integer=True),
+        None if args.fmax > args.fmin else
+        f"--fmax = {args.fmax:g} Hz: must be above --fmin = {args.fmin:g} Hz",
+    ])
+    settings = settings_from_args(args)
+    model = model_from_args(args, undeformed_default=False)
+    freqs = np.geomspace(args.fmin, args.fmax, args.points)
+    output_name = OUTPUT_CHOICES[args.output]
+    responses = [full_frequency_response(model, args.input, output_name, freqs)]
+    reduced = None
+    if args.reduced:
+        reduced = reduce(model, settings)
+        responses.append(reduced_frequency_response(reduced, args.input, output_name, freqs))
+    data = {**model.summary(), "responses": [r.to_dict() for r in responses]}
+    rows = []
+    for f in (1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 300.0):
+        if args.fmin <= f <= args.fmax:
+            i = int(np.argmin(np.abs(freqs - f)))
+            rows.append([freqs[i]] + [r.magnitude[i] for r in responses])
+    text = table(rows, ["f [Hz]"] + [f"|H| {r.label} [{r.unit}]" for r in responses])
+    if reduced is not None:
+        error = float(responses[1].relative_error_to(responses[0]).max())
+        data["max_relative_error"] = error
+        data["reduction"] = reduced.summary()
+        text += f"\nmax relative error {error:.3g} over {args.fmin:g}-{args.fmax:g} Hz"
+    output = Output(text=text, data=data)
+    title = (f"{args.input} -> {output_name}: N = {model.n_elements}, patch "
+             f"{model.patch.length_m * 100:.3g} cm, load {model.patch.load_n / 1e3:.3g} kN, "
+             f"speed {model.speed_m_s:g} m/s")
+    write_plot(args, output, plot_with("plot_bode", responses, title=title))
+    return output
+
+
+def _report_text(reduced, model) -> str:
+    report = reduced.report
+    lines = [
+        f"method {reduced.settings.method}: {reduced.n_states} states "
+        f"({reduced.n_modes} modes) of {4 * model.n_elements}, "
+        f"{reduced.n_inputs} inputs (rim + {reduced.n_inputs - 1} road delay groups)",
+        f"built in {reduced.metadata['build_seconds']:.2f} s",
+        f"max relative FRF error over {report.band_hz[0]:g}-{report.band_hz[1]:g} Hz: "
+        f"{report.max_relative_error:.3g}",
+    ]
+    rows = [[pair, err] for pair, err in report.per_pair.items()]
+    return "\n".join(lines) + "\n" + table(rows, ["input->output", "max rel. error"])
+
+
+def run_reduce(args: argparse.Namespace) -> Output:
+    settings = settings_from_args(args)
+    model = model_from_args(args, undeformed_default=False)
+    reduced = reduce(model, settings)
+    return Output(text=_report_text(reduced, model), data=reduced.summary())
+
+
+def run_export(args: argparse.Namespace) -> Output:
+    from ..core.export import save_mat, save_npz
+
+    fmt = args.format or args.out.suffix.lstrip(".").lower()
+    if fmt not in ("npz", "mat"):
+        raise CliError(f"--format = {fmt!r}: must be npz or mat (or give OUT a .npz or .mat "
+                       "extension)")
+    if not args.out.parent.exists():
+        raise CliError(f"OUT = {str(args.out)!r}: folder {args.out.parent} does not exist")
+    settings = settings_from_args(args)
+    model = model_from_args(args, undeformed_default=False)
+    reduced = reduce(model, settings)
+    path = (save_npz if fmt == "npz" else save_mat)(reduced, args.out)
+    output = Output(text=_report_text(reduced, model), data={**reduced.summary(),
+                                                             "file": str(path)})
+    output.written.append(path)
+    return output

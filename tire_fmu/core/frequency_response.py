@@ -1,0 +1,84 @@
+"""Frequency responses as result objects: the full model and its reduced models side by side."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .io_model import OUTPUT_UNITS, OUTPUTS, PHYSICAL_INPUTS, build_io_model
+from .model import TireModel
+from .reduction import ReducedModel
+
+
+@dataclass(frozen=True, eq=False)
+class FrequencyResponse:
+    """H(f) from a unit physical input (rim displacement or road height, m) to one output."""
+
+    frequencies_hz: np.ndarray
+    response: np.ndarray  # complex, output unit per m
+    input: str
+    output: str
+    label: str
+
+    @property
+    def unit(self) -> str:
+        return f"{OUTPUT_UNITS[self.output]}/m"
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        return np.abs(self.response)
+
+    @property
+    def phase_deg(self) -> np.ndarray:
+        return np.degrees(np.unwrap(np.angle(self.response)))
+
+    def relative_error_to(self, reference: FrequencyResponse) -> np.ndarray:
+        return np.abs(self.response - reference.response) / np.abs(reference.response)
+
+    def to_dict(self) -> dict:
+        return {
+            "label": self.label,
+            "input": self.input,
+            "output": self.output,
+            "unit": self.unit,
+            "frequencies_hz": self.frequencies_hz.tolist(),
+            "magnitude": self.magnitude.tolist(),
+            "phase_deg": self.phase_deg.tolist(),
+        }
+
+
+def _check(input_name: str, output_name: str) -> int:
+    problems = []
+    if input_name not in PHYSICAL_INPUTS:
+        problems.append(f"input = {input_name!r}: must be one of {PHYSICAL_INPUTS}")
+    if output_name not in OUTPUTS:
+        problems.append(f"output = {output_name!r}: must be one of {OUTPUTS}")
+    if problems:
+        from .parameters import ParameterError
+
+        raise ParameterError(problems)
+    return OUTPUTS.index(output_name)
+
+
+def full_frequency_response(model: TireModel, input_name: str, output_name: str,
+                            freqs_hz) -> FrequencyResponse:
+    """Exact FRF of the unreduced model."""
+    row = _check(input_name, output_name)
+    if input_name == "road" and not model.patch.in_contact:
+        from .parameters import ParameterError
+
+        raise ParameterError(["input = 'road' needs a contact patch: give a load or a patch "
+                              "length > 0"])
+    freqs = np.asarray(freqs_hz, dtype=float)
+    response = build_io_model(model).frequency_response(input_name, freqs)[row]
+    return FrequencyResponse(freqs, response, input_name, output_name, "full model")
+
+
+def reduced_frequency_response(reduced: ReducedModel, input_name: str, output_name: str,
+                               freqs_hz) -> FrequencyResponse:
+    row = _check(input_name, output_name)
+    freqs = np.asarray(freqs_hz, dtype=float)
+    response = reduced.physical_frequency_response(input_name, freqs)[row]
+    label = f"reduced ({reduced.settings.method}, {reduced.n_states} states)"
+    return FrequencyResponse(freqs, response, input_name, output_name, label)
