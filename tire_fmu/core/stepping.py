@@ -11,9 +11,16 @@ the diagonal case of the matrix exponential of [[A, B, 0], [0, 0, I], [0, 0, 0]]
 and for models that are not diagonal. The coefficients are cached per h, so a host that
 varies its step pays for each distinct h once; a step then costs one element-wise product and
 one (states × 2·inputs) matrix-vector product.
+
+:class:`FusedStep` folds the output readout, a map from the caller's own input coordinates and
+the static offset into the coefficients of one h, so that a simulator keeping its state in one
+buffer z = [q, p, 1] advances with three numpy calls and no allocation (the FMU's hot path,
+where each numpy call costs as much as the arithmetic).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
@@ -70,6 +77,42 @@ class DiagonalStepper:
     def output(self, q: np.ndarray, inputs: np.ndarray) -> np.ndarray:
         """y = Re(C q) + D r + E v for ``inputs`` = [r, v]."""
         return (self.c @ q).real + self.de @ inputs
+
+    def fused(self, h: float, input_map: np.ndarray, offset: np.ndarray) -> FusedStep:
+        """The step over h with the readout at its end folded in (see :class:`FusedStep`).
+
+        ``input_map`` (2·inputs × p) turns the caller's p input values into [r, v];
+        ``offset`` is added to every output (the static values).
+        """
+        decay, gain = self.coefficients(h)
+        m = self.n_inputs
+        # outputs are read at the ramp's end: [r + v h, v] = ramp_end @ [r, v]
+        ramp_end = np.eye(2 * m)
+        ramp_end[:m, m:] = h * np.eye(m)
+        input_map = np.asarray(input_map, dtype=float)
+        readout = np.hstack([
+            self.c * decay[None, :],
+            (self.c @ gain + self.de @ ramp_end) @ input_map,
+            np.asarray(offset, dtype=float)[:, None],
+        ])
+        return FusedStep(h=h, decay=decay, gain=gain @ input_map, readout=readout)
+
+
+@dataclass(frozen=True, eq=False)
+class FusedStep:
+    """One step over ``h`` for a state kept in a buffer z = [q, p, 1], p the inputs at the
+    step's start in the caller's coordinates:
+
+        y(t + h) = Re(readout @ z),    q(t + h) = decay * q + gain @ p.
+
+    The readout is taken before q is advanced: it carries C·e^{λh} on q and C·Γ plus the
+    feedthrough at the ramp's end on p, so both results come from the state at t.
+    """
+
+    h: float
+    decay: np.ndarray  # (k,) complex
+    gain: np.ndarray  # (k, p) complex
+    readout: np.ndarray  # (outputs, k + p + 1) complex
 
 
 class DenseStepper:
