@@ -5,7 +5,9 @@ Inputs at each communication point are deviations from static equilibrium: rim d
 and velocity, road height and velocity at the leading edge of the patch. Each group of patch
 nodes sees the road height a delay τ later; the road's history is kept at the communication
 points and read back by cubic Hermite interpolation (exact for the ramps the step assumes).
-Before the first communication point the road is taken as level at its first value.
+Before the first communication point the road is taken as level at its first value. Once the
+steps have had one size for the whole reach of the delays, that read-back is fixed weights on
+the last samples, and a delay line applies them with one product a step.
 
 Outputs are totals: static value plus deviation, so a host in equilibrium stays there. The
 linear contact cannot lift off; when the total contact force drops below zero,
@@ -17,9 +19,11 @@ from __future__ import annotations
 import io
 import json
 import math
+import struct
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg.blas import dgemv
 
 from .reduction import ReducedModel
 from .stepping import DiagonalStepper, FusedStep
@@ -27,10 +31,12 @@ from .stepping import DiagonalStepper, FusedStep
 INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
 OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
 _STATE_FORMAT = "tire_fmu.simulator-state/1"
-_INF = math.inf
 _KERNEL_CACHE_SIZE = 64
 #: Steps closer than this times the current time are one step (a few ulps of the time axis).
 _SAME_STEP_EPS = 8 * np.finfo(float).eps
+_PACK_INPUTS = struct.Struct(f"{len(INPUT_NAMES)}d").pack_into
+_PACK_PAIR = struct.Struct("2d").pack_into
+_UNPACK_OUTPUTS = struct.Struct(f"{len(OUTPUT_NAMES)}d").unpack_from
 
 
 class StepError(ValueError):
@@ -75,8 +81,8 @@ class SimulatorState:
 class TireSimulator:
     """Steps a :class:`ReducedModel` from communication point to communication point.
 
-    The modal state lives in one buffer z = [q, inputs, 1] that :class:`FusedStep` advances in
-    place, so a step allocates nothing: it is the inner loop of the FMU.
+    The modal state lives in one buffer that :class:`FusedStep` advances in place, so a step
+    allocates nothing but its list of outputs: it is the inner loop of the FMU.
     """
 
     def __init__(self, reduced: ReducedModel, start_time: float = 0.0):
@@ -87,21 +93,32 @@ class TireSimulator:
         self._horizon = float(self.road_delays_s.max()) if self.road_delays_s.size else 0.0
         self.static = np.array([reduced.static_outputs[name] for name in OUTPUT_NAMES])
         m, k = reduced.n_inputs, reduced.n_modes
-        if self._delayed:  # the road history gives each internal input its own value
-            self._input_map = np.eye(2 * m)
-        else:  # the four physical inputs feed the internal ones directly
-            self._input_map = np.zeros((2 * m, len(INPUT_NAMES)))
-            self._input_map[0, 0] = self._input_map[m, 1] = 1.0  # rim_z, rim_vz
+        # The step's inputs p start with rim_z, rim_vz. At rest road_z, road_vz follow and
+        # feed every road input; at speed each road input has its own delayed height, then
+        # its own slope: p = [rim_z, rim_vz, r_1 .. r_m-1, v_1 .. v_m-1].
+        n_p = len(INPUT_NAMES) if not self._delayed else 2 * m
+        self._input_map = np.zeros((2 * m, n_p))
+        self._input_map[0, 0] = self._input_map[m, 1] = 1.0  # rim_z, rim_vz
+        if self._delayed:
+            self._input_map[1:m, 2:m + 1] = self._input_map[m + 1:, m + 1:] = np.eye(m - 1)
+        else:
             self._input_map[1:m, 2] = self._input_map[m + 1:, 3] = 1.0  # road_z, road_vz
-        n_p = self._input_map.shape[1]
-        self._z = np.zeros(k + n_p + 1, dtype=complex)
-        self._z[-1] = 1.0  # carries the static outputs through the readout
-        self._q, self._p = self._z[:k], self._z[k:k + n_p]
-        self._y = np.zeros(len(OUTPUT_NAMES), dtype=complex)
-        self._g = np.zeros(k, dtype=complex)
+        # One real buffer [q as (re, im) pairs, inputs, 1] that FusedStep advances in place;
+        # the 1 carries the static outputs through the readout.
+        self._buffer = np.zeros(2 * k + n_p + 1)
+        self._buffer[-1] = 1.0
+        self._q = self._buffer[:2 * k].view(complex)
+        self._p = self._buffer[2 * k:2 * k + n_p]
+        self._road = self._buffer[2 * k + 2:2 * k + n_p]  # the delayed road inputs
+        self._y = np.zeros(len(OUTPUT_NAMES))
+        # inputs go in with one struct call and the outputs come out as floats with another:
+        # cheaper than numpy item assignments and a tolist
+        self._buffer_bytes = memoryview(self._buffer).cast("B")
+        self._input_offset = 2 * k * self._buffer.itemsize
         self._kernels: dict[float, FusedStep] = {}
         self._kernel: FusedStep | None = None
         self._kernel_h = math.nan
+        self._advance = None
         self.reset(start_time)
 
     def reset(self, start_time: float = 0.0) -> None:
@@ -110,8 +127,9 @@ class TireSimulator:
         self.history_t = np.zeros(0)
         self.history_z = np.zeros(0)
         self.history_v = np.zeros(0)
-        self._values = self.static.tolist()
-        self.in_contact = bool(self.static[2] > 0.0)
+        self._delay_line: _RoadDelayLine | None = None
+        self._uniform_run: int | None = None  # see _road_inputs; None: count it again
+        self._values = tuple(self.static.tolist())
 
     @property
     def q(self) -> np.ndarray:
@@ -123,13 +141,18 @@ class TireSimulator:
         self._q[:] = value
 
     @property
+    def in_contact(self) -> bool:
+        """Whether the contact force is positive (the linear contact cannot lift off)."""
+        return self._values[2] > 0.0
+
+    @property
     def outputs(self) -> np.ndarray:
         """Total outputs (rim_Fz, rim_Fx, contact_Fz, deflection) at ``time``."""
         return np.array(self._values)
 
     @outputs.setter
     def outputs(self, value) -> None:
-        self._values = [float(v) for v in value]
+        self._values = tuple(float(v) for v in value)
 
     # -- stepping ----------------------------------------------------------------------------
     def step(self, h: float, rim_z: float, rim_vz: float, road_z: float, road_vz: float
@@ -139,32 +162,27 @@ class TireSimulator:
         return np.array(self.step_values(h, rim_z, rim_vz, road_z, road_vz))
 
     def step_values(self, h: float, rim_z: float, rim_vz: float, road_z: float,
-                    road_vz: float) -> list[float]:
-        """:meth:`step` returning the outputs as a list of floats (the FMU's hot path)."""
+                    road_vz: float) -> tuple[float, ...]:
+        """:meth:`step` returning the outputs as a tuple of floats (the FMU's hot path)."""
         # One test for all four inputs: x * 0 is 0 only for finite x, and a sum keeps any nan
-        # or inf; the exact check runs only when this one fails.
-        if not 0.0 < h < _INF or (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0:
+        # or inf. h is checked when its coefficients are chosen: only a valid h gets them.
+        if h != self._kernel_h or (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0:
             self._check_step(h, (rim_z, rim_vz, road_z, road_vz))
-        kernel = self._kernel if h == self._kernel_h else self._kernel_for(h)
-        if self._delayed:
-            r, v = self._internal_inputs(rim_z, rim_vz, road_z, road_vz)
-            m = r.size
-            self._p[:m] = r
-            self._p[m:] = v
+            if h != self._kernel_h:
+                self._use_kernel(h)
+        if not self._delayed:
+            _PACK_INPUTS(self._buffer_bytes, self._input_offset, rim_z, rim_vz, road_z, road_vz)
         else:
-            z, k = self._z, self._q.size
-            z[k] = rim_z
-            z[k + 1] = rim_vz
-            z[k + 2] = road_z
-            z[k + 3] = road_vz
-        np.dot(kernel.readout, self._z, out=self._y)  # from the state at t, so before q moves
-        np.multiply(self._q, kernel.decay, out=self._q)
-        np.dot(kernel.gain, self._p, out=self._g)
-        np.add(self._q, self._g, out=self._q)
-        values = self._y.real.tolist()
+            _PACK_PAIR(self._buffer_bytes, self._input_offset, rim_z, rim_vz)
+            if self._delay_line is None:
+                self._road_inputs(road_z, road_vz)
+            else:
+                self._delay_line.push(self.time, road_z, road_vz)
+                self._delay_line.read_into(self._road)
+        self._advance()
+        values = _UNPACK_OUTPUTS(self._y)
         self._values = values
         self.time += h
-        self.in_contact = values[2] > 0.0
         return values
 
     def _check_step(self, h: float, values: tuple) -> None:
@@ -176,11 +194,11 @@ class TireSimulator:
         if bad:
             raise StepError("non-finite input: " + ", ".join(bad))
 
-    def _kernel_for(self, h: float) -> FusedStep:
-        """The fused step for h. A step that differs from a cached one by less than the time
-        axis resolves at this time is that step: hosts that compute h as a difference of
-        communication points (fmpy does) jitter it in the last bits, and the jitter does not
-        accumulate because the host's own time stays the reference."""
+    def _use_kernel(self, h: float) -> None:
+        """Step with the fused step for h from now on. A step that differs from a cached one
+        by less than the time axis resolves at this time is that step: hosts that compute h
+        as a difference of communication points (fmpy does) jitter it in the last bits, and
+        the jitter does not accumulate because the host's own time stays the reference."""
         resolution = _SAME_STEP_EPS * (abs(self.time) + h)
         kernel = next((cached for cached_h, cached in self._kernels.items()
                        if abs(h - cached_h) <= resolution), None)
@@ -189,22 +207,48 @@ class TireSimulator:
             if len(self._kernels) >= _KERNEL_CACHE_SIZE:
                 self._kernels.pop(next(iter(self._kernels)))
             self._kernels[h] = kernel
-        self._kernel, self._kernel_h = kernel, h
-        return kernel
+        if kernel is not self._kernel:
+            self._stop_delay_line()  # its weights belong to the old step size
+            self._kernel = kernel
+            self._advance = kernel.bind(self._buffer, self._y)
+            if self._delayed:
+                self._delay_line_samples = _RoadDelayLine.samples_needed(self.road_delays_s,
+                                                                         kernel.h)
+        self._kernel_h = h
 
-    def _internal_inputs(self, rim_z, rim_vz, road_z, road_vz):
-        n_road = self.road_delays_s.size
-        r = np.empty(1 + n_road)
-        v = np.empty(1 + n_road)
-        r[0], v[0] = rim_z, rim_vz
-        if not n_road:
-            return r, v
-        if not self._delayed:
-            r[1:], v[1:] = road_z, road_vz
-            return r, v
+    def _road_inputs(self, road_z: float, road_vz: float) -> None:
+        """Delayed road inputs while no delay line runs.
+
+        The rule, a function of the recorded history and h alone (so a restored state takes
+        the same path as the run it was saved from, bit for bit): once the last samples,
+        this step's included, are spaced h apart over the whole reach of the delays, a
+        delay line with fixed weights takes over; until then the history is searched.
+        """
+        h, needed = self._kernel.h, self._delay_line_samples
+        t = self.history_t
+        resolution = _SAME_STEP_EPS * (abs(self.time) + h)
+        if self._uniform_run is None:
+            self._uniform_run = _uniform_run(t, h, resolution)
+        uniform = t.size > 0 and abs(self.time - t[-1] - h) <= resolution
+        self._uniform_run = self._uniform_run + 1 if uniform else 1
+        if self._uniform_run >= needed:
+            self._delay_line = _RoadDelayLine(
+                self.road_delays_s, h, t[1 - needed:], self.history_z[1 - needed:],
+                self.history_v[1 - needed:])
+            self._delay_line.push(self.time, road_z, road_vz)
+            self._delay_line.read_into(self._road)
+            return
         self._record_road(road_z, road_vz)
-        r[1:], v[1:] = self._road_at(self.time - self.road_delays_s)
-        return r, v
+        height, slope = self._road_at(self.time - self.road_delays_s)
+        n = height.size
+        self._road[:n], self._road[n:] = height, slope
+
+    def _stop_delay_line(self) -> None:
+        """Back to the recorded history, which the delay line holds while it runs."""
+        if self._delay_line is not None:
+            self.history_t, self.history_z, self.history_v = self._delay_line.history()
+            self._delay_line = None
+        self._uniform_run = None
 
     def _record_road(self, z: float, vz: float) -> None:
         if self.history_t.size and self.history_t[-1] >= self.time:
@@ -239,9 +283,11 @@ class TireSimulator:
 
     # -- state -------------------------------------------------------------------------------
     def get_state(self) -> SimulatorState:
-        return SimulatorState(self.time, self.q, self.history_t.copy(),
-                              self.history_z.copy(), self.history_v.copy(),
-                              self.outputs, self.in_contact)
+        if self._delay_line is not None:
+            history = self._delay_line.history()
+        else:
+            history = (self.history_t.copy(), self.history_z.copy(), self.history_v.copy())
+        return SimulatorState(self.time, self.q, *history, self.outputs, self.in_contact)
 
     def set_state(self, state: SimulatorState) -> None:
         if state.q.shape != self.q.shape or state.outputs.shape != self.outputs.shape:
@@ -251,10 +297,89 @@ class TireSimulator:
             )
         self.time = state.time
         self.q = state.q
+        self._delay_line, self._uniform_run = None, None
         self.history_t, self.history_z = state.history_t.copy(), state.history_z.copy()
         self.history_v = state.history_v.copy()
-        self.outputs = state.outputs
-        self.in_contact = state.in_contact
+        self.outputs = state.outputs  # in_contact follows from them
 
     def output_dict(self) -> dict[str, float]:
         return dict(zip(OUTPUT_NAMES, self._values))
+
+
+def _uniform_run(times: np.ndarray, h: float, resolution: float) -> int:
+    """How many samples at the end of ``times`` are spaced h apart (0 for none)."""
+    if not times.size:
+        return 0
+    regular = np.abs(np.diff(times) - h) <= resolution
+    irregular = np.flatnonzero(~regular)
+    return times.size - (irregular[-1] + 1 if irregular.size else 0)
+
+
+class _RoadDelayLine:
+    """The road under each patch node group for steps of one size h.
+
+    With uniform steps the time t - τ_j that group j reads sits at the same fraction s_j of
+    the same interval between lagged samples at every step, so the cubic Hermite read-back of
+    :meth:`TireSimulator._road_at` is fixed weights on the last samples: one matrix-vector
+    product a step instead of a search and a polynomial. Each sample (z, v) is written twice,
+    one window apart, so the window, newest first, is always contiguous and BLAS reads it in
+    place from an offset.
+    """
+
+    def __init__(self, delays_s: np.ndarray, h: float, times, heights, slopes):
+        lags, fractions = self._intervals(delays_s, h)
+        n = int(lags.max()) + 1
+        self.h, self.window = h, 2 * n
+        # rows: heights of every group, then slopes; columns: (z, v) of lag 0, 1, ...
+        weights = np.zeros((2 * delays_s.size, self.window), order="F")
+        s = fractions
+        s2, s3 = s * s, s * s * s
+        rows = np.arange(delays_s.size)
+        older, newer = 2 * lags, 2 * (lags - 1)  # columns of z; v follows each
+        for row, column, value in (
+            (rows, older, 2 * s3 - 3 * s2 + 1), (rows, older + 1, (s3 - 2 * s2 + s) * h),
+            (rows, newer, -2 * s3 + 3 * s2), (rows, newer + 1, (s3 - s2) * h),
+            (rows + s.size, older, (6 * s2 - 6 * s) / h), (rows + s.size, older + 1,
+                                                           3 * s2 - 4 * s + 1),
+            (rows + s.size, newer, (-6 * s2 + 6 * s) / h), (rows + s.size, newer + 1,
+                                                            3 * s2 - 2 * s),
+        ):
+            weights[row, column] += value
+        self.weights = weights
+        self.samples = np.zeros(2 * self.window)
+        self._bytes = memoryview(self.samples).cast("B")
+        self.start = 0  # index of the newest sample's z in the window
+        self.newest_time = math.nan
+        for t, z, v in zip(times, heights, slopes):  # oldest first
+            self.push(float(t), float(z), float(v))
+
+    @staticmethod
+    def _intervals(delays_s: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per group: the lag of the older sample of its interval and the fraction s in
+        [0, 1] from it to the newer one (lag - 1); a zero delay reads the newest sample."""
+        ratio = delays_s / h
+        lags = np.maximum(1, np.ceil(ratio - 1e-9)).astype(int)
+        return lags, np.clip(lags - ratio, 0.0, 1.0)
+
+    @classmethod
+    def samples_needed(cls, delays_s: np.ndarray, h: float) -> int:
+        return int(cls._intervals(delays_s, h)[0].max()) + 1
+
+    def push(self, time: float, z: float, v: float) -> None:
+        start = (self.start - 2) % self.window
+        offset = start * self.samples.itemsize
+        _PACK_PAIR(self._bytes, offset, z, v)
+        _PACK_PAIR(self._bytes, offset + self.window * self.samples.itemsize, z, v)
+        self.start, self.newest_time = start, time
+
+    def read_into(self, out: np.ndarray) -> None:
+        """The groups' delayed heights then slopes, written into ``out`` in place."""
+        # positional arguments, Fortran-ordered weights: no copy, no keyword parsing
+        dgemv(1.0, self.weights, self.samples, 0.0, out, self.start, 1, 0, 1, 0, 1)
+
+    def history(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The samples as the recorded history (times ascending)."""
+        window = self.samples[self.start:self.start + self.window]
+        lags = np.arange(self.window // 2)[::-1]
+        return self.newest_time - lags * self.h, window[0::2][::-1].copy(), \
+            window[1::2][::-1].copy()

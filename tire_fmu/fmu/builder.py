@@ -1,0 +1,180 @@
+"""Build ``TireModal.fmu``: pythonfmu's builder, then the model description it leaves short.
+
+The slave is copied under a versioned module name, because every pythonfmu FMU in a process
+shares ``sys.modules``: two FMUs whose slave modules are both called ``slave`` would run the
+first one's code. The ``tire_fmu`` package (``__init__.py`` and ``core/``) goes into
+``resources/``, which pythonfmu puts first on ``sys.path``, with a ``requirements.txt`` for
+the host's Python (pythonfmu embeds the host's interpreter and installs nothing).
+
+pythonfmu 0.7 writes no units, no ``UnitDefinitions`` and no ``ModelStructure/
+InitialUnknowns``; :func:`complete_model_description` adds them, and the build fails unless
+``fmpy.validation.validate_fmu`` then reports no problem.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import sys
+import tempfile
+import zipfile
+from importlib import metadata
+from pathlib import Path
+from xml.etree import ElementTree
+
+import tire_fmu
+
+MODEL_IDENTIFIER = "TireModal"
+SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
+#: What the slave imports besides the shipped package (pyproject's runtime dependencies,
+#: used when the package metadata is not installed).
+FALLBACK_REQUIREMENTS = ("numpy>=1.24", "scipy>=1.10")
+
+CAPABILITIES = {
+    "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
+    "canGetAndSetFMUstate": True,  # the full modal state, not pythonfmu's scalars only
+    "canSerializeFMUstate": True,
+}
+
+#: SI base-unit exponents of the units the variables use.
+BASE_UNITS = {
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "Hz": {"s": -1},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "kg/m": {"kg": 1, "m": -1},
+    "N/m^2": {"kg": 1, "m": -1, "s": -2},
+    "N*m^2": {"kg": 1, "m": 3, "s": -2},
+    "1/s": {"s": -1},
+    "s": {"s": 1},
+}
+
+_PACKAGE_ROOT = Path(tire_fmu.__file__).parent
+_SLAVE_SOURCE = Path(__file__).with_name("slave.py")
+
+
+class FmuBuildError(RuntimeError):
+    """The FMU could not be built, or what was built does not validate."""
+
+
+def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
+    """Write ``TireModal.fmu`` into ``out_dir`` (created if missing) and return its path.
+
+    ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
+    :class:`FmuBuildError` listing any problem.
+    """
+    try:
+        from pythonfmu.builder import FmuBuilder
+    except ImportError as error:
+        raise FmuBuildError("building the FMU needs pythonfmu: pip install "
+                            "'tire_fmu[fmu]'") from error
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
+        staging = Path(staging)
+        script = staging / "slave" / f"{SLAVE_MODULE}.py"
+        script.parent.mkdir()
+        shutil.copyfile(_SLAVE_SOURCE, script)
+        project = _stage_project(staging / "project")
+        try:
+            fmu = FmuBuilder.build_FMU(script, dest=out_dir / f"{MODEL_IDENTIFIER}.fmu",
+                                       project_files=project, **CAPABILITIES)
+        finally:
+            _forget_build_imports(script)
+    complete_fmu(fmu)
+    if validate:
+        problems = validation_problems(fmu)
+        if problems:
+            raise FmuBuildError(f"{fmu} does not validate: " + "; ".join(problems))
+    return Path(fmu)
+
+
+def _stage_project(folder: Path) -> list[Path]:
+    """The package the slave imports (no CLI, plots or caches) and the host requirements."""
+    package = folder / "tire_fmu"
+    (package / "core").mkdir(parents=True)
+    shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
+    for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
+        shutil.copyfile(source, package / "core" / source.name)
+    requirements = folder / "requirements.txt"
+    requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"
+                            + "\n".join(runtime_requirements()) + "\n")
+    return [package, requirements]
+
+
+def runtime_requirements() -> list[str]:
+    """The package's unconditional dependencies (those without an extra or a marker)."""
+    try:
+        declared = metadata.requires("tire_fmu") or []
+    except metadata.PackageNotFoundError:
+        return list(FALLBACK_REQUIREMENTS)
+    plain = [item.replace(" ", "") for item in declared if ";" not in item]
+    return plain or list(FALLBACK_REQUIREMENTS)
+
+
+def _forget_build_imports(script: Path) -> None:
+    # pythonfmu's builder imports the slave from the staging folder and leaves that folder on
+    # sys.path; the folder is about to disappear, so take both back out.
+    sys.modules.pop(script.stem, None)
+    while str(script.parent) in sys.path:
+        sys.path.remove(str(script.parent))
+
+
+# -- the model description -----------------------------------------------------------------
+
+def complete_fmu(fmu: str | Path) -> None:
+    """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`."""
+    fmu = Path(fmu)
+    rewritten = fmu.with_suffix(".fmu.tmp")
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rewritten, "w",
+                                                          zipfile.ZIP_DEFLATED) as target:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = complete_model_description(data)
+            target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
+    rewritten.replace(fmu)
+
+
+def complete_model_description(xml: bytes) -> bytes:
+    """Add UnitDefinitions, the outputs and initial unknowns, and pin the capability flags."""
+    root = ElementTree.fromstring(xml)
+    co_simulation = root.find("CoSimulation")
+    for name, value in CAPABILITIES.items():
+        co_simulation.set(name, str(value).lower())
+    co_simulation.attrib.pop("providesDirectionalDerivative", None)
+    units = sorted({real.get("unit") for real in root.iter("Real") if real.get("unit")})
+    if units:
+        for old in root.findall("UnitDefinitions"):
+            root.remove(old)
+        definitions = ElementTree.Element("UnitDefinitions")
+        for unit in units:
+            element = ElementTree.SubElement(definitions, "Unit", name=unit)
+            if unit in BASE_UNITS:
+                ElementTree.SubElement(element, "BaseUnit",
+                                       {k: str(v) for k, v in BASE_UNITS[unit].items()})
+        root.insert(list(root).index(co_simulation) + 1, definitions)
+    variables = root.find("ModelVariables").findall("ScalarVariable")
+    outputs = [i for i, v in enumerate(variables, 1) if v.get("causality") == "output"]
+    calculated = [i for i in outputs
+                  if variables[i - 1].get("initial", "calculated") in ("calculated", "approx")]
+    structure = root.find("ModelStructure")
+    for old in list(structure):
+        structure.remove(old)
+    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", calculated)):
+        if indices:
+            group = ElementTree.SubElement(structure, tag)
+            for index in indices:
+                ElementTree.SubElement(group, "Unknown", index=str(index))
+    ElementTree.indent(root, space="  ")
+    return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def validation_problems(fmu: str | Path) -> list[str]:
+    """fmpy's validation of the FMU, or [] when fmpy is not installed."""
+    try:
+        from fmpy.validation import validate_fmu
+    except ImportError:
+        return []
+    return list(validate_fmu(str(fmu)))

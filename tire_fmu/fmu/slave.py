@@ -1,0 +1,515 @@
+"""``TireModal``: the ring tire as a pythonfmu co-simulation slave.
+
+A thin adapter: parameters are FMI variables; when initialisation ends they go through the
+core's validation, ``build_model`` and ``reduce``; ``do_step`` hands the four inputs to
+:class:`~tire_fmu.core.simulation.TireSimulator`. No physics and no parameter ranges live here.
+
+How failures surface, given what pythonfmu 0.7 can express (see docs/fmu.md):
+
+- A Python exception that escapes becomes fmi2Fatal, and pythonfmu's C wrapper then releases
+  the Python instance while keeping its pointer, so the host may crash later. Nothing here
+  raises: every entry point catches and logs.
+- The wrapper returns fmi2Error only for C++ failures, never for a Python method, and every
+  hook except ``do_step`` returns fmi2OK. The one refusal a slave can make is ``do_step``
+  returning False: fmi2Discard. So rejected parameters are logged (each problem at status
+  error) when initialisation ends, and every ``doStep`` after that returns fmi2Discard with a
+  message saying why; a bad step (t off the last communication point, h <= 0, a non-finite
+  input) is refused the same way and leaves the state untouched, so the host may retry.
+- Messages reach the host only when it instantiates with ``loggingOn = true`` (pythonfmu's
+  logger filters every status on it).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+import warnings
+from dataclasses import dataclass, fields
+
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Initial, Fmi2Status
+
+import tire_fmu
+from tire_fmu.core.model import build_model
+from tire_fmu.core.parameters import (
+    DEFAULT_LOAD_N,
+    TIRE_FIELDS,
+    ParameterError,
+    TireParameters,
+    validate,
+)
+from tire_fmu.core.reduction import ReductionSettings, reduce
+from tire_fmu.core.simulation import (
+    INPUT_NAMES,
+    OUTPUT_NAMES,
+    SimulatorState,
+    StepError,
+    TireSimulator,
+)
+
+_TIRE_DEFAULTS = TireParameters()
+
+#: Communication points closer than this (absolute s, relative to the time) are the same.
+TIME_ABS_TOLERANCE_S = 1e-12
+TIME_REL_TOLERANCE = 1e-9
+
+# The core names operating-point fields after their units, and "no limit" None, where the
+# FMU user set ``load`` and 0.
+_CORE_WORDING = [
+    (re.compile(r"\bload_n\b"), "load"),
+    (re.compile(r"\bspeed_m_s\b"), "speed"),
+    (re.compile(r"\bf_max_hz\b"), "f_max"),
+    (re.compile(r"^((?:f_max|n_modes) = .*) or None\b"), r"\1 or 0"),
+]
+
+_STATE_FORMAT = "tire_fmu.fmu-state/1"
+
+# Value references of the hot path, fixed by the order of :func:`_variables`.
+_INPUTS = slice(0, len(INPUT_NAMES))
+_OUTPUTS = slice(_INPUTS.stop, _INPUTS.stop + len(OUTPUT_NAMES))
+_IN_CONTACT = _OUTPUTS.stop
+
+
+class UnitReal(Real):
+    """A pythonfmu Real that writes its unit into the model description."""
+
+    def __init__(self, name: str, unit: str, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self):
+        element = super().to_xml()
+        if self.unit:
+            element.find("Real").set("unit", self.unit)
+        return element
+
+
+@dataclass(frozen=True)
+class _Variable:
+    name: str
+    kind: type  # UnitReal, Integer or Boolean
+    causality: Fmi2Causality
+    start: float | int | bool
+    unit: str
+    description: str
+
+
+def _variables() -> list[_Variable]:
+    """Every FMU variable in value-reference order: inputs, outputs, then parameters."""
+    p, i, o = Fmi2Causality.parameter, Fmi2Causality.input, Fmi2Causality.output
+    settings = ReductionSettings()
+    table = [
+        _Variable("rim_z", UnitReal, i, 0.0, "m",
+                  "rim vertical displacement from static equilibrium (z up)"),
+        _Variable("rim_vz", UnitReal, i, 0.0, "m/s",
+                  "rim vertical velocity: the rim ramps with it over the step"),
+        _Variable("road_z", UnitReal, i, 0.0, "m",
+                  "road height under the leading edge of the patch, from static equilibrium"),
+        _Variable("road_vz", UnitReal, i, 0.0, "m/s",
+                  "road vertical velocity at the leading edge: the road ramps with it"),
+        _Variable("rim_Fz", UnitReal, o, DEFAULT_LOAD_N, "N",
+                  "vertical force of the tire on the rim, total (static load + dynamic)"),
+        _Variable("rim_Fx", UnitReal, o, 0.0, "N",
+                  "longitudinal force of the tire on the rim (x forward), total"),
+        _Variable("contact_Fz", UnitReal, o, DEFAULT_LOAD_N, "N",
+                  "vertical force of the road on the tire (positive pushing up), total"),
+        _Variable("deflection", UnitReal, o, 0.0, "m",
+                  "radial compression of the tread at the patch centre relative to the rim, "
+                  "total (0 until initialised)"),
+        _Variable("in_contact", Boolean, o, True, "",
+                  "false while the linear contact would pull on the road (contact_Fz <= 0)"),
+        _Variable("load", UnitReal, p, DEFAULT_LOAD_N, "N",
+                  "static vertical load the reduced basis is linearised at (the wheel's share of "
+                  "the weight); rim_Fz starts at it"),
+        _Variable("speed", UnitReal, p, 0.0, "m/s",
+                  "forward speed (spin = speed / R); below the mesh's critical speed unless "
+                  "allow_supercritical"),
+        _Variable("n_elements", Integer, p, 100, "",
+                  "finite-difference nodes around the ring"),
+        _Variable("f_max", UnitReal, p, settings.f_max_hz or 0.0, "Hz",
+                  "highest natural frequency of the modes the reduction keeps (0 = no cut: "
+                  "the reduction's error budget decides)"),
+        _Variable("n_modes", Integer, p, 0, "",
+                  "keep at most this many modes, largest contributions first (0 = no limit)"),
+        _Variable("static_correction", Boolean, p, settings.static_correction, "",
+                  "add the dropped modes' static response, so static stiffness is exact"),
+        _Variable("allow_supercritical", Boolean, p, False, "",
+                  "run at or above the critical (standing-wave) speed of the mesh"),
+    ]
+    for f in fields(TireParameters):
+        spec = TIRE_FIELDS[f.name]
+        table.append(_Variable(f.name, UnitReal, p, getattr(_TIRE_DEFAULTS, f.name), spec.unit,
+                               f"{spec.description}; allowed {spec.range_text()}"))
+    names = [v.name for v in table]
+    assert names[_INPUTS] == list(INPUT_NAMES) and names[_OUTPUTS] == list(OUTPUT_NAMES)
+    assert names[_IN_CONTACT] == "in_contact"
+    return table
+
+
+class _Phase:
+    """Where the slave is in the FMI lifecycle, as far as it needs to know."""
+
+    INSTANTIATED = "instantiated"  # parameters may change
+    INITIALISING = "initialisation mode"  # parameters may change
+    RUNNING = "running"
+    REJECTED = "rejected"  # the parameters were refused when initialisation ended
+    BROKEN = "broken"  # an FMU state could not be restored
+    TERMINATED = "terminated"
+
+
+@dataclass(frozen=True, eq=False)
+class _Snapshot:
+    """An FMU state: every variable's value, the simulator's state and the warning latch."""
+
+    values: tuple
+    phase: str
+    simulator: SimulatorState | None
+    contact_warning_armed: bool
+
+
+@dataclass(frozen=True)
+class _InvalidState:
+    """What deserialising bad bytes gives: setting it is refused with ``reason``."""
+
+    reason: str
+
+
+class TireModal(Fmi2Slave):
+    """In-plane modal ring tire (GL073A defaults): rim and road motion in, rim force out."""
+
+    author = "tire_fmu contributors"
+    description = ("Open in-plane modal ring tire (0-300 Hz): reduced modal model built at "
+                   "initialisation for the load and speed; inputs are deviations from static "
+                   "equilibrium, forces are totals. Needs Python with numpy and scipy.")
+    version = tire_fmu.__version__
+    license = "MIT"
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-4)
+
+    def __init__(self, **kwargs):
+        # Cheap on purpose: pythonfmu instantiates the slave at build time and on every reset.
+        super().__init__(**kwargs)
+        self._table = _variables()
+        self._values: list = [v.start for v in self._table]
+        self._index = {v.name: vr for vr, v in enumerate(self._table)}
+        self._parameter_vrs = [vr for vr, v in enumerate(self._table)
+                               if v.causality == Fmi2Causality.parameter]
+        self._input_vrs = list(range(_INPUTS.start, _INPUTS.stop))
+        self._output_vrs = list(range(_OUTPUTS.start, _OUTPUTS.stop))
+        self._phase = _Phase.INSTANTIATED
+        self._why_not_running = "the FMU is not initialised (call fmi2ExitInitializationMode)"
+        self._start_time = 0.0
+        self._simulator: TireSimulator | None = None
+        self._built_for: tuple | None = None  # parameter values the simulator was built with
+        self._running: TireSimulator | None = None  # the simulator while do_step may run
+        self._contact_warning_armed = True
+        for vr, v in enumerate(self._table):
+            self._register(vr, v)
+
+    def _register(self, vr: int, v: _Variable) -> None:
+        kwargs = dict(causality=v.causality, description=v.description,
+                      getter=lambda: self._values[vr], setter=lambda value: None)
+        if v.causality == Fmi2Causality.parameter:
+            kwargs.update(variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact)
+        elif v.causality == Fmi2Causality.input:
+            kwargs.update(variability=Fmi2Variability.continuous)
+        else:  # outputs are computed: no start value, listed as initial unknowns
+            variability = (Fmi2Variability.discrete if v.kind is Boolean
+                           else Fmi2Variability.continuous)
+            kwargs.update(variability=variability, initial=Fmi2Initial.calculated)
+        if v.kind is UnitReal:
+            self.register_variable(UnitReal(v.name, v.unit, **kwargs))
+        else:
+            self.register_variable(v.kind(v.name, **kwargs))
+
+    # -- lifecycle ---------------------------------------------------------------------------
+    def setup_experiment(self, start_time: float, stop_time: float | None = None,
+                         tolerance: float | None = None) -> None:
+        self._start_time = float(start_time)
+
+    def enter_initialization_mode(self) -> None:
+        if self._phase == _Phase.INSTANTIATED:
+            self._phase = _Phase.INITIALISING
+
+    def exit_initialization_mode(self) -> None:
+        try:
+            self._initialise(self._parameter_values())
+        except Exception as error:  # an escaping exception would be fmi2Fatal (see module doc)
+            why = f"building the model failed ({type(error).__name__}: {error})"
+            self.log(f"TireModal cannot run: {why}", Fmi2Status.error)
+            self._stop(_Phase.REJECTED, why + "; reset the FMU")
+
+    def terminate(self) -> None:
+        self._stop(_Phase.TERMINATED, "the FMU was terminated (fmi2Terminate)")
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        simulator = self._running
+        if simulator is None:
+            return self._discard(f"doStep at t = {current_time!r} s refused: "
+                                 f"{self._why_not_running}")
+        now = simulator.time
+        if current_time != now:
+            if abs(current_time - now) > max(TIME_ABS_TOLERANCE_S, TIME_REL_TOLERANCE * abs(now)):
+                return self._discard(
+                    f"doStep at t = {current_time!r} s refused: the last communication point "
+                    f"is t = {now!r} s, and a step must start there (roll back with "
+                    "fmi2SetFMUstate to step from an earlier time); state unchanged")
+            simulator.time = current_time  # the host's clock is the reference: no drift
+        values = self._values
+        try:  # the inputs are value references 0-3 (_INPUTS); indexing beats *args here
+            outputs = simulator.step_values(step_size, values[0], values[1], values[2],
+                                            values[3])
+        except StepError as error:
+            simulator.time = now
+            return self._discard(f"doStep at t = {current_time!r} s refused: {error}; "
+                                 "state unchanged")
+        except Exception as error:  # an escaping exception would be fmi2Fatal
+            self._stop(_Phase.BROKEN, f"the step at t = {current_time!r} s failed "
+                       f"({type(error).__name__}: {error}); reset the FMU")
+            return self._discard(f"doStep at t = {current_time!r} s failed: {error}")
+        values[_OUTPUTS] = outputs
+        contact_force = outputs[2]
+        values[_IN_CONTACT] = contact_force > 0.0
+        if contact_force < 0.0:
+            if self._contact_warning_armed:
+                self._warn_contact_lost(simulator.time, contact_force)
+        elif not self._contact_warning_armed:
+            self._contact_warning_armed = True
+        return True
+
+    # -- building the model ------------------------------------------------------------------
+    def _parameter_values(self) -> tuple:
+        return tuple(self._values[vr] for vr in self._parameter_vrs)
+
+    def _initialise(self, parameters: tuple) -> None:
+        """Validate every parameter, build and reduce the model, prepare the simulator."""
+        started = time.perf_counter()
+        named = {self._table[vr].name: value for vr, value in zip(self._parameter_vrs,
+                                                                   parameters)}
+        tire_values = {name: named[name] for name in TIRE_FIELDS}
+        op_values = {"n_elements": named["n_elements"], "load_n": named["load"],
+                     "speed_m_s": named["speed"],
+                     "allow_supercritical": bool(named["allow_supercritical"])}
+        problems, model = [], None
+        f_max, n_modes = named["f_max"], named["n_modes"]
+        try:
+            settings = ReductionSettings(f_max_hz=None if f_max == 0 else float(f_max),
+                                         n_modes=None if n_modes == 0 else int(n_modes),
+                                         static_correction=bool(named["static_correction"]))
+        except ParameterError as error:
+            problems += error.problems
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:  # the load and speed checks need the assembled model: build it if we can
+                model = build_model(*validate(tire_values, op_values))
+            except ParameterError as error:
+                problems += error.problems
+            if problems:
+                self._reject(problems)
+                return
+            reduced = reduce(model, settings, report=False)
+        for warning in caught:
+            self.log(_fmu_wording(str(warning.message)), Fmi2Status.warning)
+        simulator = TireSimulator(reduced, start_time=self._start_time)
+        self._simulator, self._built_for = simulator, parameters
+        self._running, self._phase = simulator, _Phase.RUNNING
+        self._contact_warning_armed = True
+        self._show(simulator.output_dict(), simulator.in_contact)
+        summary = model.summary()
+        self.log(
+            f"TireModal ready in {time.perf_counter() - started:.2f} s: N = {model.n_elements}, "
+            f"{reduced.n_modes} modes ({reduced.n_states} states), patch "
+            f"{summary['patch_length_m'] * 100:.3g} cm, static load {summary['load_n']:.6g} N, "
+            f"vertical stiffness {summary['vertical_stiffness_n_per_m']:.6g} N/m, critical "
+            f"speed {model.critical_speed_m_s:.4g} m/s; core tire_fmu {tire_fmu.__version__} "
+            f"from {tire_fmu.__file__}")
+
+    def _reject(self, problems: list[str]) -> None:
+        for number, problem in enumerate(problems, 1):
+            self.log(f"parameter problem {number}/{len(problems)}: {_fmu_wording(problem)}",
+                     Fmi2Status.error)
+        self._stop(_Phase.REJECTED,
+                   f"the parameters were rejected when initialisation ended "
+                   f"({len(problems)} problem(s), logged then: "
+                   f"{'; '.join(_fmu_wording(p) for p in problems)}); reset the FMU and set "
+                   "valid parameters")
+        self.log("TireModal cannot run: " + self._why_not_running, Fmi2Status.error)
+
+    def _stop(self, phase: str, why: str) -> None:
+        self._phase, self._why_not_running, self._running = phase, why, None
+
+    def _show(self, outputs: dict, in_contact: bool) -> None:
+        for name, value in outputs.items():
+            self._values[self._index[name]] = value
+        self._values[self._index["in_contact"]] = in_contact
+
+    # -- messages ----------------------------------------------------------------------------
+    def _discard(self, message: str) -> bool:
+        self.log(message, Fmi2Status.discard)
+        return False
+
+    def _warn_contact_lost(self, at_time: float, contact_force: float) -> None:
+        self._contact_warning_armed = False
+        self.log(f"t = {at_time:.9g} s: contact force {contact_force:.6g} N < 0: the linear "
+                 "contact pulls on the road, so the tire has lost contact (in_contact = false) "
+                 "and the forces are not physical until it returns; logged once until contact "
+                 "returns", Fmi2Status.warning)
+
+    # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
+    # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
+    def get_real(self, vrs):
+        values = self._values
+        if vrs == self._output_vrs:  # the host's usual call: the four forces, in order
+            return values[_OUTPUTS]
+        try:
+            return [values[vr] for vr in vrs]
+        except (IndexError, TypeError):
+            return self._get_checked(vrs, float, math.nan)
+
+    def get_integer(self, vrs):
+        return self._get_checked(vrs, int, 0)
+
+    def get_boolean(self, vrs):
+        return self._get_checked(vrs, bool, False)
+
+    def get_string(self, vrs):
+        if vrs:
+            self.log(f"fmi2GetString{list(vrs)}: TireModal has no String variables",
+                     Fmi2Status.error)
+        return ["" for _ in vrs]
+
+    def set_real(self, vrs, values):
+        if vrs == self._input_vrs:  # the host's usual call: all four inputs, in order
+            self._values[_INPUTS] = values
+        else:
+            for vr, value in zip(vrs, values):
+                self._set(vr, value, UnitReal)
+
+    def set_integer(self, vrs, values):
+        for vr, value in zip(vrs, values):
+            self._set(vr, value, Integer)
+
+    def set_boolean(self, vrs, values):
+        for vr, value in zip(vrs, values):
+            self._set(vr, bool(value), Boolean)
+
+    def set_string(self, vrs, values):
+        if vrs:
+            self.log(f"fmi2SetString{list(vrs)}: TireModal has no String variables",
+                     Fmi2Status.error)
+
+    def _get_checked(self, vrs, convert, fallback):
+        result = []
+        for vr in vrs:
+            try:
+                result.append(convert(self._values[vr]))
+            except (IndexError, TypeError, ValueError, OverflowError):
+                self.log(f"value reference {vr!r} cannot be read as {convert.__name__} "
+                         f"(TireModal has {len(self._values)} variables)", Fmi2Status.error)
+                result.append(fallback)
+        return result
+
+    def _set(self, vr, value, kind) -> None:
+        if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
+            self.log(f"value reference {vr!r} does not exist (TireModal has "
+                     f"{len(self._table)} variables); ignored", Fmi2Status.error)
+            return
+        v = self._table[vr]
+        if v.kind is not kind:
+            fmi_type = v.kind.__name__.replace("Unit", "")
+            self.log(f"{v.name} has FMI type {fmi_type}: set it with fmi2Set{fmi_type}; "
+                     "ignored", Fmi2Status.error)
+        elif v.causality == Fmi2Causality.output:
+            self.log(f"{v.name} is an output; ignored", Fmi2Status.error)
+        elif v.causality == Fmi2Causality.parameter and self._phase not in (
+                _Phase.INSTANTIATED, _Phase.INITIALISING):
+            self.log(f"{v.name} = {value!r} ignored: parameters are fixed after "
+                     "initialisation (they define the reduced basis); reset the FMU to change "
+                     "them", Fmi2Status.error)
+        else:
+            self._values[vr] = value
+            if v.name == "load":  # the outputs echo the static load until initialised
+                self._show({"rim_Fz": value, "contact_Fz": value}, value > 0)
+
+    # -- FMU state ---------------------------------------------------------------------------
+    def _get_fmu_state(self):
+        try:
+            simulator = self._simulator.get_state() if self._simulator is not None else None
+            return _Snapshot(tuple(self._values), self._phase, simulator,
+                             self._contact_warning_armed)
+        except Exception as error:  # an escaping exception would be fmi2Fatal
+            self.log(f"fmi2GetFMUstate failed: {type(error).__name__}: {error}",
+                     Fmi2Status.error)
+            return _InvalidState(f"it was taken when fmi2GetFMUstate failed ({error})")
+
+    def _set_fmu_state(self, state) -> None:
+        try:
+            self._restore(state)
+        except Exception as error:  # an escaping exception would be fmi2Fatal
+            self._refuse_state(f"{type(error).__name__}: {error}")
+
+    def _restore(self, state) -> None:
+        if isinstance(state, _InvalidState):
+            self._refuse_state(state.reason)
+            return
+        if not isinstance(state, _Snapshot) or len(state.values) != len(self._values):
+            self._refuse_state(f"it is not a TireModal state ({type(state).__name__})")
+            return
+        parameters = tuple(state.values[vr] for vr in self._parameter_vrs)
+        if state.simulator is not None and parameters != self._built_for:
+            # a state of other parameters, or restored into a fresh instance: build its model
+            self._initialise(parameters)
+            if self._simulator is None or self._built_for != parameters:
+                self._refuse_state("its parameters do not build a model (logged above)")
+                return
+        if state.simulator is not None:
+            self._simulator.set_state(state.simulator)
+        self._values[:] = state.values
+        self._contact_warning_armed = state.contact_warning_armed
+        self._phase = state.phase
+        self._running = self._simulator if state.phase == _Phase.RUNNING else None
+        if state.phase != _Phase.RUNNING:
+            self._why_not_running = (f"the restored FMU state was taken in phase "
+                                     f"'{state.phase}'")
+
+    def _refuse_state(self, reason: str) -> None:
+        self._stop(_Phase.BROKEN, f"an FMU state could not be restored ({reason}); set a valid "
+                   "state or reset the FMU")
+        self.log(f"fmi2SetFMUstate refused: {reason}; doStep returns fmi2Discard until a valid "
+                 "state is set or the FMU is reset", Fmi2Status.error)
+
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        # JSON header, a newline (JSON escapes its own), then the simulator's npz bytes: no
+        # pickle, so a state file cannot run code when read.
+        if isinstance(state, _InvalidState):
+            header = {"format": _STATE_FORMAT, "invalid": state.reason}
+            return json.dumps(header).encode() + b"\n"
+        header = {"format": _STATE_FORMAT, "values": list(state.values), "phase": state.phase,
+                  "contact_warning_armed": state.contact_warning_armed}
+        simulator = state.simulator.to_bytes() if state.simulator is not None else b""
+        return json.dumps(header).encode() + b"\n" + simulator
+
+    @staticmethod
+    def _fmu_state_from_bytes(data: bytes):
+        try:
+            head, _, simulator = bytes(data).partition(b"\n")
+            header = json.loads(head.decode())
+            if header.get("format") != _STATE_FORMAT:
+                return _InvalidState(f"unknown state format {header.get('format')!r}")
+            if "invalid" in header:
+                return _InvalidState(header["invalid"])
+            return _Snapshot(tuple(header["values"]), header["phase"],
+                             SimulatorState.from_bytes(simulator) if simulator else None,
+                             bool(header["contact_warning_armed"]))
+        except Exception as error:  # an escaping exception would be fmi2Fatal
+            return _InvalidState(f"the serialized bytes are not a TireModal state ({error})")
+
+
+def _fmu_wording(message: str) -> str:
+    """A core message in the FMU's variable names."""
+    for pattern, replacement in _CORE_WORDING:
+        message = pattern.sub(replacement, message)
+    return message
