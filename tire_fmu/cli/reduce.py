@@ -18,6 +18,7 @@ from .common import (
     add_speed_options,
     add_tire_options,
     model_from_args,
+    operating_point_values,
     plot_with,
     raise_problems,
     range_problem,
@@ -29,6 +30,8 @@ from .common import (
 OUTPUT_CHOICES = {"rim_fz": "rim_Fz", "rim_fx": "rim_Fx", "contact_fz": "contact_Fz",
                   "deflection": "deflection"}
 _DEFAULTS = ReductionSettings()
+#: npz and mat: the reduced model as data; fmu: compiled into a native FMU (tire_fmu.native)
+EXPORT_FORMATS = ("npz", "mat", "fmu")
 
 
 def add_reduction_options(p: argparse.ArgumentParser) -> None:
@@ -127,7 +130,7 @@ def register(subparsers) -> None:
         "ss(A, B, C, D), inputs [r; dr/dt].",
     )
     p.add_argument("out", metavar="OUT", type=Path, help="file to write")
-    p.add_argument("--format", choices=("npz", "mat"), default=None,
+    p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
                    help="file format (default: from the extension of OUT)")
     _add_model_options(p)
     add_reduction_options(p)
@@ -197,16 +200,32 @@ def run_export(args: argparse.Namespace) -> Output:
     from ..core.export import save_mat, save_npz
 
     fmt = args.format or args.out.suffix.lstrip(".").lower()
-    if fmt not in ("npz", "mat"):
-        raise CliError(f"--format = {fmt!r}: must be npz or mat (or give OUT a .npz or .mat "
-                       "extension)")
+    if fmt not in EXPORT_FORMATS:
+        raise CliError(f"--format = {fmt!r}: must be npz, mat or fmu (or give OUT a .npz, .mat "
+                       "or .fmu extension)")
     if not args.out.parent.exists():
         raise CliError(f"OUT = {str(args.out)!r}: folder {args.out.parent} does not exist")
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
     reduced = reduce(model, settings)
-    path = (save_npz if fmt == "npz" else save_mat)(reduced, args.out)
+    if fmt == "fmu":
+        path = _export_native_fmu(args, reduced)
+    else:
+        path = (save_npz if fmt == "npz" else save_mat)(reduced, args.out)
     output = Output(text=_report_text(reduced, model), data={**reduced.summary(),
                                                              "file": str(path)})
     output.written.append(path)
     return output
+
+
+def _export_native_fmu(args: argparse.Namespace, reduced) -> Path:
+    """The reduced model compiled into a native FMU; its fixed ``load`` parameter is the load
+    asked for, which the operating point keeps (the model only has its bisected patch load)."""
+    from ..core.parameters import OperatingPoint
+    from ..native import NativeBuildError, build_native_fmu
+
+    operating_point = OperatingPoint(**operating_point_values(args, undeformed_default=False))
+    try:
+        return build_native_fmu(reduced, args.out, operating_point)
+    except NativeBuildError as error:
+        raise CliError(f"OUT = {str(args.out)!r}: {error}") from error
