@@ -1,3 +1,9 @@
+import os
+
+# Before numpy loads OpenBLAS: small dense eigenproblems run ~10x slower when its threads
+# fight over a couple of shared cores (the FMU builds a reduced basis in every test).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import warnings
 
 import pytest

@@ -162,8 +162,12 @@ def test_capabilities_units_and_the_shipped_core(fmu_path, unpacked):
         requirements = archive.read("resources/requirements.txt").decode()
         module = archive.read("resources/slavemodule.txt").decode().strip()
     assert {"resources/tire_fmu/__init__.py", "resources/tire_fmu/core/simulation.py",
-            f"resources/{SLAVE_MODULE}.py"} <= names
-    assert not any("/cli/" in n or "/fmu/" in n or "__pycache__" in n for n in names)
+            "resources/tire_fmu/fmu/interface.py", f"resources/{SLAVE_MODULE}.py"} <= names
+    # the core and the variable table only: no CLI, no builder, no slave twice, no caches
+    shipped_fmu = {n for n in names if "/tire_fmu/fmu/" in n}
+    assert shipped_fmu == {"resources/tire_fmu/fmu/__init__.py",
+                           "resources/tire_fmu/fmu/interface.py"}
+    assert not any("/cli/" in n or "__pycache__" in n for n in names)
     assert module == SLAVE_MODULE and module.startswith("tire_fmu_modal_slave_")
     assert "numpy" in requirements and "scipy" in requirements
 

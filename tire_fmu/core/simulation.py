@@ -33,7 +33,7 @@ OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
 _STATE_FORMAT = "tire_fmu.simulator-state/1"
 _KERNEL_CACHE_SIZE = 64
 #: Steps closer than this times the current time are one step (a few ulps of the time axis).
-_SAME_STEP_EPS = 8 * np.finfo(float).eps
+SAME_STEP_EPS = 8 * np.finfo(float).eps
 _PACK_INPUTS = struct.Struct(f"{len(INPUT_NAMES)}d").pack_into
 _PACK_PAIR = struct.Struct("2d").pack_into
 _UNPACK_OUTPUTS = struct.Struct(f"{len(OUTPUT_NAMES)}d").unpack_from
@@ -199,7 +199,7 @@ class TireSimulator:
         by less than the time axis resolves at this time is that step: hosts that compute h
         as a difference of communication points (fmpy does) jitter it in the last bits, and
         the jitter does not accumulate because the host's own time stays the reference."""
-        resolution = _SAME_STEP_EPS * (abs(self.time) + h)
+        resolution = SAME_STEP_EPS * (abs(self.time) + h)
         kernel = next((cached for cached_h, cached in self._kernels.items()
                        if abs(h - cached_h) <= resolution), None)
         if kernel is None:
@@ -226,7 +226,7 @@ class TireSimulator:
         """
         h, needed = self._kernel.h, self._delay_line_samples
         t = self.history_t
-        resolution = _SAME_STEP_EPS * (abs(self.time) + h)
+        resolution = SAME_STEP_EPS * (abs(self.time) + h)
         if self._uniform_run is None:
             self._uniform_run = _uniform_run(t, h, resolution)
         uniform = t.size > 0 and abs(self.time - t[-1] - h) <= resolution

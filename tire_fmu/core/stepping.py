@@ -28,14 +28,14 @@ import scipy.linalg as sla
 from scipy.linalg.blas import dgemv as _dgemv
 
 #: Below this |z| the φ-functions use their Taylor series (cancellation in e^z - 1 - z).
-_SERIES_LIMIT = 1e-3
+SERIES_LIMIT = 1e-3
 _CACHE_SIZE = 64
 
 
 def phi_functions(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """φ1(z) = (e^z - 1)/z and φ2(z) = (e^z - 1 - z)/z², accurate for small |z| too."""
     z = np.asarray(z, dtype=complex)
-    small = np.abs(z) < _SERIES_LIMIT
+    small = np.abs(z) < SERIES_LIMIT
     zs = np.where(small, 1.0, z)  # avoid 0/0 where the series takes over
     em1 = np.expm1(zs)
     phi1 = np.where(small, 1 + z / 2 + z**2 / 6 + z**3 / 24, em1 / zs)

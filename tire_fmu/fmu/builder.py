@@ -24,31 +24,13 @@ from xml.etree import ElementTree
 
 import tire_fmu
 
+from .interface import CAPABILITIES, unit_definitions
+
 MODEL_IDENTIFIER = "TireModal"
 SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
 #: What the slave imports besides the shipped package (pyproject's runtime dependencies,
 #: used when the package metadata is not installed).
 FALLBACK_REQUIREMENTS = ("numpy>=1.24", "scipy>=1.10")
-
-CAPABILITIES = {
-    "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
-    "canGetAndSetFMUstate": True,  # the full modal state, not pythonfmu's scalars only
-    "canSerializeFMUstate": True,
-}
-
-#: SI base-unit exponents of the units the variables use.
-BASE_UNITS = {
-    "N": {"kg": 1, "m": 1, "s": -2},
-    "m": {"m": 1},
-    "m/s": {"m": 1, "s": -1},
-    "Hz": {"s": -1},
-    "Pa": {"kg": 1, "m": -1, "s": -2},
-    "kg/m": {"kg": 1, "m": -1},
-    "N/m^2": {"kg": 1, "m": -1, "s": -2},
-    "N*m^2": {"kg": 1, "m": 3, "s": -2},
-    "1/s": {"s": -1},
-    "s": {"s": 1},
-}
 
 _PACKAGE_ROOT = Path(tire_fmu.__file__).parent
 _SLAVE_SOURCE = Path(__file__).with_name("slave.py")
@@ -94,9 +76,12 @@ def _stage_project(folder: Path) -> list[Path]:
     """The package the slave imports (no CLI, plots or caches) and the host requirements."""
     package = folder / "tire_fmu"
     (package / "core").mkdir(parents=True)
+    (package / "fmu").mkdir()
     shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
     for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
         shutil.copyfile(source, package / "core" / source.name)
+    for name in ("__init__.py", "interface.py"):  # the variable table the slave declares
+        shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"
                             + "\n".join(runtime_requirements()) + "\n")
@@ -144,17 +129,11 @@ def complete_model_description(xml: bytes) -> bytes:
     for name, value in CAPABILITIES.items():
         co_simulation.set(name, str(value).lower())
     co_simulation.attrib.pop("providesDirectionalDerivative", None)
-    units = sorted({real.get("unit") for real in root.iter("Real") if real.get("unit")})
+    units = {real.get("unit") for real in root.iter("Real") if real.get("unit")}
     if units:
         for old in root.findall("UnitDefinitions"):
             root.remove(old)
-        definitions = ElementTree.Element("UnitDefinitions")
-        for unit in units:
-            element = ElementTree.SubElement(definitions, "Unit", name=unit)
-            if unit in BASE_UNITS:
-                ElementTree.SubElement(element, "BaseUnit",
-                                       {k: str(v) for k, v in BASE_UNITS[unit].items()})
-        root.insert(list(root).index(co_simulation) + 1, definitions)
+        root.insert(list(root).index(co_simulation) + 1, unit_definitions(units))
     variables = root.find("ModelVariables").findall("ScalarVariable")
     outputs = [i for i, v in enumerate(variables, 1) if v.get("causality") == "output"]
     calculated = [i for i in outputs

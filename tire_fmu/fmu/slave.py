@@ -26,7 +26,7 @@ import math
 import re
 import time
 import warnings
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
@@ -35,26 +35,21 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 import tire_fmu
 from tire_fmu.core.model import build_model
 from tire_fmu.core.parameters import (
-    DEFAULT_LOAD_N,
     TIRE_FIELDS,
     ParameterError,
-    TireParameters,
     validate,
 )
 from tire_fmu.core.reduction import ReductionSettings, reduce
-from tire_fmu.core.simulation import (
-    INPUT_NAMES,
-    OUTPUT_NAMES,
-    SimulatorState,
-    StepError,
-    TireSimulator,
+from tire_fmu.core.simulation import SimulatorState, StepError, TireSimulator
+from tire_fmu.fmu.interface import (
+    IN_CONTACT,
+    INPUTS,
+    OUTPUTS,
+    TIME_ABS_TOLERANCE_S,
+    TIME_REL_TOLERANCE,
+    FmuVariable,
+    fmu_variables,
 )
-
-_TIRE_DEFAULTS = TireParameters()
-
-#: Communication points closer than this (absolute s, relative to the time) are the same.
-TIME_ABS_TOLERANCE_S = 1e-12
-TIME_REL_TOLERANCE = 1e-9
 
 # The core names operating-point fields after their units, and "no limit" None, where the
 # FMU user set ``load`` and 0.
@@ -66,11 +61,6 @@ _CORE_WORDING = [
 ]
 
 _STATE_FORMAT = "tire_fmu.fmu-state/1"
-
-# Value references of the hot path, fixed by the order of :func:`_variables`.
-_INPUTS = slice(0, len(INPUT_NAMES))
-_OUTPUTS = slice(_INPUTS.stop, _INPUTS.stop + len(OUTPUT_NAMES))
-_IN_CONTACT = _OUTPUTS.stop
 
 
 class UnitReal(Real):
@@ -87,66 +77,8 @@ class UnitReal(Real):
         return element
 
 
-@dataclass(frozen=True)
-class _Variable:
-    name: str
-    kind: type  # UnitReal, Integer or Boolean
-    causality: Fmi2Causality
-    start: float | int | bool
-    unit: str
-    description: str
-
-
-def _variables() -> list[_Variable]:
-    """Every FMU variable in value-reference order: inputs, outputs, then parameters."""
-    p, i, o = Fmi2Causality.parameter, Fmi2Causality.input, Fmi2Causality.output
-    settings = ReductionSettings()
-    table = [
-        _Variable("rim_z", UnitReal, i, 0.0, "m",
-                  "rim vertical displacement from static equilibrium (z up)"),
-        _Variable("rim_vz", UnitReal, i, 0.0, "m/s",
-                  "rim vertical velocity: the rim ramps with it over the step"),
-        _Variable("road_z", UnitReal, i, 0.0, "m",
-                  "road height under the leading edge of the patch, from static equilibrium"),
-        _Variable("road_vz", UnitReal, i, 0.0, "m/s",
-                  "road vertical velocity at the leading edge: the road ramps with it"),
-        _Variable("rim_Fz", UnitReal, o, DEFAULT_LOAD_N, "N",
-                  "vertical force of the tire on the rim, total (static load + dynamic)"),
-        _Variable("rim_Fx", UnitReal, o, 0.0, "N",
-                  "longitudinal force of the tire on the rim (x forward), total"),
-        _Variable("contact_Fz", UnitReal, o, DEFAULT_LOAD_N, "N",
-                  "vertical force of the road on the tire (positive pushing up), total"),
-        _Variable("deflection", UnitReal, o, 0.0, "m",
-                  "radial compression of the tread at the patch centre relative to the rim, "
-                  "total (0 until initialised)"),
-        _Variable("in_contact", Boolean, o, True, "",
-                  "false while the linear contact would pull on the road (contact_Fz <= 0)"),
-        _Variable("load", UnitReal, p, DEFAULT_LOAD_N, "N",
-                  "static vertical load the reduced basis is linearised at (the wheel's share of "
-                  "the weight); rim_Fz starts at it"),
-        _Variable("speed", UnitReal, p, 0.0, "m/s",
-                  "forward speed (spin = speed / R); below the mesh's critical speed unless "
-                  "allow_supercritical"),
-        _Variable("n_elements", Integer, p, 100, "",
-                  "finite-difference nodes around the ring"),
-        _Variable("f_max", UnitReal, p, settings.f_max_hz or 0.0, "Hz",
-                  "highest natural frequency of the modes the reduction keeps (0 = no cut: "
-                  "the reduction's error budget decides)"),
-        _Variable("n_modes", Integer, p, 0, "",
-                  "keep at most this many modes, largest contributions first (0 = no limit)"),
-        _Variable("static_correction", Boolean, p, settings.static_correction, "",
-                  "add the dropped modes' static response, so static stiffness is exact"),
-        _Variable("allow_supercritical", Boolean, p, False, "",
-                  "run at or above the critical (standing-wave) speed of the mesh"),
-    ]
-    for f in fields(TireParameters):
-        spec = TIRE_FIELDS[f.name]
-        table.append(_Variable(f.name, UnitReal, p, getattr(_TIRE_DEFAULTS, f.name), spec.unit,
-                               f"{spec.description}; allowed {spec.range_text()}"))
-    names = [v.name for v in table]
-    assert names[_INPUTS] == list(INPUT_NAMES) and names[_OUTPUTS] == list(OUTPUT_NAMES)
-    assert names[_IN_CONTACT] == "in_contact"
-    return table
+#: pythonfmu's variable class for each FMI type of the shared table
+_KINDS = {"Real": UnitReal, "Integer": Integer, "Boolean": Boolean}
 
 
 class _Phase:
@@ -191,13 +123,13 @@ class TireModal(Fmi2Slave):
     def __init__(self, **kwargs):
         # Cheap on purpose: pythonfmu instantiates the slave at build time and on every reset.
         super().__init__(**kwargs)
-        self._table = _variables()
+        self._table = fmu_variables()
         self._values: list = [v.start for v in self._table]
         self._index = {v.name: vr for vr, v in enumerate(self._table)}
         self._parameter_vrs = [vr for vr, v in enumerate(self._table)
-                               if v.causality == Fmi2Causality.parameter]
-        self._input_vrs = list(range(_INPUTS.start, _INPUTS.stop))
-        self._output_vrs = list(range(_OUTPUTS.start, _OUTPUTS.stop))
+                               if v.causality == "parameter"]
+        self._input_vrs = list(range(INPUTS.start, INPUTS.stop))
+        self._output_vrs = list(range(OUTPUTS.start, OUTPUTS.stop))
         self._phase = _Phase.INSTANTIATED
         self._why_not_running = "the FMU is not initialised (call fmi2ExitInitializationMode)"
         self._start_time = 0.0
@@ -208,21 +140,19 @@ class TireModal(Fmi2Slave):
         for vr, v in enumerate(self._table):
             self._register(vr, v)
 
-    def _register(self, vr: int, v: _Variable) -> None:
-        kwargs = dict(causality=v.causality, description=v.description,
+    def _register(self, vr: int, v: FmuVariable) -> None:
+        kwargs = dict(causality=Fmi2Causality[v.causality], description=v.description,
+                      variability=Fmi2Variability[v.variability],
                       getter=lambda: self._values[vr], setter=lambda value: None)
-        if v.causality == Fmi2Causality.parameter:
-            kwargs.update(variability=Fmi2Variability.fixed, initial=Fmi2Initial.exact)
-        elif v.causality == Fmi2Causality.input:
-            kwargs.update(variability=Fmi2Variability.continuous)
-        else:  # outputs are computed: no start value, listed as initial unknowns
-            variability = (Fmi2Variability.discrete if v.kind is Boolean
-                           else Fmi2Variability.continuous)
-            kwargs.update(variability=variability, initial=Fmi2Initial.calculated)
-        if v.kind is UnitReal:
+        if v.causality == "parameter":
+            kwargs.update(initial=Fmi2Initial.exact)
+        elif v.causality == "output":  # computed: no start value, listed as initial unknowns
+            kwargs.update(initial=Fmi2Initial.calculated)
+        kind = _KINDS[v.type]
+        if kind is UnitReal:
             self.register_variable(UnitReal(v.name, v.unit, **kwargs))
         else:
-            self.register_variable(v.kind(v.name, **kwargs))
+            self.register_variable(kind(v.name, **kwargs))
 
     # -- lifecycle ---------------------------------------------------------------------------
     def setup_experiment(self, start_time: float, stop_time: float | None = None,
@@ -258,7 +188,7 @@ class TireModal(Fmi2Slave):
                     "fmi2SetFMUstate to step from an earlier time); state unchanged")
             simulator.time = current_time  # the host's clock is the reference: no drift
         values = self._values
-        try:  # the inputs are value references 0-3 (_INPUTS); indexing beats *args here
+        try:  # the inputs are value references 0-3 (INPUTS); indexing beats *args here
             outputs = simulator.step_values(step_size, values[0], values[1], values[2],
                                             values[3])
         except StepError as error:
@@ -269,9 +199,9 @@ class TireModal(Fmi2Slave):
             self._stop(_Phase.BROKEN, f"the step at t = {current_time!r} s failed "
                        f"({type(error).__name__}: {error}); reset the FMU")
             return self._discard(f"doStep at t = {current_time!r} s failed: {error}")
-        values[_OUTPUTS] = outputs
+        values[OUTPUTS] = outputs
         contact_force = outputs[2]
-        values[_IN_CONTACT] = contact_force > 0.0
+        values[IN_CONTACT] = contact_force > 0.0
         if contact_force < 0.0:
             if self._contact_warning_armed:
                 self._warn_contact_lost(simulator.time, contact_force)
@@ -362,7 +292,7 @@ class TireModal(Fmi2Slave):
     def get_real(self, vrs):
         values = self._values
         if vrs == self._output_vrs:  # the host's usual call: the four forces, in order
-            return values[_OUTPUTS]
+            return values[OUTPUTS]
         try:
             return [values[vr] for vr in vrs]
         except (IndexError, TypeError):
@@ -382,18 +312,18 @@ class TireModal(Fmi2Slave):
 
     def set_real(self, vrs, values):
         if vrs == self._input_vrs:  # the host's usual call: all four inputs, in order
-            self._values[_INPUTS] = values
+            self._values[INPUTS] = values
         else:
             for vr, value in zip(vrs, values):
-                self._set(vr, value, UnitReal)
+                self._set(vr, value, "Real")
 
     def set_integer(self, vrs, values):
         for vr, value in zip(vrs, values):
-            self._set(vr, value, Integer)
+            self._set(vr, value, "Integer")
 
     def set_boolean(self, vrs, values):
         for vr, value in zip(vrs, values):
-            self._set(vr, bool(value), Boolean)
+            self._set(vr, bool(value), "Boolean")
 
     def set_string(self, vrs, values):
         if vrs:
@@ -417,13 +347,12 @@ class TireModal(Fmi2Slave):
                      f"{len(self._table)} variables); ignored", Fmi2Status.error)
             return
         v = self._table[vr]
-        if v.kind is not kind:
-            fmi_type = v.kind.__name__.replace("Unit", "")
-            self.log(f"{v.name} has FMI type {fmi_type}: set it with fmi2Set{fmi_type}; "
+        if v.type != kind:
+            self.log(f"{v.name} has FMI type {v.type}: set it with fmi2Set{v.type}; "
                      "ignored", Fmi2Status.error)
-        elif v.causality == Fmi2Causality.output:
+        elif v.causality == "output":
             self.log(f"{v.name} is an output; ignored", Fmi2Status.error)
-        elif v.causality == Fmi2Causality.parameter and self._phase not in (
+        elif v.causality == "parameter" and self._phase not in (
                 _Phase.INSTANTIATED, _Phase.INITIALISING):
             self.log(f"{v.name} = {value!r} ignored: parameters are fixed after "
                      "initialisation (they define the reduced basis); reset the FMU to change "

@@ -24,7 +24,8 @@ import tire_fmu
 
 from ..core.parameters import OperatingPoint
 from ..core.reduction import ReducedModel
-from ..fmu.builder import BASE_UNITS
+from ..fmu.interface import CAPABILITIES as SHARED_CAPABILITIES
+from ..fmu.interface import unit_definitions
 from .codegen import DEFAULT_MODEL_IDENTIFIER, NativeModel, generate_sources, native_model
 from .runtime import RUNTIME_FILE
 
@@ -36,15 +37,13 @@ PLATFORM = "linux64"
 #: What the C runtime really does (see tire_fmu/native/runtime.py).
 CAPABILITIES = {
     "needsExecutionTool": False,
-    "canHandleVariableCommunicationStepSize": True,  # exact for any h, coefficients cached
     "canInterpolateInputs": False,  # the velocity inputs carry the ramp instead
     "maxOutputDerivativeOrder": 0,
     "canRunAsynchronuously": False,  # FMI 2.0's own spelling
     "canBeInstantiatedOnlyOncePerProcess": False,  # no global mutable state
     "canNotUseMemoryManagementFunctions": False,  # allocates through the host's callbacks
-    "canGetAndSetFMUstate": True,
-    "canSerializeFMUstate": True,
     "providesDirectionalDerivative": False,
+    **SHARED_CAPABILITIES,  # variable steps, state get/set and serialisation: as the Python FMU
 }
 
 LOG_CATEGORIES = {
@@ -199,13 +198,7 @@ def model_description(native: NativeModel) -> bytes:
     sources = ElementTree.SubElement(co_simulation, "SourceFiles")
     ElementTree.SubElement(sources, "File", name=RUNTIME_FILE)
 
-    units = sorted({v.unit for v in native.variables if v.unit})
-    definitions = ElementTree.SubElement(root, "UnitDefinitions")
-    for unit in units:
-        element = ElementTree.SubElement(definitions, "Unit", name=unit)
-        if unit in BASE_UNITS:
-            ElementTree.SubElement(element, "BaseUnit",
-                                   {k: str(v) for k, v in BASE_UNITS[unit].items()})
+    root.append(unit_definitions(v.unit for v in native.variables if v.unit))
     categories = ElementTree.SubElement(root, "LogCategories")
     for name, description in LOG_CATEGORIES.items():
         ElementTree.SubElement(categories, "Category", name=name, description=description)
@@ -225,7 +218,7 @@ def model_description(native: NativeModel) -> bytes:
             attributes["initial"] = "calculated"
         element = ElementTree.SubElement(variables, "ScalarVariable", attributes)
         typed = ElementTree.SubElement(element, v.type)
-        if v.start is not None:
+        if v.causality != "output":  # outputs are calculated: no start value
             typed.set("start", _xml_value(v.start))
         if v.unit:
             typed.set("unit", v.unit)

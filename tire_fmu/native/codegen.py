@@ -27,40 +27,21 @@ import numpy as np
 
 import tire_fmu
 
-from ..core.io_model import OUTPUT_UNITS
-from ..core.parameters import TIRE_FIELDS, OperatingPoint, TireParameters
+from ..core.parameters import OperatingPoint, TireParameters
 from ..core.reduction import ReducedModel
-from ..core.simulation import _SAME_STEP_EPS, INPUT_NAMES, OUTPUT_NAMES
-from ..core.stepping import _SERIES_LIMIT
+from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES, SAME_STEP_EPS
+from ..core.stepping import SERIES_LIMIT
+from ..fmu.interface import (
+    TIME_ABS_TOLERANCE_S,
+    TIME_REL_TOLERANCE,
+    FmuVariable,
+    fmu_variables,
+)
 from .runtime import DATA_FILE, RUNTIME_C, RUNTIME_FILE
 
 DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
 
-#: The Python FMU's tolerance on a step's start time (``tire_fmu.fmu.slave``, which needs
-#: pythonfmu to import): communication points closer than this are the same.
-TIME_ABS_TOLERANCE_S = 1e-12
-TIME_REL_TOLERANCE = 1e-9
-
 _GUID_NAMESPACE = uuid.UUID("6f1c3a52-5d1e-4f57-9a53-2b1e0c7d9e41")
-
-
-@dataclass(frozen=True)
-class Variable:
-    """One FMU variable; its value reference is its position in :attr:`NativeModel.variables`."""
-
-    name: str
-    type: str  # "Real", "Integer" or "Boolean"
-    causality: str  # "parameter", "input" or "output"
-    start: float | int | bool | None  # parameters: the export value; outputs: None (calculated)
-    unit: str
-    description: str
-    reexport: str = ""  # parameters: the export option that sets another value
-
-    @property
-    def variability(self) -> str:
-        if self.causality == "parameter":
-            return "fixed"
-        return "discrete" if self.type == "Boolean" else "continuous"
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +49,7 @@ class NativeModel:
     """A reduced model and what its native FMU declares about it."""
 
     reduced: ReducedModel
-    variables: tuple[Variable, ...]
+    variables: tuple[FmuVariable, ...]
     model_identifier: str
     guid: str
     description: str
@@ -120,62 +101,9 @@ def export_parameters(reduced: ReducedModel, operating_point: OperatingPoint | N
     return values
 
 
-def fmu_variables(parameters: dict[str, float | int | bool]) -> tuple[Variable, ...]:
-    """Every variable in value-reference order, as the Python FMU orders them: inputs,
-    outputs, then parameters."""
-    fixed = "fixed at export: the reduced model is compiled in"
-    table = [
-        Variable("rim_z", "Real", "input", 0.0, "m",
-                 "rim vertical displacement from static equilibrium (z up)"),
-        Variable("rim_vz", "Real", "input", 0.0, "m/s",
-                 "rim vertical velocity: the rim ramps with it over the step"),
-        Variable("road_z", "Real", "input", 0.0, "m",
-                 "road height under the leading edge of the patch, from static equilibrium"),
-        Variable("road_vz", "Real", "input", 0.0, "m/s",
-                 "road vertical velocity at the leading edge: the road ramps with it"),
-        Variable("rim_Fz", "Real", "output", None, OUTPUT_UNITS["rim_Fz"],
-                 "vertical force of the tire on the rim, total (static load + dynamic)"),
-        Variable("rim_Fx", "Real", "output", None, OUTPUT_UNITS["rim_Fx"],
-                 "longitudinal force of the tire on the rim (x forward), total"),
-        Variable("contact_Fz", "Real", "output", None, OUTPUT_UNITS["contact_Fz"],
-                 "vertical force of the road on the tire (positive pushing up), total"),
-        Variable("deflection", "Real", "output", None, OUTPUT_UNITS["deflection"],
-                 "radial compression of the tread at the patch centre relative to the rim, "
-                 "total"),
-        Variable("in_contact", "Boolean", "output", None, "",
-                 "false while the linear contact would pull on the road (contact_Fz <= 0)"),
-        Variable("load", "Real", "parameter", parameters["load"], "N",
-                 f"static vertical load the reduced basis was linearised at; {fixed}",
-                 "--load"),
-        Variable("speed", "Real", "parameter", parameters["speed"], "m/s",
-                 f"forward speed (spin = speed / R); {fixed}", "--speed"),
-        Variable("n_elements", "Integer", "parameter", parameters["n_elements"], "",
-                 f"finite-difference nodes around the ring; {fixed}", "--elements"),
-        Variable("f_max", "Real", "parameter", parameters["f_max"], "Hz",
-                 "highest natural frequency of the modes the reduction kept (0 = no cut); "
-                 + fixed, "--f-max"),
-        Variable("n_modes", "Integer", "parameter", parameters["n_modes"], "",
-                 f"at most this many modes were kept (0 = no limit); {fixed}", "--n-modes"),
-        Variable("static_correction", "Boolean", "parameter", parameters["static_correction"],
-                 "", f"the dropped modes' static response is included; {fixed}",
-                 "--no-static-correction"),
-        Variable("allow_supercritical", "Boolean", "parameter",
-                 parameters["allow_supercritical"], "",
-                 f"exported at or above the critical (standing-wave) speed; {fixed}",
-                 "--allow-supercritical"),
-    ]
-    for f in fields(TireParameters):
-        spec = TIRE_FIELDS[f.name]
-        option = ("--inflation-pressure" if f.name == "inflation_pressure"
-                  else f"--tire {f.name}=VALUE")
-        table.append(Variable(f.name, "Real", "parameter", parameters[f.name], spec.unit,
-                              f"{spec.description}; {fixed}", option))
-    # the C runtime reads inputs and outputs as these contiguous blocks
-    names = [v.name for v in table]
-    first_input, first_output = names.index(INPUT_NAMES[0]), names.index(OUTPUT_NAMES[0])
-    assert names[first_input:first_input + len(INPUT_NAMES)] == list(INPUT_NAMES)
-    assert names[first_output:first_output + len(OUTPUT_NAMES)] == list(OUTPUT_NAMES)
-    return tuple(table)
+def export_variables(parameters: dict[str, float | int | bool]) -> tuple[FmuVariable, ...]:
+    """The Python FMU's variables with the export's values as fixed parameters."""
+    return fmu_variables(parameters, "fixed at export: the reduced model is compiled in")
 
 
 def native_model(reduced: ReducedModel, operating_point: OperatingPoint | None = None,
@@ -191,7 +119,7 @@ def native_model(reduced: ReducedModel, operating_point: OperatingPoint | None =
         raise ValueError(f"the reduced model has non-finite entries in {', '.join(bad)}; "
                          "it cannot be exported")
     parameters = export_parameters(reduced, operating_point)
-    variables = fmu_variables(parameters)
+    variables = export_variables(parameters)
     return NativeModel(reduced, variables, model_identifier,
                        _guid(arrays, reduced, parameters, model_identifier),
                        describe(reduced, parameters))
@@ -335,7 +263,7 @@ def _variable_rows(native: NativeModel) -> str:
         value = c_double(float(v.start)) if v.causality == "parameter" else "0.0"
         head = (f"    /* {vr:2d} */ {{{c_string(v.name)}, {types[v.type]}, "
                 f"{causalities[v.causality]},")
-        tail = f"{value}, {c_string(v.unit)}, {c_string(v.reexport)}}},"
+        tail = f"{value}, {c_string(v.unit)}, {c_string(v.export_option)}}},"
         rows.append(f"{head} {tail}" if len(head) + len(tail) < 100 else
                     f"{head}\n             {tail}")
     return "\n".join(rows)
@@ -388,8 +316,8 @@ static const char MODEL_SUMMARY[] =
 #define ROAD_HORIZON {c_double(delays.max())}  /* s, the longest road delay */
 
 /* As the Python reference (tire_fmu.core.stepping, .simulation and the Python FMU) */
-#define PHI_SERIES_LIMIT {c_double(_SERIES_LIMIT)}
-#define SAME_STEP_EPS {c_double(_SAME_STEP_EPS)}
+#define PHI_SERIES_LIMIT {c_double(SERIES_LIMIT)}
+#define SAME_STEP_EPS {c_double(SAME_STEP_EPS)}
 #define TIME_ABS_TOLERANCE {c_double(TIME_ABS_TOLERANCE_S)}
 #define TIME_REL_TOLERANCE {c_double(TIME_REL_TOLERANCE)}
 

@@ -1,0 +1,157 @@
+"""What every tire FMU declares, whatever runs inside it: variables, units, capabilities.
+
+The Python FMU (:mod:`.slave`, pythonfmu) and the native C FMU (:mod:`tire_fmu.native`) share
+this table, so their inputs, outputs, parameters, units and descriptions cannot drift apart.
+It needs neither pythonfmu nor fmpy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+from xml.etree import ElementTree
+
+from ..core.io_model import OUTPUT_UNITS
+from ..core.parameters import DEFAULT_LOAD_N, TIRE_FIELDS, TireParameters
+from ..core.reduction import ReductionSettings
+from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES
+
+#: Communication points closer than this (absolute s, or relative to the time) are the same.
+TIME_ABS_TOLERANCE_S = 1e-12
+TIME_REL_TOLERANCE = 1e-9
+
+CAPABILITIES = {
+    "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
+    "canGetAndSetFMUstate": True,  # the full modal state, not pythonfmu's scalars only
+    "canSerializeFMUstate": True,
+}
+
+#: SI base-unit exponents of the units the variables use.
+BASE_UNITS = {
+    "N": {"kg": 1, "m": 1, "s": -2},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "Hz": {"s": -1},
+    "Pa": {"kg": 1, "m": -1, "s": -2},
+    "kg/m": {"kg": 1, "m": -1},
+    "N/m^2": {"kg": 1, "m": -1, "s": -2},
+    "N*m^2": {"kg": 1, "m": 3, "s": -2},
+    "1/s": {"s": -1},
+    "s": {"s": 1},
+}
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    """One FMU variable; its value reference is its position in the table."""
+
+    name: str
+    type: str  # "Real", "Integer" or "Boolean"
+    causality: str  # "input", "output" or "parameter"
+    start: float | int | bool | None  # outputs: the value shown before initialisation
+    unit: str
+    description: str
+    export_option: str = ""  # parameters: the CLI option of `tire-fmu export` that sets it
+
+    @property
+    def variability(self) -> str:
+        if self.causality == "parameter":
+            return "fixed"  # they define the reduced basis
+        return "discrete" if self.type == "Boolean" else "continuous"
+
+
+def _signals() -> list[FmuVariable]:
+    return [
+        FmuVariable("rim_z", "Real", "input", 0.0, "m",
+                    "rim vertical displacement from static equilibrium (z up)"),
+        FmuVariable("rim_vz", "Real", "input", 0.0, "m/s",
+                    "rim vertical velocity: the rim ramps with it over the step"),
+        FmuVariable("road_z", "Real", "input", 0.0, "m",
+                    "road height under the leading edge of the patch, from static equilibrium"),
+        FmuVariable("road_vz", "Real", "input", 0.0, "m/s",
+                    "road vertical velocity at the leading edge: the road ramps with it"),
+        FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["rim_Fz"],
+                    "vertical force of the tire on the rim, total (static load + dynamic)"),
+        FmuVariable("rim_Fx", "Real", "output", 0.0, OUTPUT_UNITS["rim_Fx"],
+                    "longitudinal force of the tire on the rim (x forward), total"),
+        FmuVariable("contact_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["contact_Fz"],
+                    "vertical force of the road on the tire (positive pushing up), total"),
+        FmuVariable("deflection", "Real", "output", 0.0, OUTPUT_UNITS["deflection"],
+                    "radial compression of the tread at the patch centre relative to the rim, "
+                    "total"),
+        FmuVariable("in_contact", "Boolean", "output", True, "",
+                    "false while the linear contact would pull on the road (contact_Fz <= 0)"),
+    ]
+
+
+def _parameters() -> list[FmuVariable]:
+    """Parameters with their defaults; f_max and n_modes use 0 for "no limit"."""
+    settings = ReductionSettings()
+    defaults = TireParameters()
+    table = [
+        FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
+                    "static vertical load the reduced basis is linearised at (the wheel's "
+                    "share of the weight); rim_Fz starts at it", "--load"),
+        FmuVariable("speed", "Real", "parameter", 0.0, "m/s",
+                    "forward speed (spin = speed / R); below the mesh's critical speed unless "
+                    "allow_supercritical", "--speed"),
+        FmuVariable("n_elements", "Integer", "parameter", 100, "",
+                    "finite-difference nodes around the ring", "--elements"),
+        FmuVariable("f_max", "Real", "parameter", settings.f_max_hz or 0.0, "Hz",
+                    "highest natural frequency of the modes the reduction keeps (0 = no cut: "
+                    "the reduction's error budget decides)", "--f-max"),
+        FmuVariable("n_modes", "Integer", "parameter", settings.n_modes or 0, "",
+                    "keep at most this many modes, largest contributions first (0 = no limit)",
+                    "--n-modes"),
+        FmuVariable("static_correction", "Boolean", "parameter", settings.static_correction,
+                    "", "add the dropped modes' static response, so static stiffness is exact",
+                    "--no-static-correction"),
+        FmuVariable("allow_supercritical", "Boolean", "parameter", False, "",
+                    "run at or above the critical (standing-wave) speed of the mesh",
+                    "--allow-supercritical"),
+    ]
+    for f in fields(TireParameters):
+        spec = TIRE_FIELDS[f.name]
+        option = ("--inflation-pressure" if f.name == "inflation_pressure"
+                  else f"--tire {f.name}=VALUE")
+        table.append(FmuVariable(f.name, "Real", "parameter", getattr(defaults, f.name),
+                                 spec.unit, f"{spec.description}; allowed {spec.range_text()}",
+                                 option))
+    return table
+
+
+def fmu_variables(parameter_values: dict | None = None, parameter_note: str = ""
+                  ) -> tuple[FmuVariable, ...]:
+    """Every variable in value-reference order: inputs, outputs (with in_contact), parameters.
+
+    ``parameter_values`` replaces the parameters' start values (an export's fixed values) and
+    ``parameter_note`` is appended to their descriptions.
+    """
+    parameters = _parameters()
+    if parameter_values is not None or parameter_note:
+        values = parameter_values or {}
+        parameters = [replace(p, start=values.get(p.name, p.start),
+                              description=f"{p.description}; {parameter_note}"
+                              if parameter_note else p.description) for p in parameters]
+    table = _signals() + parameters
+    names = [v.name for v in table]
+    # the runtimes read inputs and outputs as these contiguous blocks
+    assert names[: len(INPUT_NAMES)] == list(INPUT_NAMES)
+    assert names[len(INPUT_NAMES): len(INPUT_NAMES) + len(OUTPUT_NAMES)] == list(OUTPUT_NAMES)
+    return tuple(table)
+
+
+#: Value references of the hot path, fixed by the order of :func:`fmu_variables`.
+INPUTS = slice(0, len(INPUT_NAMES))
+OUTPUTS = slice(INPUTS.stop, INPUTS.stop + len(OUTPUT_NAMES))
+IN_CONTACT = OUTPUTS.stop
+
+
+def unit_definitions(units) -> ElementTree.Element:
+    """<UnitDefinitions> for the units the variables use, with their SI base units."""
+    definitions = ElementTree.Element("UnitDefinitions")
+    for unit in sorted(set(units)):
+        element = ElementTree.SubElement(definitions, "Unit", name=unit)
+        if unit in BASE_UNITS:
+            ElementTree.SubElement(element, "BaseUnit",
+                                   {k: str(v) for k, v in BASE_UNITS[unit].items()})
+    return definitions
