@@ -1,0 +1,376 @@
+"""vehicle_demo: the quarter car co-simulated with TireModal.fmu through fmpy.
+
+Layers: the quarter car and its references against closed forms; the quarter-car FMU against
+its exact solution; the co-simulation against the full-model reference (the acceptance: 1 dB
+where coherence > 0.95 and the gain is above 1 % of its peak, up to 300 Hz; body bounce and
+wheel hop within 2 % of the analytic values; equilibrium at rest); the road generator against
+its target PSD; sweeps on dask against the serial run; the demo and its command line.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import signal, stats
+
+pytest.importorskip("fmpy")
+pytest.importorskip("pythonfmu")
+
+from tire_fmu.core import OperatingPoint, TireParameters, build_model  # noqa: E402
+from vehicle_demo.quarter_car import (  # noqa: E402
+    QuarterCarError,
+    QuarterCarParameters,
+    analytic_frequencies,
+    full_tire_two_port,
+    quarter_car_modes,
+    ride_response,
+    spring_damper_two_port,
+    state_space,
+    tire_low_frequency,
+)
+from vehicle_demo.road import (  # noqa: E402
+    ISO_8608_GD_N0_M3,
+    RoadError,
+    cleat,
+    iso8608_road,
+)
+from vehicle_demo.transfer import (  # noqa: E402
+    Multisine,
+    agreement,
+    estimate_frf,
+    identify_body_and_wheel,
+    ride_outputs,
+)
+
+N_ELEMENTS = 50  # coarse mesh: the acceptance compares co-simulation with the same mesh
+CAR = QuarterCarParameters()
+EXCITATION = Multisine(period_s=2.0, settle_periods=1, average_periods=2,
+                       rms_velocity_m_s=0.005)
+STEP_S = 1e-4
+
+
+@pytest.fixture(scope="module")
+def fmus(tmp_path_factory):
+    from vehicle_demo.demo import ensure_fmus
+
+    return ensure_fmus(tmp_path_factory.mktemp("fmus"), log=lambda *_: None)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return build_model(TireParameters(), OperatingPoint(n_elements=N_ELEMENTS,
+                                                        load_n=CAR.static_tire_load_n))
+
+
+@pytest.fixture(scope="module")
+def transfer_run(fmus, model):
+    """One co-simulated multisine at speed 0, its H1 and the full-model reference."""
+    from vehicle_demo.cosim import cosimulate
+
+    _, height, velocity = EXCITATION.road(STEP_S)
+    result = cosimulate(fmus, height, velocity, CAR, {"n_elements": N_ELEMENTS}, STEP_S)
+    estimate = estimate_frf(height, ride_outputs(result), EXCITATION, STEP_S)
+    reference = ride_response(CAR, full_tire_two_port(model, estimate.freqs_hz))
+    return result, estimate, reference
+
+
+# -- quarter car and references --------------------------------------------------------------
+
+def test_quarter_car_parameters_list_every_problem_and_carry_a_load():
+    with pytest.raises(QuarterCarError) as caught:
+        QuarterCarParameters(body_mass_kg=-1.0, suspension_damping_n_s_per_m=math.nan)
+    assert len(caught.value.problems) == 2
+    assert CAR.static_tire_load_n == pytest.approx(2820 * 9.80665)
+    heavier = CAR.with_static_load(35_000.0)
+    assert heavier.static_tire_load_n == pytest.approx(35_000.0)
+    assert heavier.wheel_mass_kg == CAR.wheel_mass_kg
+    with pytest.raises(QuarterCarError):
+        CAR.with_static_load(100.0)
+
+
+def test_analytic_frequencies_are_the_two_mass_eigenvalues():
+    k_t = 2.0e6
+    found = analytic_frequencies(CAR, k_t, tire_mass_kg=40.0)
+    mass = np.diag([CAR.body_mass_kg, CAR.wheel_mass_kg + 40.0])
+    k_s = CAR.suspension_stiffness_n_per_m
+    stiffness = np.array([[k_s, -k_s], [-k_s, k_s + k_t]])
+    expected = np.sort(np.sqrt(np.linalg.eigvals(np.linalg.solve(mass, stiffness)).real))
+    assert [found.body_bounce_hz, found.wheel_hop_hz] == pytest.approx(expected / (2 * np.pi),
+                                                                        rel=1e-12)
+    # the textbook approximations of a soft suspension on a stiff tire
+    massless = analytic_frequencies(CAR, k_t)
+    assert massless.body_bounce_hz == pytest.approx(
+        math.sqrt(k_s * k_t / (k_s + k_t) / CAR.body_mass_kg) / (2 * math.pi), rel=0.01)
+    assert massless.wheel_hop_hz == pytest.approx(
+        math.sqrt((k_s + k_t) / CAR.wheel_mass_kg) / (2 * math.pi), rel=0.02)
+
+
+def test_tire_low_frequency_terms_match_the_full_model(model):
+    low = tire_low_frequency(model)
+    assert low.stiffness_n_per_m == pytest.approx(model.static_vertical_stiffness_n_per_m,
+                                                  rel=1e-9)
+    f = np.array([0.2, 1.0])
+    omega = 2 * np.pi * f
+    k_dyn = -full_tire_two_port(model, f).rim[0]
+    # K_dyn = k + iωc - ω²m up to O(ω⁴)
+    assert (low.stiffness_n_per_m - k_dyn.real) / omega**2 == pytest.approx(
+        [low.rim_side_mass_kg] * 2, rel=2e-3)
+    assert k_dyn.imag / omega == pytest.approx([low.damping_n_s_per_m] * 2, rel=1e-3)
+    # part of the 121 kg tire moves with the rim; a radial-only ring carries at most half
+    assert 20.0 < low.rim_side_mass_kg < 61.0
+
+
+def test_spring_damper_reference_is_the_classic_quarter_car():
+    k_t, c_t = 2.0e6, 300.0
+    f = np.geomspace(0.5, 300, 50)
+    ride = ride_response(CAR, spring_damper_two_port(k_t, c_t, f, CAR.static_tire_load_n))
+    # the same car as one state space with the tire spring inside it
+    a, b = state_space(CAR)
+    a = a.copy()
+    a[3, 2] -= k_t / CAR.wheel_mass_kg
+    a[3, 3] -= c_t / CAR.wheel_mass_kg
+    for i, w in enumerate(2 * np.pi * f):
+        x = np.linalg.solve(1j * w * np.eye(4) - a, b * (k_t + 1j * w * c_t))
+        assert ride["body_acc"][i] == pytest.approx(-w * w * x[0], rel=1e-9)
+        assert ride["wheel_acc"][i] == pytest.approx(-w * w * x[2], rel=1e-9)
+        tire_force = (k_t + 1j * w * c_t) * (1 - x[2])
+        assert ride["rim_load"][i] == pytest.approx(tire_force, rel=1e-9)
+        assert ride["contact_force"][i] == pytest.approx(tire_force, rel=1e-9)
+
+
+# -- the quarter-car FMU ---------------------------------------------------------------------
+
+def test_quarter_car_fmu_validates_and_steps_exactly(fmus):
+    from fmpy.validation import validate_fmu
+
+    from vehicle_demo.cosim import CAR_FMU_NAMES, FmuInstance
+
+    assert validate_fmu(str(fmus.quarter_car)) == []
+    unit = FmuInstance(fmus.quarter_car, "qc")
+    try:
+        unit.start({CAR_FMU_NAMES[k]: v for k, v in CAR.as_dict().items()})
+        force_step, h = 1000.0, 1e-3
+        vrs = [unit.vr("rim_Fz"), unit.vr("rim_Fz_rate")]
+        unit.fmu.setReal(vrs, [CAR.static_tire_load_n + force_step, 0.0])
+        states = []
+        for k in range(200):
+            unit.fmu.doStep(k * h, h)
+            states.append(unit.get(["body_z", "body_vz", "wheel_z", "wheel_vz"]))
+    finally:
+        unit.close()
+    a, b = state_space(CAR)
+    t = h * np.arange(1, 201)
+    _, _, expected = signal.lsim((a, b[:, None] * force_step, np.eye(4), np.zeros((4, 1))),
+                                 np.ones(t.size + 1), np.r_[0.0, t])
+    assert np.allclose(states, expected[1:], rtol=1e-6, atol=1e-12)
+
+
+# -- the co-simulation: the acceptance -------------------------------------------------------
+
+def test_cosimulated_transfer_functions_agree_with_the_full_model(transfer_run):
+    result, estimate, reference = transfer_run
+    assert result.contact_lost_fraction == 0.0  # the small-signal excitation keeps contact
+    found = agreement(estimate, reference, f_max_hz=300.0)
+    lines = estimate.freqs_hz.size
+    assert estimate.freqs_hz.max() == pytest.approx(300.0)
+    for name, a in found.items():
+        assert a.max_deviation_db < 1.0, (name, a)
+        # most lines count: the criterion is not met by comparing nothing
+        assert a.points_compared > 0.7 * lines, (name, a)
+        assert a.f_max_compared_hz > 200.0, (name, a)
+
+
+def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, model):
+    _, estimate, reference = transfer_run
+    modes = quarter_car_modes(CAR, model)
+    analytic = modes.with_tire_mass
+    body, wheel = identify_body_and_wheel(estimate.freqs_hz, estimate.h1["body_acc"],
+                                          estimate.h1["wheel_acc"],
+                                          estimate.coherence["wheel_acc"])
+    assert body.frequency_hz == pytest.approx(analytic.body_bounce_hz, rel=0.02)
+    assert wheel.frequency_hz == pytest.approx(analytic.wheel_hop_hz, rel=0.02)
+    # the reference's own poles agree too, and the fit finds them in the reference response
+    assert modes.body_bounce.frequency_hz == pytest.approx(analytic.body_bounce_hz, rel=0.02)
+    assert modes.wheel_hop.frequency_hz == pytest.approx(analytic.wheel_hop_hz, rel=0.02)
+    ref_body, ref_wheel = identify_body_and_wheel(reference.freqs_hz, reference["body_acc"],
+                                                  reference["wheel_acc"])
+    assert ref_body.frequency_hz == pytest.approx(modes.body_bounce.frequency_hz, rel=5e-3)
+    assert ref_wheel.frequency_hz == pytest.approx(modes.wheel_hop.frequency_hz, rel=5e-3)
+    assert wheel.damping_ratio == pytest.approx(modes.wheel_hop.damping_ratio, rel=0.05)
+    # a massless tire of the same stiffness puts wheel hop several percent too high
+    assert modes.massless.wheel_hop_hz > 1.04 * modes.wheel_hop.frequency_hz
+
+
+@pytest.mark.parametrize("speed", [0.0, 10.0])
+def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
+    from vehicle_demo.cosim import cosimulate
+    from vehicle_demo.road import road_at_rest
+
+    road = road_at_rest(0.5, STEP_S)
+    result = cosimulate(fmus, road.height_m, road.velocity_m_s, CAR,
+                        {"n_elements": N_ELEMENTS, "speed": speed}, STEP_S)
+    load = CAR.static_tire_load_n
+    assert result.static_load_n == pytest.approx(load, rel=1e-15)
+    # the tire's static load matches the car's weight to its patch solver's tolerance
+    # (~1e-12 relative): forces stay within 1 ppb of it, motions below 0.1 nm
+    for states in (result.body_z_m, result.wheel_z_m, result.wheel_vz_m_s):
+        assert np.abs(states).max() < 1e-10
+    for acc in (result.body_az_m_s2, result.wheel_az_m_s2):
+        assert np.abs(acc).max() < 1e-8
+    assert np.abs(result.rim_fz_n - load).max() < 1e-9 * load
+    assert np.abs(result.contact_fz_n - load).max() < 1e-9 * load
+    assert result.in_contact.all()
+
+
+def test_coupling_is_stable_far_beyond_the_default_step(model):
+    from tire_fmu.core.reduction import reduce
+    from vehicle_demo.coupling import spectral_radius
+
+    reduced = reduce(model, report=False)
+    body = quarter_car_modes(CAR, model).body_bounce
+    decay = body.damping_ratio * 2 * np.pi * body.frequency_hz
+    for scheme in ("gauss-seidel", "jacobi"):
+        # at 1e-4 s the slowest mode decays per step as the exact solution does
+        assert spectral_radius(CAR, reduced, 1e-4, scheme) == pytest.approx(
+            math.exp(-decay * 1e-4), abs=1e-7)
+        assert spectral_radius(CAR, reduced, 1e-3, scheme) < 1.0
+    # Gauss-Seidel with the force interpolated stays stable where Jacobi does not
+    assert spectral_radius(CAR, reduced, 5e-3, "gauss-seidel") < 1.0
+    assert spectral_radius(CAR, reduced, 5e-3, "jacobi") > 1.0
+
+
+def test_the_end_tangent_road_ramp_ends_on_the_road():
+    from vehicle_demo.cosim import road_ramps
+
+    t = np.linspace(0, 1, 11)
+    z, v = np.sin(t), np.cos(t)
+    h = t[1]
+    ramp_z, ramp_v = road_ramps(z, v, h, "end-tangent")
+    assert np.allclose(ramp_z[:-1] + h * ramp_v[:-1], z[1:])
+    assert np.allclose(ramp_v[:-1], v[1:])
+    assert road_ramps(z, v, h, "auto", speed_m_s=5.0)[0] is z  # at speed: the samples
+    with pytest.raises(ValueError):
+        road_ramps(z, v, h, "cubic")
+
+
+# -- roads -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("road_class", ["A", "C", "E"])
+def test_iso8608_road_reproduces_its_psd_within_welchs_band(road_class):
+    speed, spacing, segments = 20.0, 0.05, 30
+    road, spectrum = iso8608_road(road_class, speed, 3000.0 / speed, spacing / speed, seed=3)
+    z = road.height_m[:-1]
+    n, psd = signal.welch(z, fs=1 / spacing, window="hann", nperseg=z.size // segments,
+                          noverlap=0, detrend=False)
+    dn = n[1] - n[0]
+    # away from the band edges, where the window's leakage biases the estimate
+    inside = (n > spectrum.n_min_cycles_per_m + 3 * dn) & (n < 0.9 * spectrum.n_max_cycles_per_m)
+    ratio = psd[inside] / spectrum.psd_m3(n[inside])
+    dof = 2 * segments
+    for level, allowed in ((0.95, 0.05), (0.99, 0.01)):
+        low = dof / stats.chi2.ppf(0.5 + level / 2, dof)
+        high = dof / stats.chi2.ppf(0.5 - level / 2, dof)
+        outside = np.mean((ratio < low) | (ratio > high))
+        assert outside <= allowed, (level, outside)
+    assert np.mean(ratio) == pytest.approx(1.0, abs=0.03)
+    assert spectrum.gd_n0_m3 == ISO_8608_GD_N0_M3[road_class]
+    assert ISO_8608_GD_N0_M3["B"] == pytest.approx(4 * ISO_8608_GD_N0_M3["A"])
+
+
+def test_road_velocity_is_the_derivative_of_the_height():
+    road, _ = iso8608_road("D", 15.0, 2.0, 1e-4, seed=1, fade_in_s=0.5)
+    slope = np.gradient(road.height_m, road.time_s)
+    assert np.allclose(road.velocity_m_s[1:-1], slope[1:-1],
+                       atol=1e-3 * np.abs(road.velocity_m_s).max())
+    assert road.height_m[0] == 0.0 and road.velocity_m_s[0] == 0.0  # faded in from rest
+    with pytest.raises(RoadError):
+        iso8608_road("Z", 15.0, 2.0, 1e-4)
+    with pytest.raises(RoadError):
+        iso8608_road("C", 0.0, 2.0, 1e-4)
+
+
+@pytest.mark.parametrize("shape", ["rectangular", "rounded"])
+def test_cleat_has_its_height_and_length(shape):
+    bump = cleat(0.02, 0.1, 10.0, 0.5, 1e-4, shape, distance_m=1.0)
+    on = bump.height_m > 1e-9
+    assert bump.height_m.max() == pytest.approx(0.02, rel=1e-6)
+    duration_on = on.sum() * 1e-4
+    assert duration_on == pytest.approx(0.1 / 10.0, abs=2e-4)
+    assert bump.time_s[on][0] == pytest.approx(0.1, abs=2e-4)
+    with pytest.raises(RoadError):
+        cleat(0.02, 0.1, 10.0, 0.5, 1e-4, "triangular")
+
+
+# -- sweeps ----------------------------------------------------------------------------------
+
+def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
+    from vehicle_demo.sweep import (
+        RESULT_COLUMNS,
+        SweepSettings,
+        local_cluster,
+        run_sweep,
+    )
+
+    settings = SweepSettings(n_elements=40, reference=False)
+    points = [{"load": 22_000.0, "speed": 0.0}, {"load": CAR.static_tire_load_n, "speed": 5.0},
+              {"load": CAR.static_tire_load_n, "speed": 500.0}]  # above the critical speed
+    serial = run_sweep(points, fmus, settings, scheduler="synchronous", progress=False)
+    cluster = local_cluster(n_workers=2)
+    try:
+        parallel = run_sweep(points, fmus, settings, address=cluster.scheduler_address,
+                             progress=False)
+    finally:
+        cluster.close()
+    for result in (serial, parallel):
+        table = result.table
+        assert list(table["status"]) == ["ok", "ok", "failed"]
+        assert "critical" in table["error"][2] and "500" in table["error"][2]
+        assert table.loc[:1, "body_bounce_hz"].notna().all()
+    numeric = [c for c in RESULT_COLUMNS if c not in ("status", "error", "seconds")]
+    a = serial.table[numeric].to_numpy(float)
+    b = parallel.table[numeric].to_numpy(float)
+    assert np.allclose(a, b, rtol=1e-9, equal_nan=True)
+    # a heavier body lowers body bounce
+    assert serial.table["body_bounce_hz"][1] < serial.table["body_bounce_hz"][0]
+
+
+def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
+    from vehicle_demo.sweep import SweepError, run_sweep
+
+    with pytest.raises(SweepError, match="inflation_pressure"):
+        run_sweep([{"tyre_pressure": 1.0}], fmus, progress=False)
+
+
+# -- the demo and its command line -----------------------------------------------------------
+
+def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
+    import shutil
+
+    from vehicle_demo.demo import DemoSettings, format_summary, run_demo
+
+    out = tmp_path / "demo"
+    (out / "fmus").mkdir(parents=True)
+    for path in (fmus.tire, fmus.quarter_car):  # reuse the built FMUs (they are up to date)
+        shutil.copy2(path, out / "fmus" / path.name)
+    summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=1.0,
+                                          progress=False), log=lambda *_: None)
+    for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
+                 "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv"):
+        assert (out / name).stat().st_size > 0, name
+    assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
+    text = format_summary(summary)
+    assert "wheel hop" in text and "body bounce" in text
+
+
+def test_command_line_reports_user_errors_in_one_line(tmp_path, capsys):
+    from vehicle_demo.__main__ import main
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")
+    assert main(["--out", str(blocker / "out"), "--quick"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("vehicle_demo: error:") and "\n" not in err
+    assert main(["sweep", "--factor", "load=oops", "--out", str(tmp_path)]) == 2
+    assert "levels must be numbers" in capsys.readouterr().err

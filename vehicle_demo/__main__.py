@@ -1,0 +1,149 @@
+"""``python -m vehicle_demo [--out DIR] [--quick]`` and ``python -m vehicle_demo sweep ...``.
+
+Only parses arguments and delegates to :mod:`vehicle_demo.demo` and :mod:`vehicle_demo.sweep`.
+"""
+
+from __future__ import annotations
+
+import os
+
+# Before numpy loads: one BLAS thread. On two shared cores OpenBLAS's worker threads spin
+# against each other and the small dense eigenproblems here get about ten times slower.
+for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_name, "1")
+
+import argparse  # noqa: E402
+import sys  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+
+def _demo_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m vehicle_demo",
+        description="Quarter car co-simulated with TireModal.fmu through fmpy: ride transfer "
+                    "functions (0.5-300 Hz) against the full-model and spring-damper "
+                    "references, an ISO 8608 road run and a cleat. Writes figures and "
+                    "summary tables to --out. (For a parameter sweep: python -m vehicle_demo "
+                    "sweep --help.)")
+    p.add_argument("--out", type=Path, default=Path("demo_output"),
+                   help="output folder (default: demo_output)")
+    p.add_argument("--quick", action="store_true",
+                   help="shorter run: N = 60, 0.5 Hz lines, 2 s road")
+    p.add_argument("--n-elements", type=int, help="tire mesh (default 100, quick 60)")
+    p.add_argument("--road-class", default="C", choices=list("ABCDEFGH"),
+                   help="ISO 8608 class of the road run (default C)")
+    p.add_argument("--road-speed", type=float, default=20.0, help="road-run speed, m/s")
+    p.add_argument("--rebuild", action="store_true", help="rebuild the FMUs")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    return p
+
+
+def _sweep_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m vehicle_demo sweep",
+        description="Full-factorial sweep of the co-simulated quarter car on dask; writes the "
+                    "table (CSV or Parquet) and a plot of how the resonances move.")
+    p.add_argument("--factor", action="append", default=[], metavar="NAME=V1,V2,...",
+                   help="a factor and its levels, e.g. load=20000,27655 or speed=0,10 or "
+                        "inflation_pressure=6e5,7.9e5 (repeat for more factors)")
+    p.add_argument("--out", type=Path, default=Path("sweep_output"), help="output folder")
+    p.add_argument("--table", default="sweep.csv", help="file name: .csv or .parquet")
+    p.add_argument("--address", help="dask.distributed scheduler address (default: dask's "
+                                     "local process scheduler)")
+    p.add_argument("--serial", action="store_true", help="run in this process, no dask")
+    p.add_argument("--workers", type=int, default=2, help="local worker processes")
+    p.add_argument("--n-elements", type=int, default=60, help="tire mesh unless a factor")
+    p.add_argument("--rebuild", action="store_true", help="rebuild the FMUs")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def _parse_factors(items: list[str]) -> dict:
+    from .sweep import SweepError
+
+    factors = {}
+    for item in items:
+        name, sep, levels = item.partition("=")
+        if not sep or not name or not levels:
+            raise SweepError(f"--factor {item!r}: write NAME=V1,V2,...")
+        try:
+            factors[name.strip()] = [float(v) if any(c in v for c in ".eE") else int(v)
+                                     for v in levels.split(",")]
+        except ValueError:
+            raise SweepError(f"--factor {item!r}: levels must be numbers") from None
+    if not factors:
+        raise SweepError("give at least one --factor NAME=V1,V2,...")
+    return factors
+
+
+def _demo(argv) -> int:
+    from .demo import DemoSettings, format_summary, run_demo
+
+    args = _demo_parser().parse_args(argv)
+    overrides = dict(out_dir=args.out, road_class=args.road_class,
+                     road_speed_m_s=args.road_speed, rebuild=args.rebuild,
+                     progress=not args.no_progress)
+    if args.n_elements is not None:
+        overrides["n_elements"] = args.n_elements
+    settings = DemoSettings.quick(**overrides) if args.quick else DemoSettings(**overrides)
+    summary = run_demo(settings)
+    print(format_summary(summary))
+    return 0
+
+
+def _sweep(argv) -> int:
+    from .demo import ensure_fmus
+    from .plots import plot_sweep
+    from .sweep import SweepSettings, full_factorial, run_sweep, save_table
+
+    args = _sweep_parser().parse_args(argv)
+    factors = _parse_factors(args.factor)
+    fmus = ensure_fmus(args.out / "fmus", args.rebuild)
+    result = run_sweep(full_factorial(factors), fmus, SweepSettings(n_elements=args.n_elements),
+                       scheduler="synchronous" if args.serial else "processes",
+                       address=args.address, n_workers=args.workers,
+                       progress=not args.no_progress)
+    table = save_table(result, args.out / args.table)
+    figure = plot_sweep(result.table, next(iter(factors)), args.out / "sweep_resonances.png",
+                        title=f"Resonances over the sweep ({result.scheduler})")
+    shown = [*result.factors, "status", "body_bounce_hz", "wheel_hop_hz", "tire_mode_hz",
+             "ref_body_bounce_hz", "ref_wheel_hop_hz", "contact_lost_fraction"]
+    print(result.table[shown].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    for _, row in result.failed.iterrows():
+        point = ", ".join(f"{f}={row[f]:g}" for f in result.factors)
+        print(f"failed: {point}: {row['error']}")
+    print(f"\n{len(result.table)} points in {result.wall_s:.1f} s "
+          f"({result.points_per_minute:.1f} points/min, {result.scheduler}); "
+          f"{len(result.failed)} failed")
+    print(f"wrote {table}\nwrote {figure}")
+    return 0
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    from tire_fmu.core.parameters import ParameterError
+
+    from .cosim import CoSimError
+    from .demo import DemoError
+    from .quarter_car import QuarterCarError
+    from .road import RoadError
+    from .sweep import SweepError
+
+    user_errors = (DemoError, SweepError, RoadError, QuarterCarError, CoSimError,
+                   ParameterError, FileNotFoundError, PermissionError)
+    warnings.filterwarnings("ignore", category=DeprecationWarning)
+    try:
+        if argv[:1] == ["sweep"]:
+            return _sweep(argv[1:])
+        return _demo(argv)
+    except user_errors as error:
+        print(f"vehicle_demo: error: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("vehicle_demo: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

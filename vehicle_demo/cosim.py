@@ -1,0 +1,422 @@
+"""The master algorithm: the quarter car and the tire as two FMUs stepped by fmpy.
+
+Coupling (default ``"gauss-seidel"``), over each communication step t_k -> t_k + h:
+
+1. the tire gets the wheel state at t_k (``rim_z`` = z_w, ``rim_vz`` = ż_w: it ramps the
+   rim with that velocity over the step) and the road at t_k (height and velocity at the
+   leading edge of the patch), steps, and returns its total rim force F_{k+1};
+2. the quarter car gets ``rim_Fz`` = F_k and ``rim_Fz_rate`` = (F_{k+1} - F_k)/h, i.e. the tire
+   force linearly interpolated over the step (first-order hold), steps exactly, and returns
+   the wheel and body state at t_{k+1}.
+
+The tire goes first because its force has direct feedthrough from rim displacement and
+velocity (its structural damping passes ż_rim straight to the rim), whereas the quarter car's
+wheel state depends on the force only through an integration: so the ordering never needs the
+unknown end-of-step value of a feedthrough output. What remains explicit is the rim motion
+the tire assumes over the step (a ramp from the state at t_k): an O(h²) error per step.
+``"jacobi"`` steps both from t_k values (force held over the step): first order, for
+comparison. :mod:`vehicle_demo.coupling` gives the step-size limit and the error of both.
+
+The road is handed to the tire as a ramp per step too; which ramp matters for the contact
+force's large direct feedthrough from the road, see :func:`road_ramps`.
+
+Both FMUs start in static equilibrium: the tire's ``load`` is set to the car's weight
+(m_b + m_w)·g, which the quarter car subtracts from the total rim force it receives.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import shutil
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from .quarter_car import QuarterCarParameters
+
+SCHEMES = ("gauss-seidel", "jacobi")
+ROAD_RAMPS = ("auto", "end-tangent", "start-tangent")
+DEFAULT_STEP_S = 1e-4
+
+#: Quarter-car FMU parameter for each field of :class:`QuarterCarParameters`.
+CAR_FMU_NAMES = {
+    "body_mass_kg": "body_mass",
+    "wheel_mass_kg": "wheel_mass",
+    "suspension_stiffness_n_per_m": "suspension_stiffness",
+    "suspension_damping_n_s_per_m": "suspension_damping",
+    "gravity_m_s2": "gravity",
+}
+
+
+class CoSimError(RuntimeError):
+    """An FMU refused a call; the message carries what the FMU logged."""
+
+
+@dataclass(frozen=True)
+class FmuPaths:
+    tire: Path
+    quarter_car: Path
+
+
+_EXTRACTED: dict[tuple[str, float], str] = {}
+
+
+def _extracted(path: Path) -> str:
+    """Unzip an FMU once per process (and file version); removed when the process ends."""
+    from fmpy import extract
+
+    key = (str(Path(path).resolve()), Path(path).stat().st_mtime)
+    folder = _EXTRACTED.get(key)
+    if folder is None:
+        folder = extract(str(path))
+        _EXTRACTED[key] = folder
+        atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    return folder
+
+
+_STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
+
+
+def _raw(fmu, name: str):
+    """The bare ctypes function fmi2<name>, returning its status: fmpy's wrapper checks and
+    logs every call, which costs about a microsecond a call in a loop of seven calls a step;
+    the master checks the statuses itself. Falls back to the wrapper (which raises) if fmpy
+    keeps its functions elsewhere."""
+    functions = getattr(fmu, "_functions", None)
+    raw = functions.get("fmi2" + name) if isinstance(functions, dict) else None
+    if raw is None:
+        wrapped = getattr(fmu, "fmi2" + name)
+
+        def raw(*args):
+            wrapped(*args)
+            return 0
+
+    return raw
+
+
+class FmuInstance:
+    """One fmpy ``FMU2Slave`` with variables by name, its log captured, and errors that say
+    what the FMU logged. Instantiated once; :meth:`start` (re)initialises with parameters."""
+
+    def __init__(self, path: str | Path, instance_name: str):
+        from fmpy import read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise CoSimError(f"{self.path}: no such FMU")
+        self.description = read_model_description(str(self.path))
+        self.variables = {v.name: v for v in self.description.modelVariables}
+        self.log: list[tuple[str, str]] = []  # (status, message)
+        self.fmu = FMU2Slave(guid=self.description.guid, unzipDirectory=_extracted(self.path),
+                             modelIdentifier=self.description.coSimulation.modelIdentifier,
+                             instanceName=instance_name)
+        self._callbacks = self._make_callbacks()
+        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=True)
+        self._fresh = True
+
+    def _make_callbacks(self):
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+        )
+
+        def logger(component, instance, status, category, message):
+            label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
+            self.log.append((label, message.decode("utf-8", "replace") if message else ""))
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        return callbacks
+
+    def vr(self, name: str) -> int:
+        try:
+            return self.variables[name].valueReference
+        except KeyError:
+            raise CoSimError(f"{self.path.name} has no variable {name!r}; it has "
+                             f"{sorted(self.variables)}") from None
+
+    def problems(self) -> str:
+        """What the FMU logged at warning or worse: the first error (the cause; later
+        messages mostly repeat it) or else the last warning, and how many more there were."""
+        bad = [(s, m) for s, m in self.log if s != "OK"]
+        if not bad:
+            return "(the FMU logged nothing)"
+        errors = [(s, m) for s, m in bad if s in ("ERROR", "FATAL")]
+        status, message = errors[0] if errors else bad[-1]
+        more = f" (+{len(bad) - 1} more message(s))" if len(bad) > 1 else ""
+        return f"[{status}] {message}{more}"
+
+    def fail(self, what: str, error: Exception) -> CoSimError:
+        return CoSimError(f"{self.path.name}: {what} failed ({error}): {self.problems()}")
+
+    def start(self, parameters: Mapping[str, float | int | bool], start_time: float = 0.0
+              ) -> None:
+        """(Re)initialise with ``parameters`` (FMU names): reset, set, initialise."""
+        try:
+            if not self._fresh:
+                self.fmu.reset()
+            self._fresh = False
+            self.log.clear()
+            self.fmu.setupExperiment(startTime=start_time)
+            self.fmu.enterInitializationMode()
+            for name, value in parameters.items():
+                vr, kind = self.vr(name), self.variables[name].type
+                if kind == "Real":
+                    self.fmu.setReal([vr], [float(value)])
+                elif kind == "Integer":
+                    self.fmu.setInteger([vr], [int(value)])
+                elif kind == "Boolean":
+                    self.fmu.setBoolean([vr], [bool(value)])
+                else:
+                    raise CoSimError(f"{name}: {kind} parameters are not supported")
+            self.fmu.exitInitializationMode()
+        except CoSimError:
+            raise
+        except Exception as error:
+            raise self.fail("initialisation", error) from error
+
+    def get(self, names) -> list[float]:
+        return self.fmu.getReal([self.vr(n) for n in names])
+
+    def close(self) -> None:
+        try:
+            self.fmu.terminate()
+        except Exception:  # noqa: BLE001 -- a refused terminate must not hide the real error
+            pass
+        self.fmu.freeInstance()
+
+
+@dataclass(frozen=True, eq=False)
+class CoSimResult:
+    """Signals at the communication points t_0 ... t_n (deviations unless 'total')."""
+
+    time_s: np.ndarray
+    road_z_m: np.ndarray
+    road_vz_m_s: np.ndarray
+    body_z_m: np.ndarray
+    body_az_m_s2: np.ndarray
+    wheel_z_m: np.ndarray
+    wheel_vz_m_s: np.ndarray
+    wheel_az_m_s2: np.ndarray
+    rim_fz_n: np.ndarray  # total
+    contact_fz_n: np.ndarray  # total
+    in_contact: np.ndarray  # the tire FMU's flag
+    static_load_n: float
+    step_s: float
+    scheme: str
+    wall_s: float
+    tire_log: tuple = field(default=())
+
+    @property
+    def rim_load_n(self) -> np.ndarray:
+        """Dynamic rim load (total minus static)."""
+        return self.rim_fz_n - self.static_load_n
+
+    @property
+    def contact_force_n(self) -> np.ndarray:
+        return self.contact_fz_n - self.static_load_n
+
+    @property
+    def real_time_factor(self) -> float:
+        """Wall time over simulated time (< 1: faster than real time)."""
+        simulated = self.time_s[-1] - self.time_s[0]
+        return self.wall_s / simulated if simulated > 0 else math.nan
+
+    @property
+    def contact_lost_fraction(self) -> float:
+        return float(np.mean(~self.in_contact[1:])) if self.in_contact.size > 1 else 0.0
+
+
+class QuarterCarCoSimulation:
+    """The two FMUs, instantiated once; :meth:`run` (re)initialises them and co-simulates.
+
+    ``tire_parameters`` are TireModal.fmu parameters (``speed``, ``n_elements``, tire data...);
+    ``load`` is always the car's weight, so give the car a body mass instead
+    (:meth:`QuarterCarParameters.with_static_load`).
+    """
+
+    def __init__(self, fmus: FmuPaths, car: QuarterCarParameters | None = None,
+                 tire_parameters: Mapping | None = None, step_s: float = DEFAULT_STEP_S,
+                 scheme: str = "gauss-seidel"):
+        if scheme not in SCHEMES:
+            raise ValueError(f"scheme = {scheme!r}: must be one of {SCHEMES}")
+        if not (step_s > 0 and math.isfinite(step_s)):
+            raise ValueError(f"step_s = {step_s!r}: must be finite and > 0")
+        self.car = car or QuarterCarParameters()
+        self.tire_parameters = dict(tire_parameters or {})
+        if "load" in self.tire_parameters:
+            raise ValueError("tire parameter 'load' is set from the car's weight; change the "
+                             "body mass instead (QuarterCarParameters.with_static_load)")
+        self.step_s = float(step_s)
+        self.scheme = scheme
+        self.tire = FmuInstance(fmus.tire, "tire")
+        try:
+            self.car_fmu = FmuInstance(fmus.quarter_car, "quarter_car")
+        except Exception:
+            self.tire.close()
+            raise
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self) -> None:
+        self.tire.close()
+        self.car_fmu.close()
+
+    @property
+    def speed_m_s(self) -> float:
+        return float(self.tire_parameters.get("speed", 0.0))
+
+    def run(self, road_z_m, road_vz_m_s, start_time: float = 0.0,
+            progress: Callable[[int], None] | None = None,
+            road_ramp: str = "auto") -> CoSimResult:
+        """Co-simulate with the road (leading edge) sampled at t_k = start + k·h.
+
+        ``road_ramp`` is the ramp the tire is given for the road over each step (see
+        :func:`road_ramps`). ``progress(n)`` is called with the steps done since its last call.
+        """
+        road_z = np.ascontiguousarray(road_z_m, dtype=float)
+        road_vz = np.ascontiguousarray(road_vz_m_s, dtype=float)
+        if road_z.shape != road_vz.shape or road_z.ndim != 1 or road_z.size < 2:
+            raise ValueError("road height and velocity must be 1-D arrays of one length >= 2")
+        ramp_z, ramp_vz = road_ramps(road_z, road_vz, self.step_s, road_ramp, self.speed_m_s)
+        car = self.car
+        static_load = car.static_tire_load_n
+        self.car_fmu.start({CAR_FMU_NAMES[k]: v for k, v in car.as_dict().items()}, start_time)
+        self.tire.start({"load": static_load, **self.tire_parameters}, start_time)
+        result = self._loop(ramp_z, ramp_vz, static_load, start_time, progress)
+        # report the road itself, not the ramps handed to the tire
+        return replace(result, road_z_m=road_z, road_vz_m_s=road_vz)
+
+    def _loop(self, road_z, road_vz, static_load, start_time, progress) -> CoSimResult:
+        from fmpy.fmi2 import fmi2Boolean, fmi2Real, fmi2True, fmi2ValueReference
+
+
+        tire, car = self.tire, self.car_fmu
+        n = road_z.size - 1
+        h = self.step_s
+        gauss_seidel = self.scheme == "gauss-seidel"
+
+        def refs(fmu, names):
+            return (fmi2ValueReference * len(names))(*[fmu.vr(x) for x in names])
+
+        tire_in = refs(tire, ("rim_z", "rim_vz", "road_z", "road_vz"))
+        tire_out = refs(tire, ("rim_Fz", "contact_Fz"))
+        tire_flag = refs(tire, ("in_contact",))
+        car_in = refs(car, ("rim_Fz", "rim_Fz_rate"))
+        car_out = refs(car, ("wheel_z", "wheel_vz", "wheel_az", "body_z", "body_az"))
+        u_t, y_t, y_flag = (fmi2Real * 4)(), (fmi2Real * 2)(), (fmi2Boolean * 1)()
+        u_c, y_c = (fmi2Real * 2)(), (fmi2Real * 5)()
+        ct, cc = tire.fmu.component, car.fmu.component
+        t_set, t_step, t_get = (_raw(tire.fmu, f) for f in ("SetReal", "DoStep", "GetReal"))
+        t_get_flag = _raw(tire.fmu, "GetBoolean")
+        c_set, c_step, c_get = (_raw(car.fmu, f) for f in ("SetReal", "DoStep", "GetReal"))
+
+        out = np.empty((n + 1, 7))  # wheel z, vz, az, body z, az, rim Fz, contact Fz
+        flags = np.empty(n + 1, dtype=bool)
+        t_get(ct, tire_out, 2, y_t)
+        t_get_flag(ct, tire_flag, 1, y_flag)
+        c_get(cc, car_out, 5, y_c)
+        out[0, :5] = y_c[:]
+        out[0, 5:] = y_t[:]
+        flags[0] = bool(y_flag[0])
+        z_w, v_w = y_c[0], y_c[1]
+        force = y_t[0]
+        report_every = max(1, min(n // 100, 5000))
+        started = time.perf_counter()
+        k = 0
+        try:
+            for k in range(n):
+                t = start_time + k * h  # multiples of h: no drift of the communication points
+                u_t[0], u_t[1], u_t[2], u_t[3] = z_w, v_w, road_z[k], road_vz[k]
+                status = t_set(ct, tire_in, 4, u_t)
+                if gauss_seidel:
+                    status |= t_step(ct, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
+                    u_c[0], u_c[1] = force, (y_t[0] - force) / h
+                    status |= c_set(cc, car_in, 2, u_c) | c_step(cc, t, h, fmi2True)
+                else:  # both from t_k values, the force held
+                    u_c[0], u_c[1] = force, 0.0
+                    status |= c_set(cc, car_in, 2, u_c) | t_step(ct, t, h, fmi2True)
+                    status |= c_step(cc, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
+                status |= t_get_flag(ct, tire_flag, 1, y_flag) | c_get(cc, car_out, 5, y_c)
+                if status > 1:  # an OR of statuses exceeds 1 iff one was discard or worse
+                    raise CoSimError(f"an FMI call returned {_STATUS[min(status, 4)]} or worse")
+                row = out[k + 1]
+                row[:5] = y_c
+                row[5:] = y_t
+                flags[k + 1] = y_flag[0]
+                z_w, v_w, force = y_c[0], y_c[1], y_t[0]
+                if progress is not None and (k + 1) % report_every == 0:
+                    progress(report_every)
+        except Exception as error:  # fmpy raises on any status worse than warning
+            t = start_time + k * h
+            said = [f"{unit.path.name}: {unit.problems()}" for unit in (tire, car)
+                    if any(status != "OK" for status, _ in unit.log)]
+            raise CoSimError(f"step {k} at t = {t:.6g} s refused ({error}); "
+                             + ("; ".join(said) or "no FMU logged why")) from error
+        wall = time.perf_counter() - started
+        if progress is not None and n % report_every:
+            progress(n % report_every)
+        times = start_time + h * np.arange(n + 1)
+        return CoSimResult(
+            time_s=times, road_z_m=road_z, road_vz_m_s=road_vz,
+            body_z_m=out[:, 3].copy(), body_az_m_s2=out[:, 4].copy(),
+            wheel_z_m=out[:, 0].copy(), wheel_vz_m_s=out[:, 1].copy(),
+            wheel_az_m_s2=out[:, 2].copy(), rim_fz_n=out[:, 5].copy(),
+            contact_fz_n=out[:, 6].copy(), in_contact=flags, static_load_n=static_load,
+            step_s=h, scheme=self.scheme, wall_s=wall, tire_log=tuple(tire.log),
+        )
+
+
+def road_ramps(road_z, road_vz, step_s: float, ramp: str = "auto", speed_m_s: float = 0.0):
+    """The (road_z, road_vz) handed to the tire at each t_k; it ramps the road with them.
+
+    The tire reads its outputs at the end of the ramp, t_{k+1}, and its contact force has a
+    large direct feedthrough from the road (about 1e8 N/m on height and 1.7e4 N·s/m on
+    velocity at the default load) that nearly cancels its modal part. The plain samples
+    (``"start-tangent"``: height and velocity at t_k) leave the velocity term one step late,
+    an O(h) error that reaches 4 dB in road -> contact force near 70 Hz at h = 1e-4 s.
+    ``"end-tangent"`` hands over the tangent at t_{k+1} instead, z_{k+1} - h·ż_{k+1} with
+    slope ż_{k+1}: the ramp ends on the road's true height and velocity where the outputs are
+    read, and departs from the road by only h²z̈/2 over the step. The road is prescribed, so
+    the master may look one step ahead.
+
+    At speed the tire keeps a history of the samples and reads each patch node's road, delayed,
+    from it by Hermite interpolation: that history must hold true heights and slopes, so
+    ``"auto"`` uses the end tangent only at speed 0 (a shaker plate, no history).
+    """
+    if ramp not in ROAD_RAMPS:
+        raise ValueError(f"road_ramp = {ramp!r}: must be one of {ROAD_RAMPS}")
+    if ramp == "auto":
+        ramp = "end-tangent" if speed_m_s == 0 else "start-tangent"
+    if ramp == "start-tangent":
+        return road_z, road_vz
+    z = np.empty_like(road_z)
+    v = np.empty_like(road_vz)
+    z[:-1] = road_z[1:] - step_s * road_vz[1:]
+    v[:-1] = road_vz[1:]
+    z[-1], v[-1] = road_z[-1], road_vz[-1]  # never stepped from
+    return z, v
+
+
+def cosimulate(fmus: FmuPaths, road_z_m, road_vz_m_s, car: QuarterCarParameters | None = None,
+               tire_parameters: Mapping | None = None, step_s: float = DEFAULT_STEP_S,
+               scheme: str = "gauss-seidel", progress=None, road_ramp: str = "auto"
+               ) -> CoSimResult:
+    """One co-simulation with fresh FMU instances (see :class:`QuarterCarCoSimulation`)."""
+    with QuarterCarCoSimulation(fmus, car, tire_parameters, step_s, scheme) as sim:
+        return sim.run(road_z_m, road_vz_m_s, progress=progress, road_ramp=road_ramp)
+

@@ -1,0 +1,310 @@
+"""The end-to-end job behind ``python -m vehicle_demo``.
+
+1. build ``TireModal.fmu`` and ``QuarterCar.fmu`` into ``OUT/fmus`` (again only when a source
+   is newer than the FMU);
+2. co-simulate the quarter car on a broadband multisine road (speed 0: a shaker plate) and
+   estimate the four ride transfer functions (H1, coherence);
+3. compare them with the car on the full ring model and on a spring-damper tire, and
+   identify body bounce, wheel hop and the tire modes;
+4. run an ISO 8608 road at speed and a cleat, and plot rim load and contact force;
+5. write the figures and ``summary.csv``, ``resonances.csv``, ``agreement.csv`` to OUT and
+   print the summary.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .cosim import FmuPaths, QuarterCarCoSimulation
+from .quarter_car import QuarterCarParameters
+from .road import cleat, iso8608_road
+from .transfer import Multisine
+
+
+class DemoError(RuntimeError):
+    """Something the user can fix (a missing package, an unwritable folder)."""
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    out_dir: Path = Path("demo_output")
+    n_elements: int = 100
+    step_s: float = 1e-4
+    excitation: Multisine = field(default_factory=lambda: Multisine(
+        period_s=4.0, settle_periods=1, average_periods=3, rms_velocity_m_s=0.005))
+    tf_speed_m_s: float = 0.0
+    road_class: str = "C"
+    road_speed_m_s: float = 20.0
+    road_duration_s: float = 4.0
+    cleat_height_m: float = 0.03
+    cleat_length_m: float = 0.10
+    cleat_shape: str = "rounded"
+    cleat_speed_m_s: float = 10.0
+    car: QuarterCarParameters = field(default_factory=QuarterCarParameters)
+    rebuild: bool = False
+    progress: bool = True
+
+    @classmethod
+    def quick(cls, **overrides) -> DemoSettings:
+        """A shorter run for a first look and the benchmark: coarser mesh, 0.5 Hz lines."""
+        values = dict(n_elements=60, road_duration_s=2.0, excitation=Multisine(
+            period_s=2.0, settle_periods=1, average_periods=2, rms_velocity_m_s=0.005))
+        values.update(overrides)
+        return cls(**values)
+
+
+def _sources() -> list[Path]:
+    import tire_fmu
+
+    package = Path(tire_fmu.__file__).parent
+    here = Path(__file__).parent
+    return [*package.glob("core/*.py"), *package.glob("fmu/*.py"), package / "__init__.py",
+            here / "quarter_car_fmu.py"]
+
+
+def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
+    """The two FMUs in ``folder``, built when missing, older than their sources, or asked."""
+    try:
+        from tire_fmu.fmu.builder import build_fmu
+
+        from .quarter_car_fmu import build_quarter_car_fmu
+    except ImportError as error:
+        raise DemoError(f"building the FMUs needs pythonfmu and fmpy ({error}); "
+                        "pip install -e '.[test]'") from error
+    folder = Path(folder)
+    paths = FmuPaths(folder / "TireModal.fmu", folder / "QuarterCar.fmu")
+    newest = max(p.stat().st_mtime for p in _sources() if p.exists())
+    for path, build in ((paths.tire, build_fmu), (paths.quarter_car, build_quarter_car_fmu)):
+        if rebuild or not path.exists() or path.stat().st_mtime < newest:
+            started = time.perf_counter()
+            build(folder)
+            log(f"built {path} ({time.perf_counter() - started:.1f} s)")
+    return paths
+
+
+def _step_bar(total: int, enabled: bool, what: str):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, disable=not enabled, desc=what, unit="step", unit_scale=True,
+                mininterval=0.5)
+
+
+@dataclass(frozen=True)
+class DemoSummary:
+    """What the demo measured (also written as CSV)."""
+
+    rows: list  # (quantity, value, unit)
+    resonances: list  # transfer.Resonance
+    agreements: dict  # name -> transfer.Agreement
+    figures: list
+    tables: list
+    wall_s: float
+
+
+def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
+    settings = settings or DemoSettings()
+    started = time.perf_counter()
+    out = Path(settings.out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / ".write_test").write_text("")
+        (out / ".write_test").unlink()
+    except OSError as error:
+        raise DemoError(f"cannot write to {out}: {error.strerror or error}") from error
+    try:
+        import matplotlib  # noqa: F401
+        import tqdm  # noqa: F401
+    except ImportError as error:
+        raise DemoError(f"the demo needs matplotlib and tqdm ({error}); "
+                        "pip install -e '.[test]'") from error
+    fmus = ensure_fmus(out / "fmus", settings.rebuild, log)
+    rows: list[tuple[str, float | str, str]] = []
+    figures, tables = [], []
+
+    # -- references and coupling analysis ---------------------------------------------------
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+    from tire_fmu.core.reduction import reduce
+
+    from . import plots
+    from .coupling import stability_limit
+    from .quarter_car import (
+        full_tire_two_port,
+        quarter_car_modes,
+        ride_response,
+        spring_damper_two_port,
+        tire_low_frequency,
+    )
+    from .transfer import (
+        agreement,
+        estimate_frf,
+        identify_body_and_wheel,
+        resonance_table,
+        ride_outputs,
+    )
+
+    car, h, ex = settings.car, settings.step_s, settings.excitation
+    log(f"tire model: N = {settings.n_elements}, load {car.static_tire_load_n:.0f} N, "
+        f"speed {settings.tf_speed_m_s:g} m/s")
+    model = build_model(TireParameters(), OperatingPoint(
+        n_elements=settings.n_elements, load_n=car.static_tire_load_n,
+        speed_m_s=settings.tf_speed_m_s))
+    low = tire_low_frequency(model)
+    modes = quarter_car_modes(car, model)
+    limit = stability_limit(car, reduce(model, report=False))
+
+    # -- transfer functions by co-simulation ------------------------------------------------
+    tire_parameters = {"n_elements": settings.n_elements, "speed": settings.tf_speed_m_s}
+    _, height, velocity = ex.road(h)
+    with _step_bar(height.size - 1, settings.progress, "transfer functions") as bar, \
+            QuarterCarCoSimulation(fmus, car, tire_parameters, h) as sim:
+        tf_run = sim.run(height, velocity, progress=bar.update)
+    estimate = estimate_frf(height, ride_outputs(tf_run), ex, h)
+    delay = 0.5 * model.patch.length_m / settings.tf_speed_m_s if settings.tf_speed_m_s else 0.0
+
+    def references(freqs):
+        full = ride_response(car, full_tire_two_port(model, freqs))
+        spring = ride_response(car, spring_damper_two_port(
+            low.stiffness_n_per_m, low.damping_n_s_per_m, freqs, model.patch.load_n, delay))
+        return full, spring
+
+    full_at_lines, _ = references(estimate.freqs_hz)
+    agreements = agreement(estimate, full_at_lines)
+    fine = np.geomspace(ex.f_min_hz, ex.f_max_hz, 1500)
+    full_fine, spring_fine = references(fine)
+    identified = identify_body_and_wheel(estimate.freqs_hz, estimate.h1["body_acc"],
+                                         estimate.h1["wheel_acc"],
+                                         estimate.coherence["wheel_acc"])
+    resonances = resonance_table(modes, full_fine, estimate, identified)
+    figures.append(plots.plot_bode(
+        estimate, full_fine, spring_fine, agreements, out / "ride_transfer_functions.png",
+        title=f"Quarter car on TireModal.fmu, co-simulated through fmpy (h = {h * 1e3:g} ms, "
+              f"N = {settings.n_elements}, speed {settings.tf_speed_m_s:g} m/s): "
+              f"road -> ride, H1 from a {ex.f_min_hz:g}-{ex.f_max_hz:g} Hz multisine"))
+
+    # -- road runs --------------------------------------------------------------------------
+    road, spectrum = iso8608_road(settings.road_class, settings.road_speed_m_s,
+                                  settings.road_duration_s, h, seed=1, fade_in_s=0.5)
+    road_parameters = {"n_elements": settings.n_elements, "speed": settings.road_speed_m_s}
+    with _step_bar(road.time_s.size - 1, settings.progress, "ISO 8608 road") as bar, \
+            QuarterCarCoSimulation(fmus, car, road_parameters, h) as sim:
+        road_run = sim.run(road.height_m, road.velocity_m_s, progress=bar.update)
+    figures.append(plots.plot_road_run(road_run, out / "road_run_iso8608.png",
+                                       title=f"{road.description}, N = {settings.n_elements}"))
+    figures.append(_road_psd_figure(road, spectrum, out / "road_psd.png"))
+    bump = cleat(settings.cleat_height_m, settings.cleat_length_m, settings.cleat_speed_m_s,
+                 1.0, h, settings.cleat_shape, distance_m=1.0)
+    cleat_parameters = {"n_elements": settings.n_elements, "speed": settings.cleat_speed_m_s}
+    with _step_bar(bump.time_s.size - 1, settings.progress, "cleat") as bar, \
+            QuarterCarCoSimulation(fmus, car, cleat_parameters, h) as sim:
+        cleat_run = sim.run(bump.height_m, bump.velocity_m_s, progress=bar.update)
+    figures.append(plots.plot_road_run(cleat_run, out / "road_run_cleat.png",
+                                       title=f"{bump.description}, N = {settings.n_elements}"))
+
+    # -- summary ----------------------------------------------------------------------------
+    rows += [
+        ("tire static stiffness K_v", low.stiffness_n_per_m, "N/m"),
+        ("tire equivalent damping (low-frequency Im K_dyn / w)", low.damping_n_s_per_m,
+         "N.s/m"),
+        ("tire mass moving with the rim (road held)", low.rim_side_mass_kg, "kg"),
+        ("coupling: spectral radius at h (Gauss-Seidel)", limit.radius_at_default, "-"),
+        ("coupling: largest stable step (Gauss-Seidel)", limit.max_stable_step_s, "s"),
+        ("transfer-function run: real-time factor (wall / simulated)",
+         tf_run.real_time_factor, "-"),
+        ("transfer-function run: contact lost", 100 * tf_run.contact_lost_fraction, "%"),
+    ]
+    for name, a in agreements.items():
+        rows.append((f"max |dB| co-sim vs full model, {name} (coherence > 0.95)",
+                     a.max_deviation_db, "dB"))
+    for label, run in (("ISO road", road_run), ("cleat", cleat_run)):
+        rows += [
+            (f"{label}: body acceleration RMS", float(np.std(run.body_az_m_s2)), "m/s2"),
+            (f"{label}: rim load min / max", f"{run.rim_fz_n.min():.0f} / "
+             f"{run.rim_fz_n.max():.0f}", "N"),
+            (f"{label}: contact force min / max", f"{run.contact_fz_n.min():.0f} / "
+             f"{run.contact_fz_n.max():.0f}", "N"),
+            (f"{label}: contact lost", 100 * run.contact_lost_fraction, "%"),
+            (f"{label}: real-time factor", run.real_time_factor, "-"),
+        ]
+    wall = time.perf_counter() - started
+    rows.append(("demo wall time", wall, "s"))
+    tables.append(_write_csv(out / "summary.csv", ("quantity", "value", "unit"), rows))
+    tables.append(_write_csv(
+        out / "resonances.csv",
+        [*asdict(resonances[0]).keys(), "cosim_vs_analytic_pct"],
+        [[*asdict(r).values(), r.cosim_vs_analytic_pct] for r in resonances]))
+    tables.append(_write_csv(out / "agreement.csv", list(asdict(next(iter(
+        agreements.values()))).keys()), [list(asdict(a).values()) for a in agreements.values()]))
+    return DemoSummary(rows, resonances, agreements, figures, tables, wall)
+
+
+def _road_psd_figure(road, spectrum, path):
+    """The generator against its target, on a 2 km realisation of the same class and speed
+    (the run itself is too short for a PSD estimate at long wavelengths)."""
+    from scipy import signal, stats
+
+    from . import plots
+
+    length_m, spacing_m, segments = 2000.0, 0.02, 32
+    long_road, _ = iso8608_road(spectrum.road_class, road.speed_m_s,
+                                length_m / road.speed_m_s, spacing_m / road.speed_m_s, seed=1,
+                                n_max_cycles_per_m=spectrum.n_max_cycles_per_m)
+    z = long_road.height_m[:-1]
+    n, psd = signal.welch(z, fs=1.0 / spacing_m, window="hann", nperseg=z.size // segments,
+                          noverlap=0, detrend=False)
+    dof = 2 * segments
+    band = (dof / stats.chi2.ppf(0.975, dof), dof / stats.chi2.ppf(0.025, dof))
+    return plots.plot_road_psd(n[1:], psd[1:], spectrum, band, path,
+                               title=f"ISO 8608 class {spectrum.road_class} generator: a "
+                                     f"{length_m / 1e3:g} km realisation vs the target PSD")
+
+
+def _write_csv(path: Path, header, rows) -> Path:
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(header)
+        for row in rows:
+            writer.writerow([_fmt(v) for v in row])
+    return path
+
+
+def _fmt(value):
+    if isinstance(value, float):
+        return "" if math.isnan(value) else f"{value:.6g}"
+    return value
+
+
+def format_summary(summary: DemoSummary) -> str:
+    """The summary as text: key numbers, agreement, resonance table, files."""
+    lines = ["", "Summary"]
+    width = max(len(q) for q, _, _ in summary.rows)
+    for quantity, value, unit in summary.rows:
+        text = f"{value:.4g}" if isinstance(value, float) else str(value)
+        lines.append(f"  {quantity:<{width}}  {text:>14} {unit}")
+    lines += ["", "Resonances (f in Hz; analytic = two-mass car, tire spring K_v, with and "
+              "without the tire's rim-side mass)"]
+    header = (f"  {'resonance':<12} {'response':<13} {'analytic':>9} {'massless':>9} "
+              f"{'reference':>10} {'co-sim':>9} {'Δ vs an.':>9} {'ζ ref':>7} {'ζ co-sim':>8} "
+              f"{'peak gain ref':>14} {'co-sim':>11}  unit")
+    lines.append(header)
+
+    def f(v, spec):
+        return "-" if isinstance(v, float) and math.isnan(v) else format(v, spec)
+
+    def pct(v):
+        return f"{'-':>9}" if math.isnan(v) else f"{v:+8.2f}%"
+
+    for r in summary.resonances:
+        lines.append(
+            f"  {r.resonance:<12} {r.response:<13} {f(r.f_analytic_hz, '9.3f')} "
+            f"{f(r.f_analytic_massless_hz, '9.3f')} {f(r.f_reference_hz, '10.3f')} "
+            f"{f(r.f_cosim_hz, '9.3f')} {pct(r.cosim_vs_analytic_pct)} "
+            f"{f(r.zeta_reference, '7.3f')} {f(r.zeta_cosim, '8.3f')} "
+            f"{f(r.gain_reference, '14.4g')} {f(r.gain_cosim, '11.4g')}  {r.gain_unit}")
+    lines += ["", "Files"] + [f"  {p}" for p in [*summary.figures, *summary.tables]]
+    return "\n".join(lines)

@@ -1,0 +1,252 @@
+"""``QuarterCar``: body and wheel as a pythonfmu co-simulation slave, and its builder.
+
+The slave needs only numpy, scipy and pythonfmu: the builder ships this file alone, under a
+distinctive module name (pythonfmu FMUs in one process share ``sys.modules``).
+
+Input ``rim_Fz`` is the tire's TOTAL vertical force on the rim (what ``TireModal.fmu``
+outputs); the slave subtracts the static load (m_b + m_w)·g itself, so gravity, suspension
+preload and static tire load never appear and the states are deviations from equilibrium.
+Over a step the force ramps from ``rim_Fz`` with slope ``rim_Fz_rate`` (0: held), and the
+step is exact for that ramp: the matrix exponential of the augmented system
+
+    d/dt [x, u, u̇] = [[A, B, 0], [0, 0, 1], [0, 0, 0]] [x, u, u̇],
+
+cached per step size. A host that knows the force at both ends of the step (the Gauss-Seidel
+master in :mod:`vehicle_demo.cosim`) passes the slope between them: first-order hold.
+
+Outputs are the state at the end of the step and the accelerations there, computed with the
+force at the end of the ramp. Bad parameters, non-finite inputs or h <= 0 refuse the step
+(fmi2Discard) with a logged message; nothing raises into the host.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Initial, Fmi2Status
+from scipy.linalg import expm
+
+GRAVITY_M_S2 = 9.80665
+
+#: (name, start, unit, description) of the parameters, inputs and outputs.
+PARAMETERS = (
+    ("body_mass", 2500.0, "kg", "sprung (body) mass of the corner"),
+    ("wheel_mass", 320.0, "kg", "unsprung mass: wheel and axle share, without the tire"),
+    ("suspension_stiffness", 80e3, "N/m", "suspension spring between body and wheel"),
+    ("suspension_damping", 8.5e3, "N.s/m", "suspension damper between body and wheel"),
+    ("gravity", GRAVITY_M_S2, "m/s2", "gravitational acceleration"),
+)
+INPUTS = (
+    ("rim_Fz", (2500.0 + 320.0) * GRAVITY_M_S2, "N",
+     "vertical force of the tire on the rim, TOTAL (static load included), z up"),
+    ("rim_Fz_rate", 0.0, "N/s", "slope of rim_Fz over the step (0 = held)"),
+)
+OUTPUTS = (
+    ("wheel_z", "m", "wheel vertical displacement from static equilibrium (z up)"),
+    ("wheel_vz", "m/s", "wheel vertical velocity"),
+    ("wheel_az", "m/s2", "wheel vertical acceleration"),
+    ("body_z", "m", "body vertical displacement from static equilibrium"),
+    ("body_vz", "m/s", "body vertical velocity"),
+    ("body_az", "m/s2", "body vertical acceleration"),
+    ("suspension_travel", "m", "body minus wheel displacement (extension positive)"),
+)
+
+
+class UnitReal(Real):
+    """A pythonfmu Real that writes its unit into the model description."""
+
+    def __init__(self, name: str, unit: str, **kwargs):
+        super().__init__(name, **kwargs)
+        self.unit = unit
+
+    def to_xml(self):
+        element = super().to_xml()
+        element.find("Real").set("unit", self.unit)
+        return element
+
+
+class QuarterCar(Fmi2Slave):
+    """Two-mass quarter car: rim force in, wheel and body motion out (exact linear step)."""
+
+    author = "tire_fmu contributors"
+    description = ("Quarter car (body, suspension, wheel) for TireModal.fmu: input the tire's "
+                   "total rim force, outputs deviations from static equilibrium. Exact step "
+                   "for a force ramped over the step.")
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-4)
+
+    def __init__(self, **kwargs):
+        # Cheap on purpose: pythonfmu instantiates the slave at build time.
+        super().__init__(**kwargs)
+        for name, start, _, _ in PARAMETERS + INPUTS:
+            setattr(self, name, start)
+        for name, _, _ in OUTPUTS:
+            setattr(self, name, 0.0)
+        self._x = (0.0, 0.0, 0.0, 0.0)  # [z_b, ż_b, z_w, ż_w]
+        self._cache: dict[float, tuple] = {}
+        self._system = None
+        self._problem = "the FMU is not initialised (call fmi2ExitInitializationMode)"
+        for name, _, unit, text in PARAMETERS:
+            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.parameter,
+                                            variability=Fmi2Variability.fixed,
+                                            initial=Fmi2Initial.exact, description=text))
+        for name, _, unit, text in INPUTS:
+            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.input,
+                                            variability=Fmi2Variability.continuous,
+                                            description=text))
+        for name, unit, text in OUTPUTS:
+            # the experiment starts in static equilibrium: every deviation is exactly 0
+            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.output,
+                                            variability=Fmi2Variability.continuous,
+                                            initial=Fmi2Initial.exact, description=text))
+
+    def exit_initialization_mode(self):
+        values = {name: getattr(self, name) for name, *_ in PARAMETERS}
+        bad = [f"{name} = {value!r}" for name, value in values.items()
+               if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0)]
+        if bad:
+            self._problem = "parameters must be finite and > 0: " + ", ".join(bad)
+            self.log(f"QuarterCar rejected its parameters: {self._problem}", Fmi2Status.error)
+            self._system = None
+            return
+        m_b, m_w = values["body_mass"], values["wheel_mass"]
+        k, c = values["suspension_stiffness"], values["suspension_damping"]
+        a = np.array([
+            [0.0, 1.0, 0.0, 0.0],
+            [-k / m_b, -c / m_b, k / m_b, c / m_b],
+            [0.0, 0.0, 0.0, 1.0],
+            [k / m_w, c / m_w, -k / m_w, -c / m_w],
+        ])
+        b = np.array([0.0, 0.0, 0.0, 1.0 / m_w])
+        self._system = (a, b, (m_b + m_w) * values["gravity"])
+        self._cache.clear()
+        self._problem = ""
+
+    def _coefficients(self, h: float) -> tuple:
+        """Rows of [Φ | Γ0 | Γ1] for the state and [A | B] for the accelerations, as tuples
+        of floats: a 4-state step in plain Python costs less than the numpy calls would."""
+        cached = self._cache.get(h)
+        if cached is None:
+            a, b, _ = self._system
+            aug = np.zeros((6, 6))
+            aug[:4, :4] = a
+            aug[:4, 4] = b
+            aug[4, 5] = 1.0  # u' = u̇, u̇' = 0: the force ramp
+            e = expm(aug * h)
+            step_rows = tuple(tuple(float(v) for v in row) for row in e[:4, :6])
+            acc_rows = tuple(tuple(float(v) for v in np.r_[a[i], b[i]]) for i in (1, 3))
+            cached = (step_rows, acc_rows)
+            if len(self._cache) > 32:
+                self._cache.clear()
+            self._cache[h] = cached
+        return cached
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        if self._system is None:
+            self.log(f"doStep at t = {current_time!r} s refused: {self._problem}",
+                     Fmi2Status.discard)
+            return False
+        force, rate = self.rim_Fz, self.rim_Fz_rate
+        if not (step_size > 0 and math.isfinite(step_size)) or not (
+                math.isfinite(force) and math.isfinite(rate)):
+            self.log(f"doStep at t = {current_time!r} s refused: h = {step_size!r} s, "
+                     f"rim_Fz = {force!r} N, rim_Fz_rate = {rate!r} N/s (h must be > 0 and "
+                     "inputs finite); state unchanged", Fmi2Status.discard)
+            return False
+        step_rows, (body_row, wheel_row) = self._coefficients(step_size)
+        x0, x1, x2, x3 = self._x
+        u = force - self._system[2]
+        r0, r1, r2, r3 = step_rows
+        x0, x1, x2, x3 = (
+            r0[0] * x0 + r0[1] * x1 + r0[2] * x2 + r0[3] * x3 + r0[4] * u + r0[5] * rate,
+            r1[0] * x0 + r1[1] * x1 + r1[2] * x2 + r1[3] * x3 + r1[4] * u + r1[5] * rate,
+            r2[0] * x0 + r2[1] * x1 + r2[2] * x2 + r2[3] * x3 + r2[4] * u + r2[5] * rate,
+            r3[0] * x0 + r3[1] * x1 + r3[2] * x2 + r3[3] * x3 + r3[4] * u + r3[5] * rate,
+        )
+        self._x = (x0, x1, x2, x3)
+        u_end = u + rate * step_size
+        self.body_z, self.body_vz, self.wheel_z, self.wheel_vz = x0, x1, x2, x3
+        r = body_row
+        self.body_az = r[0] * x0 + r[1] * x1 + r[2] * x2 + r[3] * x3 + r[4] * u_end
+        r = wheel_row
+        self.wheel_az = r[0] * x0 + r[1] * x1 + r[2] * x2 + r[3] * x3 + r[4] * u_end
+        self.suspension_travel = x0 - x2
+        return True
+
+
+# -- builder (host side only) ----------------------------------------------------------------
+
+MODEL_IDENTIFIER = "QuarterCar"
+SLAVE_MODULE = "vehicle_demo_quarter_car_slave_1"
+CAPABILITIES = {
+    "canHandleVariableCommunicationStepSize": True,  # coefficients cached per h
+    "canGetAndSetFMUstate": False,
+    "canSerializeFMUstate": False,
+}
+
+
+def build_quarter_car_fmu(out_dir=".", validate: bool = True):
+    """Write ``QuarterCar.fmu`` into ``out_dir`` and return its path.
+
+    The model description gets units, and fmpy's validation must report no problem.
+    """
+    import shutil
+    import sys
+    import tempfile
+    import zipfile
+    from pathlib import Path
+    from xml.etree import ElementTree
+
+    from pythonfmu.builder import FmuBuilder
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="quarter_car_build_") as staging:
+        script = Path(staging) / f"{SLAVE_MODULE}.py"
+        shutil.copyfile(__file__, script)
+        try:
+            fmu = Path(FmuBuilder.build_FMU(script, dest=out_dir / f"{MODEL_IDENTIFIER}.fmu",
+                                            **CAPABILITIES))
+        finally:
+            # the builder imports the script from the staging folder and leaves it on sys.path
+            sys.modules.pop(SLAVE_MODULE, None)
+            while str(script.parent) in sys.path:
+                sys.path.remove(str(script.parent))
+
+    units = {"kg": {"kg": 1}, "N/m": {"kg": 1, "s": -2}, "N.s/m": {"kg": 1, "s": -1},
+             "m/s2": {"m": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2},
+             "N/s": {"kg": 1, "m": 1, "s": -3}, "m": {"m": 1}, "m/s": {"m": 1, "s": -1}}
+
+    def complete(xml: bytes) -> bytes:
+        root = ElementTree.fromstring(xml)
+        co_simulation = root.find("CoSimulation")
+        for name, value in CAPABILITIES.items():
+            co_simulation.set(name, str(value).lower())
+        used = sorted({r.get("unit") for r in root.iter("Real") if r.get("unit")})
+        definitions = ElementTree.Element("UnitDefinitions")
+        for unit in used:
+            element = ElementTree.SubElement(definitions, "Unit", name=unit)
+            ElementTree.SubElement(element, "BaseUnit",
+                                   {k: str(v) for k, v in units[unit].items()})
+        root.insert(list(root).index(co_simulation) + 1, definitions)
+        ElementTree.indent(root, space="  ")
+        return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+    rewritten = fmu.with_suffix(".fmu.tmp")
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rewritten, "w",
+                                                          zipfile.ZIP_DEFLATED) as target:
+        for item in source.infolist():
+            data = source.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = complete(data)
+            target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
+    rewritten.replace(fmu)
+    if validate:
+        from fmpy.validation import validate_fmu
+
+        problems = list(validate_fmu(str(fmu)))
+        if problems:
+            raise RuntimeError(f"{fmu} does not validate: " + "; ".join(problems))
+    return fmu
