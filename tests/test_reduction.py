@@ -354,3 +354,64 @@ def test_python_control_state_space(small_models):
     dc = control.dcgain(system)
     assert dc[0, 0] == pytest.approx(-small_models[0.0].static_vertical_stiffness_n_per_m,
                                      rel=1e-9)
+
+
+@pytest.mark.parametrize("speed", [0.0, 15.0])
+def test_feedthrough_at_the_ramp_end_is_the_step_output(small_models, speed):
+    sim = TireSimulator(reduce(small_models[speed], report=False))
+    h = 2e-4
+    for _ in range(40):
+        t = sim.time
+        z, v = 1e-3 * np.sin(60 * t), 6e-2 * np.cos(60 * t)
+        stepped = sim.step(h, 0.5 * z, 0.5 * v, z, v).copy()
+    again = sim.outputs_with(0.5 * (z + v * h), 0.5 * v, z + v * h, v)
+    # at rest the step's own end-of-ramp inputs give its outputs back to rounding; at speed
+    # the delayed road is read from the history with the new sample in it rather than
+    # extrapolated along each group's ramp, which differs at O(h²)
+    np.testing.assert_allclose(again, stepped, rtol=1e-11 if speed == 0 else 2e-4, atol=1e-9)
+    # a different rim velocity now moves the rim force by the rim dampers, -Tᵀ D_s T per m/s
+    faster = sim.outputs_with(0.5 * (z + v * h), 0.5 * v + 0.1, z + v * h, v)
+    damper = build_io_model(small_models[speed]).e[0, 0]
+    assert faster[0] - again[0] == pytest.approx(0.1 * damper, rel=1e-9)
+
+
+def test_feedthrough_read_with_the_new_inputs_converges_at_second_order(small_models):
+    """The contact force passes the road velocity straight through the contact damper, and
+    the stiff contact amplifies any lag. Read at a communication point with that point's
+    inputs (outputs_with), it converges at second order in h to the continuous response; the
+    outputs a step reports at its end, with the slope it ramped with, only at first order."""
+    model = small_models[0.0]
+    reduced = reduce(model, ReductionSettings(contribution_threshold=0.0))
+    io = build_io_model(model)
+    static = np.array([reduced.static_outputs[n] for n in OUTPUT_NAMES])
+    duration, f0, f1 = 0.1, 2.0, 300.0
+    growth = (f1 / f0) ** (1 / duration)
+
+    def road(t):
+        phase = 2 * np.pi * f0 * (growth**t - 1) / np.log(growth)
+        return 1e-3 * (1 - np.cos(phase)), 1e-3 * np.sin(phase) * 2 * np.pi * f0 * growth**t
+
+    fine = 5e-6  # the continuous response: scipy on a step 20 times finer
+    t_ref = np.arange(0.0, duration, fine)
+    z_ref, v_ref = road(t_ref)
+    _, reference, _ = ss.lsim(ss.StateSpace(io.a.toarray(), io.b, io.c, io.d),
+                              np.column_stack([0 * z_ref, z_ref]), t_ref, interp=True)
+    reference = reference[:, 2] + v_ref * io.e[2, 1]
+    errors = {}
+    for h in (1e-4, 5e-5):
+        t = np.arange(0.0, duration - h, h)
+        z, v = road(t)
+        sim = TireSimulator(reduced)
+        stepped, read = [], []
+        for k in range(t.size - 1):
+            stepped.append(sim.step(h, 0.0, 0.0, z[k], v[k])[2] - static[2])
+            read.append(sim.outputs_with(0.0, 0.0, z[k + 1], v[k + 1])[2] - static[2])
+        exact = reference[np.round(t[1:] / fine).astype(int)]
+        scale = np.abs(exact).max()
+        errors[h] = (np.abs(np.array(stepped) - exact).max() / scale,
+                     np.abs(np.array(read) - exact).max() / scale)
+    (step_coarse, read_coarse), (step_fine, read_fine) = errors[1e-4], errors[5e-5]
+    assert read_coarse < 0.2 * step_coarse
+    assert read_coarse / read_fine > 3.2  # second order
+    assert step_coarse / step_fine < 2.5  # first order
+    assert read_fine < 0.02

@@ -17,8 +17,12 @@ the tire assumes over the step (a ramp from the state at t_k): an O(h²) error p
 ``"jacobi"`` steps both from t_k values (force held over the step): first order, for
 comparison. :mod:`vehicle_demo.coupling` gives the step-size limit and the error of both.
 
-The road is handed to the tire as a ramp per step too; which ramp matters for the contact
-force's large direct feedthrough from the road, see :func:`road_ramps`.
+After each step the master sets the tire's inputs of the new communication point (wheel state
+and road) and only then reads its outputs: the tire recomputes its direct feedthrough with
+them. That matters for the contact force, whose feedthrough from the road (about 1e8 N/m on
+height and 1.7e4 N·s/m on velocity at the default load) nearly cancels its modal part: read
+with the velocity the step ramped with, a step old, it is off by an O(h) error of 4 dB near
+70 Hz at h = 1e-4 s; read with the new inputs the error is O(h²).
 
 Both FMUs start in static equilibrium: the tire's ``load`` is set to the car's weight
 (m_b + m_w)·g, which the quarter car subtracts from the total rim force it receives.
@@ -31,7 +35,7 @@ import math
 import shutil
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -39,7 +43,6 @@ import numpy as np
 from .quarter_car import QuarterCarParameters
 
 SCHEMES = ("gauss-seidel", "jacobi")
-ROAD_RAMPS = ("auto", "end-tangent", "start-tangent")
 DEFAULT_STEP_S = 1e-4
 
 #: Quarter-car FMU parameter for each field of :class:`QuarterCarParameters`.
@@ -281,25 +284,20 @@ class QuarterCarCoSimulation:
         return float(self.tire_parameters.get("speed", 0.0))
 
     def run(self, road_z_m, road_vz_m_s, start_time: float = 0.0,
-            progress: Callable[[int], None] | None = None,
-            road_ramp: str = "auto") -> CoSimResult:
+            progress: Callable[[int], None] | None = None) -> CoSimResult:
         """Co-simulate with the road (leading edge) sampled at t_k = start + k·h.
 
-        ``road_ramp`` is the ramp the tire is given for the road over each step (see
-        :func:`road_ramps`). ``progress(n)`` is called with the steps done since its last call.
+        ``progress(n)`` is called with the steps done since its last call.
         """
         road_z = np.ascontiguousarray(road_z_m, dtype=float)
         road_vz = np.ascontiguousarray(road_vz_m_s, dtype=float)
         if road_z.shape != road_vz.shape or road_z.ndim != 1 or road_z.size < 2:
             raise ValueError("road height and velocity must be 1-D arrays of one length >= 2")
-        ramp_z, ramp_vz = road_ramps(road_z, road_vz, self.step_s, road_ramp, self.speed_m_s)
         car = self.car
         static_load = car.static_tire_load_n
         self.car_fmu.start({CAR_FMU_NAMES[k]: v for k, v in car.as_dict().items()}, start_time)
         self.tire.start({"load": static_load, **self.tire_parameters}, start_time)
-        result = self._loop(ramp_z, ramp_vz, static_load, start_time, progress)
-        # report the road itself, not the ramps handed to the tire
-        return replace(result, road_z_m=road_z, road_vz_m_s=road_vz)
+        return self._loop(road_z, road_vz, static_load, start_time, progress)
 
     def _loop(self, road_z, road_vz, static_load, start_time, progress) -> CoSimResult:
         from fmpy.fmi2 import fmi2Boolean, fmi2Real, fmi2True, fmi2ValueReference
@@ -327,13 +325,16 @@ class QuarterCarCoSimulation:
 
         out = np.empty((n + 1, 7))  # wheel z, vz, az, body z, az, rim Fz, contact Fz
         flags = np.empty(n + 1, dtype=bool)
+        c_get(cc, car_out, 5, y_c)
+        z_w, v_w = y_c[0], y_c[1]
+        # the tire's inputs at t_0, then its outputs for them (direct feedthrough)
+        u_t[0], u_t[1], u_t[2], u_t[3] = z_w, v_w, road_z[0], road_vz[0]
+        t_set(ct, tire_in, 4, u_t)
         t_get(ct, tire_out, 2, y_t)
         t_get_flag(ct, tire_flag, 1, y_flag)
-        c_get(cc, car_out, 5, y_c)
         out[0, :5] = y_c[:]
         out[0, 5:] = y_t[:]
         flags[0] = bool(y_flag[0])
-        z_w, v_w = y_c[0], y_c[1]
         force = y_t[0]
         report_every = max(1, min(n // 100, 5000))
         started = time.perf_counter()
@@ -341,24 +342,27 @@ class QuarterCarCoSimulation:
         try:
             for k in range(n):
                 t = start_time + k * h  # multiples of h: no drift of the communication points
-                u_t[0], u_t[1], u_t[2], u_t[3] = z_w, v_w, road_z[k], road_vz[k]
-                status = t_set(ct, tire_in, 4, u_t)
-                if gauss_seidel:
-                    status |= t_step(ct, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
+                if gauss_seidel:  # the tire's force at the step's end, ramped from t_k
+                    status = t_step(ct, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
                     u_c[0], u_c[1] = force, (y_t[0] - force) / h
                     status |= c_set(cc, car_in, 2, u_c) | c_step(cc, t, h, fmi2True)
                 else:  # both from t_k values, the force held
                     u_c[0], u_c[1] = force, 0.0
-                    status |= c_set(cc, car_in, 2, u_c) | t_step(ct, t, h, fmi2True)
-                    status |= c_step(cc, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
-                status |= t_get_flag(ct, tire_flag, 1, y_flag) | c_get(cc, car_out, 5, y_c)
+                    status = c_set(cc, car_in, 2, u_c) | t_step(ct, t, h, fmi2True)
+                    status |= c_step(cc, t, h, fmi2True)
+                status |= c_get(cc, car_out, 5, y_c)
+                # the inputs of t_{k+1}, then the tire's outputs for them: its feedthrough
+                # (contact damper on the road velocity, sidewall on the rim's) is then current
+                u_t[0], u_t[1], u_t[2], u_t[3] = y_c[0], y_c[1], road_z[k + 1], road_vz[k + 1]
+                status |= t_set(ct, tire_in, 4, u_t) | t_get(ct, tire_out, 2, y_t)
+                status |= t_get_flag(ct, tire_flag, 1, y_flag)
                 if status > 1:  # an OR of statuses exceeds 1 iff one was discard or worse
                     raise CoSimError(f"an FMI call returned {_STATUS[min(status, 4)]} or worse")
                 row = out[k + 1]
                 row[:5] = y_c
                 row[5:] = y_t
                 flags[k + 1] = y_flag[0]
-                z_w, v_w, force = y_c[0], y_c[1], y_t[0]
+                force = y_t[0]
                 if progress is not None and (k + 1) % report_every == 0:
                     progress(report_every)
         except Exception as error:  # fmpy raises on any status worse than warning
@@ -381,42 +385,10 @@ class QuarterCarCoSimulation:
         )
 
 
-def road_ramps(road_z, road_vz, step_s: float, ramp: str = "auto", speed_m_s: float = 0.0):
-    """The (road_z, road_vz) handed to the tire at each t_k; it ramps the road with them.
-
-    The tire reads its outputs at the end of the ramp, t_{k+1}, and its contact force has a
-    large direct feedthrough from the road (about 1e8 N/m on height and 1.7e4 N·s/m on
-    velocity at the default load) that nearly cancels its modal part. The plain samples
-    (``"start-tangent"``: height and velocity at t_k) leave the velocity term one step late,
-    an O(h) error that reaches 4 dB in road -> contact force near 70 Hz at h = 1e-4 s.
-    ``"end-tangent"`` hands over the tangent at t_{k+1} instead, z_{k+1} - h·ż_{k+1} with
-    slope ż_{k+1}: the ramp ends on the road's true height and velocity where the outputs are
-    read, and departs from the road by only h²z̈/2 over the step. The road is prescribed, so
-    the master may look one step ahead.
-
-    At speed the tire keeps a history of the samples and reads each patch node's road, delayed,
-    from it by Hermite interpolation: that history must hold true heights and slopes, so
-    ``"auto"`` uses the end tangent only at speed 0 (a shaker plate, no history).
-    """
-    if ramp not in ROAD_RAMPS:
-        raise ValueError(f"road_ramp = {ramp!r}: must be one of {ROAD_RAMPS}")
-    if ramp == "auto":
-        ramp = "end-tangent" if speed_m_s == 0 else "start-tangent"
-    if ramp == "start-tangent":
-        return road_z, road_vz
-    z = np.empty_like(road_z)
-    v = np.empty_like(road_vz)
-    z[:-1] = road_z[1:] - step_s * road_vz[1:]
-    v[:-1] = road_vz[1:]
-    z[-1], v[-1] = road_z[-1], road_vz[-1]  # never stepped from
-    return z, v
-
-
 def cosimulate(fmus: FmuPaths, road_z_m, road_vz_m_s, car: QuarterCarParameters | None = None,
                tire_parameters: Mapping | None = None, step_s: float = DEFAULT_STEP_S,
-               scheme: str = "gauss-seidel", progress=None, road_ramp: str = "auto"
-               ) -> CoSimResult:
+               scheme: str = "gauss-seidel", progress=None) -> CoSimResult:
     """One co-simulation with fresh FMU instances (see :class:`QuarterCarCoSimulation`)."""
     with QuarterCarCoSimulation(fmus, car, tire_parameters, step_s, scheme) as sim:
-        return sim.run(road_z_m, road_vz_m_s, progress=progress, road_ramp=road_ramp)
+        return sim.run(road_z_m, road_vz_m_s, progress=progress)
 

@@ -115,6 +115,11 @@ class TireSimulator:
         # cheaper than numpy item assignments and a tolist
         self._buffer_bytes = memoryview(self._buffer).cast("B")
         self._input_offset = 2 * k * self._buffer.itemsize
+        # Outputs at the current time for inputs given now (direct feedthrough): the modal
+        # part on q stored as (re, im) pairs, then D and E on the internal inputs.
+        c_pairs = np.empty((len(OUTPUT_NAMES), 2 * k))
+        c_pairs[:, 0::2], c_pairs[:, 1::2] = reduced.c.real, -reduced.c.imag
+        self._now_readout = np.hstack([c_pairs, reduced.d, reduced.e])
         self._kernels: dict[float, FusedStep] = {}
         self._kernel: FusedStep | None = None
         self._kernel_h = math.nan
@@ -184,6 +189,40 @@ class TireSimulator:
         self._values = values
         self.time += h
         return values
+
+    def outputs_with(self, rim_z: float, rim_vz: float, road_z: float, road_vz: float
+                     ) -> tuple[float, ...]:
+        """Total outputs at ``time`` for inputs given at ``time``, leaving the state alone.
+
+        A step reports its outputs at its end with the inputs ramped from its start; once the
+        host sets the inputs of the new communication point, the direct feedthrough (the
+        contact spring and damper on the road, the sidewall on the rim) should use those.
+        The contact damper alone passes about 1.7e4 N·s/m of road velocity straight to the
+        contact force, and the slope a step ramped with is a step old.
+        """
+        self._check_step(1.0, (rim_z, rim_vz, road_z, road_vz))
+        m = self.road_delays_s.size
+        r, v = np.empty(1 + m), np.empty(1 + m)
+        r[0], v[0] = rim_z, rim_vz
+        if self._delayed:
+            r[1:], v[1:] = self._road_now(road_z, road_vz)
+        else:
+            r[1:], v[1:] = road_z, road_vz
+        k2 = 2 * self.reduced.n_modes
+        values = self.static + self._now_readout @ np.concatenate([self._buffer[:k2], r, v])
+        self._values = tuple(values.tolist())
+        return self._values
+
+    def _road_now(self, road_z: float, road_vz: float) -> tuple[np.ndarray, np.ndarray]:
+        """Delayed road inputs at ``time`` with the present sample taken as given."""
+        if self._delay_line is not None:
+            t, z, v = self._delay_line.history()
+        else:
+            t, z, v = self.history_t, self.history_z, self.history_v
+        if t.size and t[-1] >= self.time - SAME_STEP_EPS * (abs(self.time) + 1.0):
+            t, z, v = t[:-1], z[:-1], v[:-1]  # the present sample again: replace it
+        t, z, v = np.append(t, self.time), np.append(z, road_z), np.append(v, road_vz)
+        return _hermite(t, z, v, self.time - self.road_delays_s)
 
     def _check_step(self, h: float, values: tuple) -> None:
         """Raise StepError for a bad h or a non-finite input (a finite sum that overflowed
@@ -263,23 +302,7 @@ class TireSimulator:
         self.history_v = np.append(self.history_v[keep:], vz)
 
     def _road_at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Road height and slope at past times: cubic Hermite between communication points,
-        level at the first value before the first one."""
-        t, z, v = self.history_t, self.history_z, self.history_v
-        if t.size == 1:  # only the present sample: level before it
-            return np.full(times.shape, z[0]), np.where(times < t[0], 0.0, v[0])
-        i = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.size - 2)
-        t0, t1 = t[i], t[i + 1]
-        dt = t1 - t0
-        s = (times - t0) / dt
-        z0, z1, v0, v1 = z[i], z[i + 1], v[i] * dt, v[i + 1] * dt
-        s2, s3 = s * s, s * s * s
-        height = (2 * s3 - 3 * s2 + 1) * z0 + (s3 - 2 * s2 + s) * v0 \
-            + (-2 * s3 + 3 * s2) * z1 + (s3 - s2) * v1
-        slope = ((6 * s2 - 6 * s) * z0 + (3 * s2 - 4 * s + 1) * v0
-                 + (-6 * s2 + 6 * s) * z1 + (3 * s2 - 2 * s) * v1) / dt
-        before = times < t[0]
-        return np.where(before, z[0], height), np.where(before, 0.0, slope)
+        return _hermite(self.history_t, self.history_z, self.history_v, times)
 
     # -- state -------------------------------------------------------------------------------
     def get_state(self) -> SimulatorState:
@@ -304,6 +327,26 @@ class TireSimulator:
 
     def output_dict(self) -> dict[str, float]:
         return dict(zip(OUTPUT_NAMES, self._values))
+
+
+def _hermite(t: np.ndarray, z: np.ndarray, v: np.ndarray, times: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Road height and slope at past ``times`` from samples (t, z, v): cubic Hermite between
+    communication points, level at the first value before the first one."""
+    if t.size == 1:  # only the present sample: level before it
+        return np.full(times.shape, z[0]), np.where(times < t[0], 0.0, v[0])
+    i = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.size - 2)
+    t0, t1 = t[i], t[i + 1]
+    dt = t1 - t0
+    s = (times - t0) / dt
+    z0, z1, v0, v1 = z[i], z[i + 1], v[i] * dt, v[i + 1] * dt
+    s2, s3 = s * s, s * s * s
+    height = (2 * s3 - 3 * s2 + 1) * z0 + (s3 - 2 * s2 + s) * v0 \
+        + (-2 * s3 + 3 * s2) * z1 + (s3 - s2) * v1
+    slope = ((6 * s2 - 6 * s) * z0 + (3 * s2 - 4 * s + 1) * v0
+             + (-6 * s2 + 6 * s) * z1 + (3 * s2 - 2 * s) * v1) / dt
+    before = times < t[0]
+    return np.where(before, z[0], height), np.where(before, 0.0, slope)
 
 
 def _uniform_run(times: np.ndarray, h: float, resolution: float) -> int:

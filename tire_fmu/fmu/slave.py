@@ -137,6 +137,9 @@ class TireModal(Fmi2Slave):
         self._built_for: tuple | None = None  # parameter values the simulator was built with
         self._running: TireSimulator | None = None  # the simulator while do_step may run
         self._contact_warning_armed = True
+        # Inputs set since the outputs were last computed: the next read recomputes the
+        # direct feedthrough with them (see TireSimulator.outputs_with).
+        self._stale = False
         for vr, v in enumerate(self._table):
             self._register(vr, v)
 
@@ -200,6 +203,7 @@ class TireModal(Fmi2Slave):
                        f"({type(error).__name__}: {error}); reset the FMU")
             return self._discard(f"doStep at t = {current_time!r} s failed: {error}")
         values[OUTPUTS] = outputs
+        self._stale = False
         contact_force = outputs[2]
         values[IN_CONTACT] = contact_force > 0.0
         if contact_force < 0.0:
@@ -247,6 +251,8 @@ class TireModal(Fmi2Slave):
         self._running, self._phase = simulator, _Phase.RUNNING
         self._contact_warning_armed = True
         self._show(simulator.output_dict(), simulator.in_contact)
+        # inputs set during initialisation feed through on the first read
+        self._stale = any(self._values[INPUTS])
         summary = model.summary()
         self.log(
             f"TireModal ready in {time.perf_counter() - started:.2f} s: N = {model.n_elements}, "
@@ -289,7 +295,25 @@ class TireModal(Fmi2Slave):
 
     # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
     # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
+    def _refresh(self) -> None:
+        """Outputs at the current time for the inputs set since the last step."""
+        self._stale = False
+        values = self._values
+        try:
+            outputs = self._running.outputs_with(values[0], values[1], values[2], values[3])
+        except StepError as error:
+            self.log(f"outputs kept from the last step: {error}", Fmi2Status.warning)
+            return
+        except Exception as error:  # an escaping exception would be fmi2Fatal
+            self.log(f"outputs kept from the last step: {type(error).__name__}: {error}",
+                     Fmi2Status.error)
+            return
+        values[OUTPUTS] = outputs
+        values[IN_CONTACT] = outputs[2] > 0.0
+
     def get_real(self, vrs):
+        if self._stale:
+            self._refresh()
         values = self._values
         if vrs == self._output_vrs:  # the host's usual call: the four forces, in order
             return values[OUTPUTS]
@@ -302,6 +326,8 @@ class TireModal(Fmi2Slave):
         return self._get_checked(vrs, int, 0)
 
     def get_boolean(self, vrs):
+        if self._stale:
+            self._refresh()
         return self._get_checked(vrs, bool, False)
 
     def get_string(self, vrs):
@@ -313,6 +339,7 @@ class TireModal(Fmi2Slave):
     def set_real(self, vrs, values):
         if vrs == self._input_vrs:  # the host's usual call: all four inputs, in order
             self._values[INPUTS] = values
+            self._stale = self._running is not None
         else:
             for vr, value in zip(vrs, values):
                 self._set(vr, value, "Real")
@@ -359,6 +386,8 @@ class TireModal(Fmi2Slave):
                      "them", Fmi2Status.error)
         else:
             self._values[vr] = value
+            if v.causality == "input":
+                self._stale = self._running is not None
             if v.name == "load":  # the outputs echo the static load until initialised
                 self._show({"rim_Fz": value, "contact_Fz": value}, value > 0)
 
@@ -397,6 +426,7 @@ class TireModal(Fmi2Slave):
             self._simulator.set_state(state.simulator)
         self._values[:] = state.values
         self._contact_warning_armed = state.contact_warning_armed
+        self._stale = False  # the snapshot's outputs belong to its inputs
         self._phase = state.phase
         self._running = self._simulator if state.phase == _Phase.RUNNING else None
         if state.phase != _Phase.RUNNING:
