@@ -115,11 +115,14 @@ class TireSimulator:
         # cheaper than numpy item assignments and a tolist
         self._buffer_bytes = memoryview(self._buffer).cast("B")
         self._input_offset = 2 * k * self._buffer.itemsize
-        # Outputs at the current time for inputs given now (direct feedthrough): the modal
-        # part on q stored as (re, im) pairs, then D and E on the internal inputs.
+        # Outputs at the current time for inputs given now (direct feedthrough), on the same
+        # buffer [q as (re, im) pairs, inputs, 1] the step reads: Re(C q), then D and E on the
+        # internal inputs as the input map makes them, then the statics.
         c_pairs = np.empty((len(OUTPUT_NAMES), 2 * k))
         c_pairs[:, 0::2], c_pairs[:, 1::2] = reduced.c.real, -reduced.c.imag
-        self._now_readout = np.hstack([c_pairs, reduced.d, reduced.e])
+        feedthrough = np.hstack([reduced.d, reduced.e]) @ self._input_map
+        self._now_readout = np.asfortranarray(
+            np.hstack([c_pairs, feedthrough, self.static[:, None]]))
         self._kernels: dict[float, FusedStep] = {}
         self._kernel: FusedStep | None = None
         self._kernel_h = math.nan
@@ -200,17 +203,21 @@ class TireSimulator:
         The contact damper alone passes about 1.7e4 N·s/m of road velocity straight to the
         contact force, and the slope a step ramped with is a step old.
         """
-        self._check_step(1.0, (rim_z, rim_vz, road_z, road_vz))
-        m = self.road_delays_s.size
-        r, v = np.empty(1 + m), np.empty(1 + m)
-        r[0], v[0] = rim_z, rim_vz
-        if self._delayed:
-            r[1:], v[1:] = self._road_now(road_z, road_vz)
+        if (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0:
+            self._check_step(1.0, (rim_z, rim_vz, road_z, road_vz))
+        if not self._delayed:
+            _PACK_INPUTS(self._buffer_bytes, self._input_offset, rim_z, rim_vz, road_z, road_vz)
         else:
-            r[1:], v[1:] = road_z, road_vz
-        k2 = 2 * self.reduced.n_modes
-        values = self.static + self._now_readout @ np.concatenate([self._buffer[:k2], r, v])
-        self._values = tuple(values.tolist())
+            _PACK_PAIR(self._buffer_bytes, self._input_offset, rim_z, rim_vz)
+            if self._delay_line is not None:
+                self._delay_line.push(self.time, road_z, road_vz)
+                self._delay_line.read_into(self._road)
+            else:
+                height, slope = self._road_now(road_z, road_vz)
+                n = height.size
+                self._road[:n], self._road[n:] = height, slope
+        dgemv(1.0, self._now_readout, self._buffer, 0.0, self._y, 0, 1, 0, 1, 0, 1)
+        self._values = _UNPACK_OUTPUTS(self._y)
         return self._values
 
     def _road_now(self, road_z: float, road_vz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -409,6 +416,13 @@ class _RoadDelayLine:
         return int(cls._intervals(delays_s, h)[0].max()) + 1
 
     def push(self, time: float, z: float, v: float) -> None:
+        """Add the sample of communication point ``time``; the same point again (outputs read
+        there before its step, or a retried step) replaces it instead."""
+        if time == self.newest_time:
+            offset = self.start * self.samples.itemsize
+            _PACK_PAIR(self._bytes, offset, z, v)
+            _PACK_PAIR(self._bytes, offset + self.window * self.samples.itemsize, z, v)
+            return
         start = (self.start - 2) % self.window
         offset = start * self.samples.itemsize
         _PACK_PAIR(self._bytes, offset, z, v)
