@@ -76,7 +76,13 @@ def test_construction_is_cheap_and_builds_nothing():
 
 
 def test_every_variable_has_unit_description_and_legal_attributes():
-    root = new_slave().to_xml()
+    from tire_fmu.fmu.builder import complete_model_description
+    from tire_fmu.fmu.interface import CAPABILITIES, fmu_variables
+
+    # the slave's description as the builder completes it (pythonfmu writes no units)
+    units = {v.name: v.unit for v in fmu_variables() if v.unit}
+    xml = ElementTree.tostring(new_slave().to_xml())
+    root = ElementTree.fromstring(complete_model_description(xml, CAPABILITIES, units))
     variables = {v.get("name"): v for v in root.iter("ScalarVariable")}
     expected = {"load", "speed", "inflation_pressure", "n_elements", "f_max", "n_modes",
                 "static_correction", "R", "b", "rhoA", "m_s", "k_r1", "k_r2", "EI", "k_cw",

@@ -334,6 +334,30 @@ def test_outputs_read_after_new_inputs_feed_through_as_in_the_python_fmu(exports
     python.close()
 
 
+@pytest.mark.parametrize("which", ["native", "python"])
+def test_reading_outputs_between_steps_leaves_the_steps_alone(exports, python_fmu, which):
+    """A master that sets the next point's inputs and reads the outputs before stepping must
+    get the same steps as one that does not, also when its clock (k·h) differs from the
+    FMU's running sum by rounding: the road sample recorded for the read is that point's."""
+    export = exports[10.0]
+    steps, u = excitation("road", 500)
+    h = 1e-4
+    path, params = ((export.path, None) if which == "native"
+                    else (python_fmu, {"n_elements": N_ELEMENTS, "speed": 10.0}))
+    plain, reading = Host(path, "plain", parameters=params), Host(path, "reading",
+                                                                  parameters=params)
+    for host, read in ((plain, False), (reading, True)):
+        for k, row in enumerate(u[:-1]):
+            host.fmu.setReal(host.inputs, list(row))
+            if read:
+                host.fmu.getReal(host.outputs)
+            host.fmu.doStep(k * 0.1 * h * 10, h)  # the host's clock, not a running sum
+        host.result = host.fmu.getReal(host.outputs)
+    np.testing.assert_allclose(reading.result, plain.result, rtol=1e-12)
+    plain.close()
+    reading.close()
+
+
 def test_simulate_fmu_runs_it_and_agrees_with_the_python_fmu(exports, python_fmu):
     t = np.linspace(0.0, 0.06, 301)
     signal = np.zeros(t.size, dtype=[(name, float) for name in ("time", *INPUTS)])

@@ -31,6 +31,8 @@ import scipy.sparse.linalg as spla
 
 from tire_fmu.core.parameters import GRAVITY_M_S2
 
+from .vehicle_demo_quarter_car_dynamics import two_mass_state_space
+
 #: Names of the ride responses, all per unit road height at the leading edge of the patch.
 RIDE_OUTPUTS = ("body_acc", "wheel_acc", "rim_load", "contact_force")
 RIDE_UNITS = {"body_acc": "(m/s²)/m", "wheel_acc": "(m/s²)/m", "rim_load": "N/m",
@@ -86,16 +88,9 @@ class QuarterCarParameters:
 
 def state_space(params: QuarterCarParameters) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) of x = [z_b, ż_b, z_w, ż_w] with input ΔF_rim (N)."""
-    m_b, m_w = params.body_mass_kg, params.wheel_mass_kg
-    k, c = params.suspension_stiffness_n_per_m, params.suspension_damping_n_s_per_m
-    a = np.array([
-        [0.0, 1.0, 0.0, 0.0],
-        [-k / m_b, -c / m_b, k / m_b, c / m_b],
-        [0.0, 0.0, 0.0, 1.0],
-        [k / m_w, c / m_w, -k / m_w, -c / m_w],
-    ])
-    b = np.array([0.0, 0.0, 0.0, 1.0 / m_w])
-    return a, b
+    return two_mass_state_space(params.body_mass_kg, params.wheel_mass_kg,
+                                params.suspension_stiffness_n_per_m,
+                                params.suspension_damping_n_s_per_m)
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,13 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from scipy.linalg import expm
 
+try:  # inside the FMU the dynamics module sits next to the slave, in resources/
+    from vehicle_demo_quarter_car_dynamics import two_mass_state_space
+except ImportError:  # in the package
+    from vehicle_demo.vehicle_demo_quarter_car_dynamics import two_mass_state_space
+
+DYNAMICS_MODULE = "vehicle_demo_quarter_car_dynamics"
+
 GRAVITY_M_S2 = 9.80665
 
 #: (name, start, unit, description) of the parameters, inputs and outputs.
@@ -55,19 +62,6 @@ OUTPUTS = (
 )
 
 
-class UnitReal(Real):
-    """A pythonfmu Real that writes its unit into the model description."""
-
-    def __init__(self, name: str, unit: str, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        element = super().to_xml()
-        element.find("Real").set("unit", self.unit)
-        return element
-
-
 class QuarterCar(Fmi2Slave):
     """Two-mass quarter car: rim force in, wheel and body motion out (exact linear step)."""
 
@@ -88,19 +82,19 @@ class QuarterCar(Fmi2Slave):
         self._cache: dict[float, tuple] = {}
         self._system = None
         self._problem = "the FMU is not initialised (call fmi2ExitInitializationMode)"
-        for name, _, unit, text in PARAMETERS:
-            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.parameter,
-                                            variability=Fmi2Variability.fixed,
-                                            initial=Fmi2Initial.exact, description=text))
-        for name, _, unit, text in INPUTS:
-            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.input,
-                                            variability=Fmi2Variability.continuous,
-                                            description=text))
-        for name, unit, text in OUTPUTS:
+        for name, _, _, text in PARAMETERS:  # units: written at build time
+            self.register_variable(Real(name, causality=Fmi2Causality.parameter,
+                                        variability=Fmi2Variability.fixed,
+                                        initial=Fmi2Initial.exact, description=text))
+        for name, _, _, text in INPUTS:
+            self.register_variable(Real(name, causality=Fmi2Causality.input,
+                                        variability=Fmi2Variability.continuous,
+                                        description=text))
+        for name, _, text in OUTPUTS:
             # the experiment starts in static equilibrium: every deviation is exactly 0
-            self.register_variable(UnitReal(name, unit, causality=Fmi2Causality.output,
-                                            variability=Fmi2Variability.continuous,
-                                            initial=Fmi2Initial.exact, description=text))
+            self.register_variable(Real(name, causality=Fmi2Causality.output,
+                                        variability=Fmi2Variability.continuous,
+                                        initial=Fmi2Initial.exact, description=text))
 
     def exit_initialization_mode(self):
         values = {name: getattr(self, name) for name, *_ in PARAMETERS}
@@ -112,14 +106,8 @@ class QuarterCar(Fmi2Slave):
             self._system = None
             return
         m_b, m_w = values["body_mass"], values["wheel_mass"]
-        k, c = values["suspension_stiffness"], values["suspension_damping"]
-        a = np.array([
-            [0.0, 1.0, 0.0, 0.0],
-            [-k / m_b, -c / m_b, k / m_b, c / m_b],
-            [0.0, 0.0, 0.0, 1.0],
-            [k / m_w, c / m_w, -k / m_w, -c / m_w],
-        ])
-        b = np.array([0.0, 0.0, 0.0, 1.0 / m_w])
+        a, b = two_mass_state_space(m_b, m_w, values["suspension_stiffness"],
+                                    values["suspension_damping"])
         self._system = (a, b, (m_b + m_w) * values["gravity"])
         self._cache.clear()
         self._problem = ""
@@ -190,63 +178,17 @@ CAPABILITIES = {
 def build_quarter_car_fmu(out_dir=".", validate: bool = True):
     """Write ``QuarterCar.fmu`` into ``out_dir`` and return its path.
 
-    The model description gets units, and fmpy's validation must report no problem.
+    Built like ``TireModal.fmu`` (``tire_fmu.fmu.builder.build_pythonfmu``): units written
+    into the model description, and fmpy's validation must report no problem. The slave ships
+    with the numpy-only dynamics module it shares with the frequency-domain references.
     """
-    import shutil
-    import sys
-    import tempfile
-    import zipfile
     from pathlib import Path
-    from xml.etree import ElementTree
 
-    from pythonfmu.builder import FmuBuilder
+    from tire_fmu.fmu.builder import build_pythonfmu
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="quarter_car_build_") as staging:
-        script = Path(staging) / f"{SLAVE_MODULE}.py"
-        shutil.copyfile(__file__, script)
-        try:
-            fmu = Path(FmuBuilder.build_FMU(script, dest=out_dir / f"{MODEL_IDENTIFIER}.fmu",
-                                            **CAPABILITIES))
-        finally:
-            # the builder imports the script from the staging folder and leaves it on sys.path
-            sys.modules.pop(SLAVE_MODULE, None)
-            while str(script.parent) in sys.path:
-                sys.path.remove(str(script.parent))
-
-    units = {"kg": {"kg": 1}, "N/m": {"kg": 1, "s": -2}, "N.s/m": {"kg": 1, "s": -1},
-             "m/s2": {"m": 1, "s": -2}, "N": {"kg": 1, "m": 1, "s": -2},
-             "N/s": {"kg": 1, "m": 1, "s": -3}, "m": {"m": 1}, "m/s": {"m": 1, "s": -1}}
-
-    def complete(xml: bytes) -> bytes:
-        root = ElementTree.fromstring(xml)
-        co_simulation = root.find("CoSimulation")
-        for name, value in CAPABILITIES.items():
-            co_simulation.set(name, str(value).lower())
-        used = sorted({r.get("unit") for r in root.iter("Real") if r.get("unit")})
-        definitions = ElementTree.Element("UnitDefinitions")
-        for unit in used:
-            element = ElementTree.SubElement(definitions, "Unit", name=unit)
-            ElementTree.SubElement(element, "BaseUnit",
-                                   {k: str(v) for k, v in units[unit].items()})
-        root.insert(list(root).index(co_simulation) + 1, definitions)
-        ElementTree.indent(root, space="  ")
-        return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
-
-    rewritten = fmu.with_suffix(".fmu.tmp")
-    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rewritten, "w",
-                                                          zipfile.ZIP_DEFLATED) as target:
-        for item in source.infolist():
-            data = source.read(item.filename)
-            if item.filename == "modelDescription.xml":
-                data = complete(data)
-            target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
-    rewritten.replace(fmu)
-    if validate:
-        from fmpy.validation import validate_fmu
-
-        problems = list(validate_fmu(str(fmu)))
-        if problems:
-            raise RuntimeError(f"{fmu} does not validate: " + "; ".join(problems))
-    return fmu
+    here = Path(__file__).parent
+    units = {name: unit for name, _, unit, _ in PARAMETERS + INPUTS}
+    units.update({name: unit for name, unit, _ in OUTPUTS})
+    return build_pythonfmu(Path(__file__), Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu",
+                           SLAVE_MODULE, project_files=[here / f"{DYNAMICS_MODULE}.py"],
+                           capabilities=CAPABILITIES, units=units, validate=validate)

@@ -8,7 +8,8 @@ the host's Python (pythonfmu embeds the host's interpreter and installs nothing)
 
 pythonfmu 0.7 writes no units, no ``UnitDefinitions`` and no ``ModelStructure/
 InitialUnknowns``; :func:`complete_model_description` adds them, and the build fails unless
-``fmpy.validation.validate_fmu`` then reports no problem.
+``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does all of
+this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from xml.etree import ElementTree
 
 import tire_fmu
 
-from .interface import CAPABILITIES, unit_definitions
+from .interface import CAPABILITIES, fmu_variables, unit_definitions
 
 MODEL_IDENTIFIER = "TireModal"
 SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
@@ -46,30 +47,46 @@ def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
     ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
     :class:`FmuBuildError` listing any problem.
     """
+    with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
+        project = _stage_project(Path(staging) / "project")
+        return build_pythonfmu(
+            _SLAVE_SOURCE, Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu", SLAVE_MODULE,
+            project_files=project, capabilities=CAPABILITIES,
+            units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate)
+
+
+def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
+                    project_files=(), capabilities: dict, units: dict[str, str],
+                    validate: bool = True) -> Path:
+    """Build a pythonfmu FMU from ``slave_source`` and complete its model description.
+
+    The slave is built under ``module_name``: every pythonfmu FMU in a process shares
+    ``sys.modules``, and two slave modules with one name would run the first one's code.
+    ``units`` maps variable names to the units written into the model description (pythonfmu
+    0.7 writes none); ``capabilities`` are the flags the slave really supports.
+    """
     try:
         from pythonfmu.builder import FmuBuilder
     except ImportError as error:
         raise FmuBuildError("building the FMU needs pythonfmu: pip install "
                             "'tire_fmu[fmu]'") from error
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
-        staging = Path(staging)
-        script = staging / "slave" / f"{SLAVE_MODULE}.py"
-        script.parent.mkdir()
-        shutil.copyfile(_SLAVE_SOURCE, script)
-        project = _stage_project(staging / "project")
+    dest = Path(dest)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="pythonfmu_build_") as staging:
+        script = Path(staging) / f"{module_name}.py"
+        shutil.copyfile(slave_source, script)
         try:
-            fmu = FmuBuilder.build_FMU(script, dest=out_dir / f"{MODEL_IDENTIFIER}.fmu",
-                                       project_files=project, **CAPABILITIES)
+            fmu = Path(FmuBuilder.build_FMU(script, dest=dest,
+                                            project_files=list(project_files),
+                                            **capabilities))
         finally:
             _forget_build_imports(script)
-    complete_fmu(fmu)
+    complete_fmu(fmu, capabilities, units)
     if validate:
         problems = validation_problems(fmu)
         if problems:
             raise FmuBuildError(f"{fmu} does not validate: " + "; ".join(problems))
-    return Path(fmu)
+    return fmu
 
 
 def _stage_project(folder: Path) -> list[Path]:
@@ -108,7 +125,7 @@ def _forget_build_imports(script: Path) -> None:
 
 # -- the model description -----------------------------------------------------------------
 
-def complete_fmu(fmu: str | Path) -> None:
+def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str]) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`."""
     fmu = Path(fmu)
     rewritten = fmu.with_suffix(".fmu.tmp")
@@ -117,23 +134,28 @@ def complete_fmu(fmu: str | Path) -> None:
         for item in source.infolist():
             data = source.read(item.filename)
             if item.filename == "modelDescription.xml":
-                data = complete_model_description(data)
+                data = complete_model_description(data, capabilities, units)
             target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
     rewritten.replace(fmu)
 
 
-def complete_model_description(xml: bytes) -> bytes:
-    """Add UnitDefinitions, the outputs and initial unknowns, and pin the capability flags."""
+def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str]) -> bytes:
+    """Write the units and their definitions, the outputs and initial unknowns, and pin the
+    capability flags."""
     root = ElementTree.fromstring(xml)
     co_simulation = root.find("CoSimulation")
-    for name, value in CAPABILITIES.items():
+    for name, value in capabilities.items():
         co_simulation.set(name, str(value).lower())
     co_simulation.attrib.pop("providesDirectionalDerivative", None)
-    units = {real.get("unit") for real in root.iter("Real") if real.get("unit")}
-    if units:
+    for variable in root.find("ModelVariables").findall("ScalarVariable"):
+        real = variable.find("Real")
+        if real is not None and units.get(variable.get("name")):
+            real.set("unit", units[variable.get("name")])
+    used = {real.get("unit") for real in root.iter("Real") if real.get("unit")}
+    if used:
         for old in root.findall("UnitDefinitions"):
             root.remove(old)
-        root.insert(list(root).index(co_simulation) + 1, unit_definitions(units))
+        root.insert(list(root).index(co_simulation) + 1, unit_definitions(used))
     variables = root.find("ModelVariables").findall("ScalarVariable")
     outputs = [i for i, v in enumerate(variables, 1) if v.get("causality") == "output"]
     calculated = [i for i in outputs

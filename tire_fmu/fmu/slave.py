@@ -63,22 +63,8 @@ _CORE_WORDING = [
 _STATE_FORMAT = "tire_fmu.fmu-state/1"
 
 
-class UnitReal(Real):
-    """A pythonfmu Real that writes its unit into the model description."""
-
-    def __init__(self, name: str, unit: str, **kwargs):
-        super().__init__(name, **kwargs)
-        self.unit = unit
-
-    def to_xml(self):
-        element = super().to_xml()
-        if self.unit:
-            element.find("Real").set("unit", self.unit)
-        return element
-
-
 #: pythonfmu's variable class for each FMI type of the shared table
-_KINDS = {"Real": UnitReal, "Integer": Integer, "Boolean": Boolean}
+_KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
 
 
 class _Phase:
@@ -151,11 +137,8 @@ class TireModal(Fmi2Slave):
             kwargs.update(initial=Fmi2Initial.exact)
         elif v.causality == "output":  # computed: no start value, listed as initial unknowns
             kwargs.update(initial=Fmi2Initial.calculated)
-        kind = _KINDS[v.type]
-        if kind is UnitReal:
-            self.register_variable(UnitReal(v.name, v.unit, **kwargs))
-        else:
-            self.register_variable(kind(v.name, **kwargs))
+        # units go into the model description at build time, from the same table
+        self.register_variable(_KINDS[v.type](v.name, **kwargs))
 
     # -- lifecycle ---------------------------------------------------------------------------
     def setup_experiment(self, start_time: float, stop_time: float | None = None,

@@ -535,7 +535,10 @@ static void record_road(Instance* inst, double t, double z, double vz)
 {
     RoadHistory* road = &inst->road;
     size_t keep, last;
-    if (road->count > 0 && road->t[road->start + road->count - 1] >= t) {
+    /* within the time tolerance of the newest sample is that point again: outputs read there
+     * before its step record it first, and hosts hand back their own clock */
+    if (road->count > 0 && road->t[road->start + road->count - 1]
+                           >= t - fmax(TIME_ABS_TOLERANCE, TIME_REL_TOLERANCE * fabs(t))) {
         /* the same communication point again (a retried step): replace, never duplicate */
         last = road->start + road->count - 1;
         road->z[last] = z;
