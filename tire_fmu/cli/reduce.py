@@ -124,10 +124,12 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "export",
-        help="write a reduced model: .npz (with metadata) or MATLAB .mat (A, B, C, D)",
+        help="write a reduced model: .npz (with metadata), MATLAB .mat (A, B, C, D) or a "
+        "native C FMU (.fmu)",
         description="Export the reduced model. npz: diagonal modal form, JSON metadata, "
         "checksums (load with tire_fmu.core.export.load_npz). mat: real A, B, C, D for "
-        "ss(A, B, C, D), inputs [r; dr/dt].",
+        "ss(A, B, C, D), inputs [r; dr/dt]. fmu: an FMI 2.0 co-simulation FMU in C, compiled "
+        "for linux64 with its sources, that needs no Python on the host (docs/native.md).",
     )
     p.add_argument("out", metavar="OUT", type=Path, help="file to write")
     p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
