@@ -190,21 +190,22 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
     # -- road runs --------------------------------------------------------------------------
     road, spectrum = iso8608_road(settings.road_class, settings.road_speed_m_s,
                                   settings.road_duration_s, h, seed=1, fade_in_s=0.5)
-    road_parameters = {"n_elements": settings.n_elements, "speed": settings.road_speed_m_s}
-    with _step_bar(road.time_s.size - 1, settings.progress, "ISO 8608 road") as bar, \
-            QuarterCarCoSimulation(fmus, car, road_parameters, h) as sim:
-        road_run = sim.run(road.height_m, road.velocity_m_s, progress=bar.update)
-    figures.append(plots.plot_road_run(road_run, out / "road_run_iso8608.png",
-                                       title=f"{road.description}, N = {settings.n_elements}"))
+    def road_run(profile, speed_m_s, what, figure):
+        """Co-simulate one road profile at its speed and plot rim load and contact force."""
+        parameters = {"n_elements": settings.n_elements, "speed": speed_m_s}
+        with _step_bar(profile.time_s.size - 1, settings.progress, what) as bar, \
+                QuarterCarCoSimulation(fmus, car, parameters, h) as sim:
+            run = sim.run(profile.height_m, profile.velocity_m_s, progress=bar.update)
+        figures.append(plots.plot_road_run(
+            run, out / figure, title=f"{profile.description}, N = {settings.n_elements}"))
+        return run
+
+    road_run_iso = road_run(road, settings.road_speed_m_s, "ISO 8608 road",
+                            "road_run_iso8608.png")
     figures.append(_road_psd_figure(road, spectrum, out / "road_psd.png"))
     bump = cleat(settings.cleat_height_m, settings.cleat_length_m, settings.cleat_speed_m_s,
                  1.0, h, settings.cleat_shape, distance_m=1.0)
-    cleat_parameters = {"n_elements": settings.n_elements, "speed": settings.cleat_speed_m_s}
-    with _step_bar(bump.time_s.size - 1, settings.progress, "cleat") as bar, \
-            QuarterCarCoSimulation(fmus, car, cleat_parameters, h) as sim:
-        cleat_run = sim.run(bump.height_m, bump.velocity_m_s, progress=bar.update)
-    figures.append(plots.plot_road_run(cleat_run, out / "road_run_cleat.png",
-                                       title=f"{bump.description}, N = {settings.n_elements}"))
+    cleat_run = road_run(bump, settings.cleat_speed_m_s, "cleat", "road_run_cleat.png")
 
     # -- summary ----------------------------------------------------------------------------
     rows += [
@@ -221,7 +222,7 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
     for name, a in agreements.items():
         rows.append((f"max |dB| co-sim vs full model, {name} (coherence > 0.95)",
                      a.max_deviation_db, "dB"))
-    for label, run in (("ISO road", road_run), ("cleat", cleat_run)):
+    for label, run in (("ISO road", road_run_iso), ("cleat", cleat_run)):
         rows += [
             (f"{label}: body acceleration RMS", float(np.std(run.body_az_m_s2)), "m/s2"),
             (f"{label}: rim load min / max", f"{run.rim_fz_n.min():.0f} / "

@@ -37,6 +37,17 @@ PAPER_SPIN_RAD_S = 20.0 * np.pi
 PHASES = ("in", "out")
 
 
+def _rolling_setup(tire: TireParameters, damped: bool, nmax: int, problems: list[str]):
+    """Check nmax, raise every problem found so far, and return the tire the rolling studies
+    solve (undamped unless ``damped``) and the signed orders -nmax..nmax."""
+    if nmax < 1:
+        problems.append(f"nmax = {nmax!r}: must be >= 1")
+    if problems:
+        raise ParameterError(problems)
+    swept_tire = tire if damped else replace(tire, alpha=0.0, beta=0.0)
+    return swept_tire, np.arange(-nmax, nmax + 1)
+
+
 def _report(progress: Progress | None, done: int, total: int) -> None:
     if progress is not None:
         progress(done, total)
@@ -377,13 +388,7 @@ def speed_sweep(
         )
     if not fmax_hz > 0.0:
         problems.append(f"fmax_hz = {fmax_hz!r}: must be > 0 Hz")
-    if nmax < 1:
-        problems.append(f"nmax = {nmax!r}: must be >= 1")
-    if problems:
-        raise ParameterError(problems)
-
-    swept_tire = tire if damped else replace(tire, alpha=0.0, beta=0.0)
-    orders = np.arange(-nmax, nmax + 1)
+    swept_tire, orders = _rolling_setup(tire, damped, nmax, problems)
     curves = [dispersion_relation(swept_tire, orders, v / tire.R, n_elements) for v in speeds]
     loaded = None
     if patch_length_m > 0.0:
@@ -456,12 +461,7 @@ def dispersion_at_speed(
     problems = []
     if not np.isfinite(speed) or speed < 0.0:
         problems.append(f"speed_m_s = {speed!r}: must be a finite number >= 0 m/s")
-    if nmax < 1:
-        problems.append(f"nmax = {nmax!r}: must be >= 1")
-    if problems:
-        raise ParameterError(problems)
-    swept_tire = tire if damped else replace(tire, alpha=0.0, beta=0.0)
-    orders = np.arange(-nmax, nmax + 1)
+    swept_tire, orders = _rolling_setup(tire, damped, nmax, problems)
     loaded = None
     if patch_length_m > 0.0:
         op = OperatingPoint(n_elements, patch_length_m=patch_length_m, speed_m_s=speed,
