@@ -1,13 +1,49 @@
-"""Contact-patch geometry: node weights, chord geometry and road delays.
+"""Tread-road contact: the contact zone, the unilateral law, the static footprint, the road
+under each node, and the paper's prescribed patch. The one home of everything contact.
 
-The patch is the arc |θ| <= L/(2R) centred on node 0. Each tread node carries k_cw·R·δθ
-times the fraction of its own arc [θ_j - δθ/2, θ_j + δθ/2] inside the patch, so frequencies and
-stiffness vary continuously with patch length instead of in node-sized steps.
+**Zone.** A fixed set of tread nodes around the contact centre (node 0, θ = 0) carries road
+springs: the nodes whose unloaded ray meets the road within ``zone_length_m / 2`` of the
+centre. The zone is fixed in the ground frame (so it does not move with spin) and is wider
+than any footprint the model is asked to carry, so that a cleat is met before it reaches the
+footprint.
 
-Load and patch length are tied through the flat-road chord, L = 2·sqrt(2Rδ - δ²), and the
-model's own static vertical stiffness K_v(L) (see :mod:`tire_fmu.core.model`): the load that
-makes patch L is W(L) = K_v(L)·δ(L), the secant force of the linear model deflected by the
-geometric deflection of that patch. W grows monotonically with L, so either one fixes the other.
+**Law.** Node j meets the road through a radial penalty spring k_j = k_cw·R·δθ and a damper
+c_j = β·k_j that can only push: with its penetration p_j (along its ray, positive into the
+road) and rate ṗ_j, the road pushes the tread inwards with
+
+    f_j = max(0, k_j p_j + c_j ṗ_j)  while p_j > 0,   f_j = 0 otherwise.
+
+k_cw is the paper's "contact-patch stiffness", here a penalty: it is stiff enough (a node on
+it alone rings near 870 Hz) that its value barely moves the footprint (see docs/theory.md).
+
+**Gap.** The rim centre is at height H = R - δ + z_rim above the road datum (δ the static
+rim deflection), node j sits on its ray at distance R + w_j from the rim centre (w the
+rim-relative radial displacement), and the road under it is at height h_j. Along the ray the
+road is (H - h_j)/cos θ_j away, so
+
+    p_j = R + w_j - (H - h_j)/cos θ_j ,
+
+which for a flat road is the brief's u_j <= (R - δ)/cos θ_j - R. Rim and road moving
+together (z_rim = h_j) leave p_j, and with it every force, unchanged.
+
+**Static footprint.** For a given rim deflection the static contact forces solve the linear
+complementarity problem f >= 0, f/k - p >= 0, f·(f/k - p) = 0 with p = -g(δ) - G f (G the
+ring's static compliance at the zone nodes). Its solution is piecewise linear in δ, so it is
+traced exactly by active-set continuation from δ = 0: along each segment the active set is
+fixed, and the next node to enter (its penetration reaches 0) or to leave (its force reaches
+0) ends the segment. The load for a deflection and the deflection for a load are both read
+off that path, with the tangent stiffness of the segment.
+
+**Footprint length** on the discrete mesh: the road length between the two points where the
+penetration, linearly interpolated between the outermost active node and its inactive
+neighbour, crosses zero. It is continuous in the load (a node entering adds length smoothly).
+
+**Road under each node.** Each zone node stands for an arc of tread, whose ray projections
+cover a window [x_lo, x_hi] of road; its road height is the average of the profile over that
+window (the exact linear part of a Winkler foundation over the arc), so a cleat narrower than
+the node spacing is not missed between nodes. ``road_z`` is the height at the front of the
+zone; at speed V node j sees the window [x_lo, x_hi] of road that passed the front
+(x_front - x)/V earlier. At V = 0 every node sees ``road_z`` at once (a shaker plate).
 """
 
 from __future__ import annotations
@@ -19,9 +55,341 @@ import numpy as np
 
 from .discretisation import Grid
 
+#: Default length of road under the contact zone (m): wide enough for the largest credible
+#: footprint and for a 40 mm cleat to be met before it reaches the footprint.
+DEFAULT_ZONE_LENGTH_M = 0.6
+#: The zone may reach at most this far around the ring (|θ| < 60°): beyond, the flat-road
+#: ray geometry and the small-deflection ring stop being credible.
+MAX_ZONE_HALF_ANGLE = math.pi / 3
+#: Relative tolerance on events of the footprint continuation (deflections, in m, of the
+#: order of the tire's size).
+_EVENT_TOLERANCE = 1e-12
+
+
+# -- the zone ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class ContactZone:
+    """The tread nodes that may meet the road, front (θ < 0) to rear, and their road springs."""
+
+    grid: Grid
+    nodes: np.ndarray  # tread node indices
+    theta: np.ndarray  # node angles from the contact centre (rad), ascending
+    stiffness_n_per_m: np.ndarray  # k_j = k_cw·R·δθ
+    damping_n_s_per_m: np.ndarray  # c_j = β·k_j
+    length_m: float  # road length the zone covers when unloaded
+
+    @property
+    def size(self) -> int:
+        return self.nodes.size
+
+    @property
+    def cos(self) -> np.ndarray:
+        return np.cos(self.theta)
+
+    @property
+    def centre(self) -> int:
+        """Position of node 0 (the contact centre) in the zone."""
+        return int(np.flatnonzero(self.nodes == 0)[0])
+
+    def unloaded_gap_m(self, deflection_m: float) -> np.ndarray:
+        """Gap along each ray between the undeformed tread and a flat road, rim lowered by δ."""
+        radius = self.grid.radius_m
+        return (radius - deflection_m) / self.cos - radius
+
+    def road_positions_m(self, deflection_m: float) -> np.ndarray:
+        """Where each node's ray meets the road, x forward from the contact centre (m)."""
+        return -(self.grid.radius_m - deflection_m) * np.tan(self.theta)
+
+    def road_windows_m(self, deflection_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(x_lo, x_hi): the road each node's arc [θ - δθ/2, θ + δθ/2] covers."""
+        height = self.grid.radius_m - deflection_m
+        half = 0.5 * self.grid.dtheta
+        return -height * np.tan(self.theta + half), -height * np.tan(self.theta - half)
+
+
+def contact_zone(grid: Grid, k_cw: float, beta: float,
+                 zone_length_m: float = DEFAULT_ZONE_LENGTH_M) -> ContactZone:
+    """The zone of nodes whose unloaded ray meets the road within ``zone_length_m / 2``."""
+    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
+    inside = np.abs(grid.theta) <= half_angle * (1 + 1e-12)
+    nodes = np.flatnonzero(inside)
+    nodes = nodes[np.argsort(grid.theta[nodes], kind="stable")]
+    stiffness = np.full(nodes.size, k_cw * grid.node_arc_m)
+    return ContactZone(grid=grid, nodes=nodes, theta=grid.theta[nodes].copy(),
+                       stiffness_n_per_m=stiffness, damping_n_s_per_m=beta * stiffness,
+                       length_m=float(zone_length_m))
+
+
+def zone_problems(grid: Grid, zone_length_m) -> list[str]:
+    """Why a zone length cannot make a usable zone on this mesh (empty when it can)."""
+    try:
+        length = float(zone_length_m)
+    except (TypeError, ValueError):
+        length = math.nan
+    limit = 2 * grid.radius_m * math.tan(MAX_ZONE_HALF_ANGLE)
+    if not (math.isfinite(length) and 0 < length <= limit):
+        return [f"contact_zone_length_m = {zone_length_m!r} m: must be in (0, {limit:.4g}] m "
+                "(at most 60 degrees of the ring either side of the contact centre)"]
+    half_angle = math.atan(0.5 * length / grid.radius_m)
+    if half_angle < grid.dtheta:
+        need = 2 * grid.radius_m * math.tan(grid.dtheta)
+        return [f"contact_zone_length_m = {length:g} m holds only the centre node of a mesh of "
+                f"{grid.n_elements} elements: must be at least {need:.4g} m (one node either "
+                "side), or refine the mesh"]
+    return []
+
+
+# -- the law ----------------------------------------------------------------------------------
+
+def contact_force(penetration_m, rate_m_s, stiffness_n_per_m, damping_n_s_per_m) -> np.ndarray:
+    """The unilateral law: f = max(0, k p + c ṗ) where p > 0, else 0 (newtons, pushing)."""
+    p = np.asarray(penetration_m, dtype=float)
+    push = stiffness_n_per_m * p + damping_n_s_per_m * np.asarray(rate_m_s, dtype=float)
+    return np.where(p > 0.0, np.maximum(push, 0.0), 0.0)
+
+
+# -- static footprint -------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class Footprint:
+    """The static contact of the ring on a flat road, computed by the model itself.
+
+    Arrays are per zone node (front to rear). ``forces_n`` push the tread inwards;
+    ``penetration_m`` is positive into the road (and equals f/k where the node pushes).
+    """
+
+    zone: ContactZone
+    deflection_m: float  # rim lowered from its unloaded height (road at 0)
+    load_n: float  # vertical force of the road on the tire = of the tire on the rim
+    forces_n: np.ndarray
+    penetration_m: np.ndarray
+    active: np.ndarray  # bool: nodes that push
+    tangent_stiffness_n_per_m: float  # dW/dδ on the current segment of the path
+    length_m: float  # road length between the interpolated edges
+    front_edge_m: float  # x of the front edge (forward positive)
+    rear_edge_m: float
+
+    @property
+    def in_contact(self) -> bool:
+        return bool(self.active.any())
+
+    @property
+    def secant_stiffness_n_per_m(self) -> float:
+        return self.load_n / self.deflection_m if self.deflection_m > 0 else math.nan
+
+    @property
+    def line_pressure_n_per_m(self) -> np.ndarray:
+        """Contact force per metre of tread circumference at each zone node."""
+        return self.forces_n / self.zone.grid.node_arc_m
+
+    @property
+    def longitudinal_force_n(self) -> float:
+        """x-component of the road's force on the tire (zero at rest, by symmetry)."""
+        return float(np.sum(self.forces_n * np.sin(self.zone.theta)))
+
+    @property
+    def n_active(self) -> int:
+        return int(self.active.sum())
+
+    def touches_zone_edge(self) -> bool:
+        """True when a zone end node pushes: the footprint may extend beyond the zone."""
+        return bool(self.active[0] or self.active[-1])
+
+    def to_dict(self) -> dict:
+        return {
+            "load_n": self.load_n,
+            "deflection_m": self.deflection_m,
+            "footprint_length_m": self.length_m,
+            "front_edge_m": self.front_edge_m,
+            "rear_edge_m": self.rear_edge_m,
+            "secant_stiffness_n_per_m": self.secant_stiffness_n_per_m,
+            "tangent_stiffness_n_per_m": self.tangent_stiffness_n_per_m,
+            "contact_nodes": self.n_active,
+            "zone_nodes": self.zone.size,
+            "longitudinal_force_n": self.longitudinal_force_n,
+            "theta_rad": self.zone.theta.tolist(),
+            "line_pressure_n_per_m": self.line_pressure_n_per_m.tolist(),
+            "penetration_m": self.penetration_m.tolist(),
+        }
+
+
+class FootprintError(ValueError):
+    """A static contact state the model cannot reach (load beyond the credible range)."""
+
+
+@dataclass(frozen=True, eq=False)
+class _Segment:
+    """A piece of the continuation path: f_A, load and penetrations affine in δ."""
+
+    start_m: float
+    active: np.ndarray
+    forces_at: tuple[np.ndarray, np.ndarray]  # f = f0 + f1 δ (zeros off the active set)
+    penetration_at: tuple[np.ndarray, np.ndarray]  # p = p0 + p1 δ
+    load_at: tuple[float, float]  # W = W0 + W1 δ
+
+
+class FootprintPath:
+    """The static contact forces as a function of the rim deflection, traced exactly.
+
+    ``compliance`` is G (zone x zone, m/N): the rim-relative radial displacement of zone
+    node i per newton pushed outwards at zone node j, at the operating speed.
+    """
+
+    def __init__(self, zone: ContactZone, compliance: np.ndarray, max_deflection_m: float):
+        self.zone = zone
+        self.compliance = np.asarray(compliance, dtype=float)
+        self.max_deflection_m = float(max_deflection_m)
+        self.segments = self._trace()
+
+    def _segment(self, start: float, active: np.ndarray) -> _Segment:
+        # p = -g(δ) - G f with g = (R - δ)/cos - R: -g = R - R/cos + δ/cos
+        zone, g = self.zone, self.compliance
+        radius, cos = zone.grid.radius_m, zone.cos
+        p0, p1 = radius - radius / cos, 1.0 / cos
+        f0, f1 = np.zeros(zone.size), np.zeros(zone.size)
+        if active.any():
+            # f_A = k_A p_A  =>  (diag(1/k_A) + G_AA) f_A = p0_A + p1_A δ
+            system = np.diag(1.0 / zone.stiffness_n_per_m[active]) + g[np.ix_(active, active)]
+            solved = np.linalg.solve(system, np.column_stack([p0[active], p1[active]]))
+            f0[active], f1[active] = solved[:, 0], solved[:, 1]
+        pen0, pen1 = p0 - g @ f0, p1 - g @ f1
+        return _Segment(start, active.copy(), (f0, f1), (pen0, pen1),
+                        (float(cos @ f0), float(cos @ f1)))
+
+    def _trace(self) -> list[_Segment]:
+        zone = self.zone
+        radius = zone.grid.radius_m
+        # at δ = 0 the undeformed ring touches the road only where cos θ = 1 (node 0)
+        active = np.zeros(zone.size, dtype=bool)
+        start = 0.0
+        segments = []
+        for _ in range(8 * zone.size + 8):
+            if not active.any():
+                # the touching node(s) enter as soon as δ > 0
+                active = np.isclose(zone.cos, 1.0, rtol=0.0, atol=1e-14)
+            segment = self._segment(start, active)
+            segments.append(segment)
+            (f0, f1), (p0, p1) = segment.forces_at, segment.penetration_at
+            # leaving: an active force falls to 0; entering: an inactive penetration rises to 0
+            with np.errstate(divide="ignore", invalid="ignore"):
+                leave = np.where(active & (f1 < 0), -f0 / f1, np.inf)
+                enter = np.where(~active & (p1 > 0), -p0 / p1, np.inf)
+            events = np.minimum(leave, enter)
+            events[events <= start * (1 + _EVENT_TOLERANCE) + _EVENT_TOLERANCE * radius] = np.inf
+            nxt = float(events.min())
+            if not math.isfinite(nxt) or nxt >= self.max_deflection_m:
+                return segments
+            # every event within rounding of the first happens together
+            together = events <= nxt * (1 + 1e-9) + _EVENT_TOLERANCE * radius
+            active = active.copy()
+            active[together & (leave <= enter)] = False
+            active[together & (enter < leave)] = True
+            start = nxt
+        raise FootprintError("the footprint continuation did not terminate (a degenerate "
+                             "contact path); report the tire data")
+
+    def _segment_for_deflection(self, deflection_m: float) -> _Segment:
+        starts = [s.start_m for s in self.segments]
+        return self.segments[max(0, int(np.searchsorted(starts, deflection_m, "right")) - 1)]
+
+    def at_deflection(self, deflection_m: float) -> Footprint:
+        d = float(deflection_m)
+        s = self._segment_for_deflection(d)
+        forces = s.forces_at[0] + s.forces_at[1] * d
+        penetration = s.penetration_at[0] + s.penetration_at[1] * d
+        load = s.load_at[0] + s.load_at[1] * d
+        active = s.active.copy() if d > 0 else np.zeros_like(s.active)
+        forces = np.where(active, forces, 0.0)
+        return self._footprint(d, load if d > 0 else 0.0, forces, penetration, active,
+                               s.load_at[1])
+
+    def at_load(self, load_n: float) -> Footprint:
+        """The static state carrying ``load_n``: the load grows with δ along the path, and is
+        affine on each segment, so the deflection follows exactly."""
+        w = float(load_n)
+        if w <= 0.0:
+            return self.at_deflection(0.0)
+        ends = [s.start_m for s in self.segments[1:]] + [self.max_deflection_m]
+        for segment, end in zip(self.segments, ends):
+            w0, w1 = segment.load_at
+            if w1 > 0 and w0 + w1 * end >= w:
+                return self.at_deflection(max((w - w0) / w1, segment.start_m))
+        raise FootprintError(f"load {w:g} N needs a rim deflection beyond "
+                             f"{self.max_deflection_m:g} m")
+
+    def _footprint(self, deflection, load, forces, penetration, active, tangent) -> Footprint:
+        zone = self.zone
+        x = zone.road_positions_m(deflection)
+        front, rear = _edges(x, penetration, active)
+        return Footprint(zone=zone, deflection_m=float(deflection), load_n=float(load),
+                         forces_n=forces, penetration_m=penetration, active=active,
+                         tangent_stiffness_n_per_m=float(tangent),
+                         length_m=float(front - rear), front_edge_m=float(front),
+                         rear_edge_m=float(rear))
+
+
+def _edges(x: np.ndarray, penetration: np.ndarray, active: np.ndarray) -> tuple[float, float]:
+    """Front and rear edge (road x) where the penetration, interpolated linearly between the
+    outermost active node and its inactive neighbour, crosses zero."""
+    idx = np.flatnonzero(active)
+    if not idx.size:
+        return 0.0, 0.0
+
+    def crossing(inner: int, outer: int) -> float:
+        if outer < 0 or outer >= x.size:
+            return float(x[inner])
+        p_in, p_out = penetration[inner], penetration[outer]
+        share = p_in / (p_in - p_out) if p_in > p_out else 0.0
+        return float(x[inner] + share * (x[outer] - x[inner]))
+
+    front = crossing(idx[0], idx[0] - 1)  # x decreases along the zone (front first)
+    rear = crossing(idx[-1], idx[-1] + 1)
+    return front, rear
+
+
+# -- the road under each node ------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class RoadWindows:
+    """For each node, the delays (s) after which the ends of its road window have travelled
+    from the zone front to under it: it sees the road that passed the front between
+    ``late_s`` and ``early_s`` ago, averaged. All zero at V = 0 (a shaker plate)."""
+
+    early_s: np.ndarray  # the window's front end (the road reached it last)
+    late_s: np.ndarray  # the window's rear end
+    front_m: float  # x of the zone front, where road_z is measured
+
+    @property
+    def horizon_s(self) -> float:
+        return float(self.late_s.max()) if self.late_s.size else 0.0
+
+    def frequency_response(self, omega) -> np.ndarray:
+        """(nodes, freqs): the road under each node per unit harmonic road height at the front:
+        the window average of a delayed harmonic, e^{-iωτ_mid}·sin(ωΔ/2)/(ωΔ/2)."""
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))[None, :]
+        mid = 0.5 * (self.early_s + self.late_s)[:, None]
+        half = 0.5 * (self.late_s - self.early_s)[:, None]
+        return np.exp(-1j * omega * mid) * np.sinc(omega * half / np.pi)
+
+
+def road_windows(zone: ContactZone, deflection_m: float, speed_m_s: float) -> RoadWindows:
+    x_lo, x_hi = zone.road_windows_m(deflection_m)
+    front = float(x_hi.max()) if x_hi.size else 0.0
+    if speed_m_s <= 0.0:
+        zeros = np.zeros(zone.size)
+        return RoadWindows(zeros, zeros.copy(), front)
+    return RoadWindows((front - x_hi) / speed_m_s, (front - x_lo) / speed_m_s, front)
+
+
+# -- the paper's prescribed patch ---------------------------------------------------------------
 
 def patch_weights(grid: Grid, patch_length_m: float) -> np.ndarray:
-    """Fraction of each node's arc inside the patch (0..1), symmetric about node 0."""
+    """Fraction of each node's arc inside a prescribed patch |θ| <= L/(2R) (0..1).
+
+    The paper's patch (Figs. 17-19) is an input, not a contact solution: each tread node
+    carries k_cw·R·δθ times this fraction, so frequencies vary continuously with L.
+    """
     half_angle = 0.5 * patch_length_m / grid.radius_m
     distance = np.abs(grid.theta)  # |θ| makes the weights exactly mirror-symmetric
     lo = distance - 0.5 * grid.dtheta
@@ -30,63 +398,163 @@ def patch_weights(grid: Grid, patch_length_m: float) -> np.ndarray:
     return np.clip(overlap / grid.dtheta, 0.0, 1.0)
 
 
-def patch_node_centroids(grid: Grid, patch_length_m: float) -> np.ndarray:
-    """Angle of the centroid of each node's in-patch arc (nan for nodes outside the patch)."""
-    half_angle = 0.5 * patch_length_m / grid.radius_m
-    lo = np.maximum(grid.theta - 0.5 * grid.dtheta, -half_angle)
-    hi = np.minimum(grid.theta + 0.5 * grid.dtheta, half_angle)
-    return np.where(hi > lo, 0.5 * (lo + hi), np.nan)
-
-
-def road_delays_s(grid: Grid, patch_length_m: float, speed_m_s: float) -> np.ndarray:
-    """Delay after which each patch node sees the road height measured at the leading edge.
-
-    Rolling forward, road points enter the patch at θ = -L/(2R) (the leading edge: θ runs
-    with the rotation, rearwards at the patch) and travel to +L/(2R) at speed V. At V = 0 the
-    whole patch sees the road at once, a shaker plate. Nodes outside the patch get nan.
-    """
-    centroid = patch_node_centroids(grid, patch_length_m)
-    if speed_m_s <= 0.0:
-        return np.where(np.isnan(centroid), np.nan, 0.0)
-    half_angle = 0.5 * patch_length_m / grid.radius_m
-    return grid.radius_m * (centroid + half_angle) / speed_m_s
-
-
 def deflection_from_patch_length(radius_m: float, patch_length_m: float) -> float:
-    """Flat-road chord: a patch of length L on a circle of radius R sits δ below its centre."""
+    """Flat-road chord: a prescribed patch of length L on a circle of radius R sits δ below
+    its centre (only for the paper's prescribed patch; a computed footprint has its own δ)."""
     half = 0.5 * patch_length_m
     return radius_m - math.sqrt(max(radius_m**2 - half**2, 0.0))
 
 
-def patch_length_from_deflection(radius_m: float, deflection_m: float) -> float:
-    d = min(max(deflection_m, 0.0), radius_m)
-    return 2.0 * math.sqrt(max(2.0 * radius_m * d - d * d, 0.0))
+# -- the state a linear model is built about ---------------------------------------------------
 
-
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ContactPatch:
-    """The static contact state a model was linearised at."""
+    """The static contact a tire model is linearised at: the footprint the model computes for
+    a load, or the paper's prescribed patch (an explicit mode, for its Figs. 17-19).
 
-    length_m: float
+    ``weights`` (per zone node) scale each node's road spring in the linearisation: 1 on the
+    footprint's pushing nodes and 0 elsewhere, or the fraction of the node's arc inside a
+    prescribed patch. Every spring acts through the gap of the module docstring, with its
+    rate damped by c_j, and the road reaches each node through ``road``.
+    """
+
+    zone: ContactZone
+    weights: np.ndarray
     deflection_m: float
     load_n: float
-    vertical_stiffness_n_per_m: float
-    weights: np.ndarray
-    road_delays_s: np.ndarray
+    length_m: float
+    vertical_stiffness_n_per_m: float  # tangent: rim force per rim travel, road held
+    road: RoadWindows
+    forces_n: np.ndarray  # static push of the road on each zone node
+    centre_compression_m: float  # -w at the contact centre: the static "deflection" output
+    footprint: Footprint | None = None  # None for a prescribed patch
+
+    @property
+    def prescribed(self) -> bool:
+        return self.footprint is None
 
     @property
     def in_contact(self) -> bool:
-        return self.length_m > 0.0
+        return bool(np.any(self.weights > 0))
+
+    @property
+    def contact_positions(self) -> np.ndarray:
+        """Positions in the zone of the nodes with a spring in the linearisation."""
+        return np.flatnonzero(self.weights > 0)
 
     @property
     def node_indices(self) -> np.ndarray:
-        return np.flatnonzero(self.weights > 0.0)
+        """Tread node indices with a spring in the linearisation."""
+        return self.zone.nodes[self.contact_positions]
+
+    @property
+    def node_stiffness_n_per_m(self) -> np.ndarray:
+        return self.weights * self.zone.stiffness_n_per_m
+
+    @property
+    def node_damping_n_s_per_m(self) -> np.ndarray:
+        return self.weights * self.zone.damping_n_s_per_m
+
+    def static_outputs(self) -> dict[str, float]:
+        """The FMU outputs at this static state (road on tire = tire on rim in statics)."""
+        vertical = float(self.zone.cos @ self.forces_n)
+        return {"rim_Fz": vertical,
+                "rim_Fx": float(np.sin(self.zone.theta) @ self.forces_n),
+                "contact_Fz": vertical,
+                "deflection": self.centre_compression_m}
 
     def to_dict(self) -> dict:
-        return {
+        out = {
+            "contact": "prescribed patch" if self.prescribed else "computed footprint",
             "patch_length_m": self.length_m,
             "deflection_m": self.deflection_m,
             "load_n": self.load_n,
             "vertical_stiffness_n_per_m": self.vertical_stiffness_n_per_m,
-            "patch_nodes": int(self.node_indices.size),
+            "patch_nodes": int(self.contact_positions.size),
+            "contact_zone_length_m": self.zone.length_m,
         }
+        if self.footprint is not None:
+            out["secant_stiffness_n_per_m"] = self.footprint.secant_stiffness_n_per_m
+        return out
+
+
+def linear_vertical_stiffness(zone: ContactZone, compliance: np.ndarray,
+                              node_stiffness: np.ndarray) -> float:
+    """dW/dδ with the springs ``node_stiffness`` held (road fixed, rim pushed down):
+    W = cosᵀ f, (diag(1/k) + G) f = δ/cos on the springs' nodes."""
+    on = node_stiffness > 0
+    if not on.any():
+        return 0.0
+    cos = zone.cos[on]
+    system = np.diag(1.0 / node_stiffness[on]) + compliance[np.ix_(on, on)]
+    return float(cos @ np.linalg.solve(system, 1.0 / cos))
+
+
+def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
+                   speed_m_s: float, max_length_m: float) -> ContactPatch:
+    """The footprint that carries ``load_n``; FootprintError (with the allowed range) when the
+    footprint would leave the zone or exceed ``max_length_m``."""
+    path = FootprintPath(zone, compliance, max_deflection_m=0.5 * zone.grid.radius_m)
+    limit = max_credible_load(path, max_length_m)
+    if load_n > limit.load_n:
+        reason = ("its footprint reaches the end of the contact zone (raise "
+                  "contact_zone_length_m)" if limit.touches_zone_edge() else
+                  f"its footprint reaches {max_length_m:.4g} m, beyond which the linear ring "
+                  "is not credible")
+        raise FootprintError(
+            f"load_n = {load_n:g} N: must be in [0, {limit.load_n:.6g}] N for this tire and "
+            f"mesh; at {limit.load_n:.6g} N (deflection {limit.deflection_m * 1e3:.3g} mm) "
+            + reason)
+    footprint = path.at_load(load_n)
+    return ContactPatch(
+        zone=zone, weights=footprint.active.astype(float), deflection_m=footprint.deflection_m,
+        load_n=footprint.load_n, length_m=footprint.length_m,
+        vertical_stiffness_n_per_m=footprint.tangent_stiffness_n_per_m,
+        road=road_windows(zone, footprint.deflection_m, speed_m_s),
+        forces_n=footprint.forces_n,
+        centre_compression_m=float(compliance[zone.centre] @ footprint.forces_n),
+        footprint=footprint)
+
+
+def max_credible_load(path: FootprintPath, max_length_m: float) -> Footprint:
+    """The static state at the largest load the model is credible for: the footprint stays
+    inside the zone (an inactive node at each end) and no longer than ``max_length_m``."""
+    segments = path.segments
+    for index, segment in enumerate(segments):
+        start = segment.start_m
+        end = (segments[index + 1].start_m if index + 1 < len(segments)
+               else path.max_deflection_m)
+        if segment.active[0] or segment.active[-1]:
+            return path.at_deflection(start)  # a zone end node enters here, with no force yet
+        if path.at_deflection(end * (1 - 1e-12)).length_m > max_length_m:
+            low, high = start, end
+            for _ in range(60):  # the length grows continuously along a segment
+                middle = 0.5 * (low + high)
+                if path.at_deflection(middle).length_m > max_length_m:
+                    high = middle
+                else:
+                    low = middle
+            return path.at_deflection(low)
+    return path.at_deflection(path.max_deflection_m)
+
+
+def prescribed_patch(zone: ContactZone, compliance: np.ndarray, patch_length_m: float,
+                     speed_m_s: float) -> ContactPatch:
+    """The paper's patch |θ| <= L/(2R): fractional node weights and the flat-road chord as
+    its deflection; the load is what those springs, two-sided, carry at that deflection."""
+    grid = zone.grid
+    weights = patch_weights(grid, patch_length_m)[zone.nodes]
+    deflection = deflection_from_patch_length(grid.radius_m, patch_length_m)
+    springs = weights * zone.stiffness_n_per_m
+    k_v = linear_vertical_stiffness(zone, compliance, springs)
+    # bilateral springs on the patch, rim lowered by the chord deflection: f = k (-g - G f)
+    forces = np.zeros(zone.size)
+    on = springs > 0
+    if on.any():
+        system = np.diag(1.0 / springs[on]) + compliance[np.ix_(on, on)]
+        forces[on] = np.linalg.solve(system, -zone.unloaded_gap_m(deflection)[on])
+    return ContactPatch(zone=zone, weights=weights, deflection_m=deflection,
+                        load_n=float(zone.cos @ forces), length_m=float(patch_length_m),
+                        vertical_stiffness_n_per_m=k_v,
+                        road=road_windows(zone, deflection, speed_m_s), forces_n=forces,
+                        centre_compression_m=float(compliance[zone.centre] @ forces))

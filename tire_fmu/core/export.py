@@ -21,10 +21,11 @@ import numpy as np
 
 from .io_model import OUTPUT_UNITS
 from .reduction import ErrorReport, ReducedModel, ReductionSettings
-from .simulation import OUTPUT_NAMES
+from .contact import RoadWindows
+from .io_model import OUTPUTS as OUTPUT_NAMES
 
-FORMAT = "tire_fmu.reduced-model/1"
-ARRAYS = ("eigenvalues", "b", "c", "d", "e", "input_delays_s")
+FORMAT = "tire_fmu.reduced-model/2"
+ARRAYS = ("eigenvalues", "b", "c", "d", "e", "road_window_early_s", "road_window_late_s")
 
 
 class ModelFileError(ValueError):
@@ -39,9 +40,9 @@ def _checksum(array: np.ndarray) -> str:
 
 
 def input_names(reduced: ReducedModel) -> list[str]:
-    """rim_z, road_z_0, road_z_1, ...: road group k sees the road input_delays_s[k+1] late,
-    then the same names with _vz for the velocities."""
-    names = ["rim_z"] + [f"road_z_{k}" for k in range(reduced.input_delays_s.size - 1)]
+    """rim_z, road_z_0, road_z_1, ...: road group k sees the road at the zone front averaged
+    over [road_window_late_s[k], road_window_early_s[k]] ago, then the same names with _vz."""
+    names = ["rim_z"] + [f"road_z_{k}" for k in range(reduced.road_windows.early_s.size)]
     return names + [name.replace("_z", "_vz", 1) for name in names]
 
 
@@ -49,12 +50,15 @@ def metadata(reduced: ReducedModel) -> dict:
     return {
         "format": FORMAT,
         "description": "Reduced in-plane ring tire (tire_fmu): q' = diag(eigenvalues) q + b r, "
-        "y = Re(c q) + d r + e r', r = [rim_z, road_z_k = road height at the leading edge "
-        "delayed by input_delays_s[k+1]] in m; outputs are deviations from static_outputs",
+        "y = Re(c q) + d r + e r', r = [rim_z, road_z_k = road height at the front of the "
+        "contact zone averaged over the window [t - road_window_late_s[k], t - "
+        "road_window_early_s[k]]] in m; outputs are deviations from static_outputs",
         "outputs": list(reduced.output_names),
         "output_units": [OUTPUT_UNITS[name] for name in reduced.output_names],
         "inputs": input_names(reduced),
-        "input_delays_s": reduced.input_delays_s.tolist(),
+        "road_window_early_s": reduced.road_windows.early_s.tolist(),
+        "road_window_late_s": reduced.road_windows.late_s.tolist(),
+        "road_front_m": reduced.road_windows.front_m,
         "static_outputs": reduced.static_outputs,
         "settings": asdict(reduced.settings),
         "report": reduced.report.to_dict() if reduced.report else None,
@@ -64,7 +68,9 @@ def metadata(reduced: ReducedModel) -> dict:
 
 def save_npz(reduced: ReducedModel, path) -> Path:
     path = Path(path)
-    arrays = {name: np.asarray(getattr(reduced, name)) for name in ARRAYS}
+    arrays = {name: np.asarray(getattr(reduced, name)) for name in ARRAYS[:5]}
+    arrays["road_window_early_s"] = np.asarray(reduced.road_windows.early_s)
+    arrays["road_window_late_s"] = np.asarray(reduced.road_windows.late_s)
     meta = metadata(reduced)
     meta["checksums"] = {name: _checksum(array) for name, array in arrays.items()}
     text = json.dumps(meta, allow_nan=True, sort_keys=True)
@@ -108,7 +114,8 @@ def load_npz(path) -> ReducedModel:
         c=contents["c"],
         d=contents["d"],
         e=contents["e"],
-        input_delays_s=contents["input_delays_s"],
+        road_windows=RoadWindows(contents["road_window_early_s"],
+                                 contents["road_window_late_s"], float(meta["road_front_m"])),
         static_outputs={k: float(v) for k, v in meta["static_outputs"].items()},
         settings=ReductionSettings(**settings_values),
         metadata=meta["model"],
@@ -142,7 +149,8 @@ def save_mat(reduced: ReducedModel, path) -> Path:
             "input_names": np.array(names_in, dtype=object),
             "output_names": np.array(list(OUTPUT_NAMES), dtype=object),
             "static_outputs": np.array([reduced.static_outputs[n] for n in OUTPUT_NAMES]),
-            "input_delays_s": reduced.input_delays_s,
+            "road_window_early_s": reduced.road_windows.early_s,
+            "road_window_late_s": reduced.road_windows.late_s,
             "metadata_json": json.dumps(meta, allow_nan=True),
         },
         do_compression=True,

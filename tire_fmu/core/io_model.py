@@ -1,15 +1,17 @@
 """The tire at an operating point as a linear input/output system.
 
 Inputs are deviations from static equilibrium: rim vertical displacement and velocity, road
-height and velocity. The road enters per patch node, each node seeing the road height at the
-leading edge delayed by its distance from it over V (all at once at V = 0, a shaker plate), so
-the internal input vector is r = [z_rim, z_road(t - τ_1), ..., z_road(t - τ_p)].
+height and velocity. The road enters per contact node, each node seeing the road under its own
+arc, i.e. the height at the front of the contact zone averaged over the window of time in
+which that stretch of road passed the front (all at once at V = 0, a shaker plate; see
+:mod:`.contact`), so the internal input vector is r = [z_rim, z_1, ..., z_p].
 
-With rim-relative internal forces and road-relative contact forces the model is
+With rim-relative internal forces and the linearised contact gap
+p_j = w_j + (z_j - z_rim)/cos θ_j the model is
 
     M ü + D u̇ + K u = B_z r + B_v ṙ,
 
-with B_z = [K_s T, K_c T_j], B_v = [D_s T, C_c T_j]. The velocity forcing is removed from the
+with B_z = [K_s T - K_c (cos - sec), -K_c sec_j], B_v likewise with D_s and C_c. The velocity forcing is removed from the
 state equation by the momentum-like state x = [u, M u̇ - B_v r]:
 
     ẋ₁ = M⁻¹ x₂ + M⁻¹ B_v r
@@ -20,7 +22,7 @@ which is exact and leaves the input velocity only in a direct feedthrough of the
 
     y = C x + D_r r + E ṙ.
 
-Outputs (dynamic parts; static values are added by :mod:`tire_fmu.core.simulation`):
+Outputs (dynamic parts; the static values are the patch's, ContactPatch.static_outputs):
 rim_Fz and rim_Fx, the force of the tire on the rim; contact_Fz, the road's force on the tire
 (positive pushing up); deflection, the radial compression of the tread at the patch centre
 relative to the rim.
@@ -35,10 +37,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .contact import RoadWindows
 from .model import TireModel
 
 OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
-OUTPUT_UNITS = {"rim_Fz": "N", "rim_Fx": "N", "contact_Fz": "N", "deflection": "m"}
+OUTPUT_UNITS = {"rim_Fz": "N", "rim_Fx": "N", "contact_Fz": "N", "deflection": "m",
+                "contact_length": "m"}
 PHYSICAL_INPUTS = ("rim", "road")
 
 
@@ -52,7 +56,7 @@ class InputOutputModel:
     c: np.ndarray  # (n_outputs, n_states)
     d: np.ndarray  # (n_outputs, n_inputs)
     e: np.ndarray  # (n_outputs, n_inputs), on input velocities
-    input_delays_s: np.ndarray  # per internal input: 0 for the rim, τ for each road input
+    road_windows: RoadWindows  # per road input: the window of road it averages
     # second-order pieces, for frequency responses and static solves
     b_disp: np.ndarray
     b_vel: np.ndarray
@@ -72,11 +76,13 @@ class InputOutputModel:
 
     @cached_property
     def input_names(self) -> tuple[str, ...]:
-        return ("rim_z",) + tuple(f"road_z(t - {tau:.6g} s)" for tau in self.input_delays_s[1:])
+        w = self.road_windows
+        return ("rim_z",) + tuple(f"road_z(t - [{a:.6g}, {b:.6g}] s)"
+                                  for a, b in zip(w.early_s, w.late_s))
 
     def physical_input(self, name: str, omega) -> np.ndarray:
         """Internal inputs r(ω) (n_inputs, n_freqs) for a unit harmonic of a physical input."""
-        return physical_input(name, self.input_delays_s, omega)
+        return physical_input(name, self.road_windows, omega)
 
     def static_gain(self) -> np.ndarray:
         """DC gain from r to y (E ṙ vanishes at DC): y = C x_static + D r."""
@@ -98,17 +104,15 @@ class InputOutputModel:
         return out
 
 
-def physical_input(name: str, delays_s: np.ndarray, omega) -> np.ndarray:
-    """Internal inputs r(ω) for a unit harmonic rim displacement or road height.
-
-    The road, measured at the leading edge, reaches patch node j after ``delays_s[j]``.
-    """
+def physical_input(name: str, windows: RoadWindows, omega) -> np.ndarray:
+    """Internal inputs r(ω) for a unit harmonic rim displacement or road height (measured at
+    the front of the contact zone)."""
     omega = np.atleast_1d(np.asarray(omega, dtype=float))
-    r = np.zeros((len(delays_s), omega.size), dtype=complex)
+    r = np.zeros((1 + windows.early_s.size, omega.size), dtype=complex)
     if name == "rim":
         r[0] = 1.0
     elif name == "road":
-        r[1:] = np.exp(-1j * np.outer(delays_s[1:], omega))
+        r[1:] = windows.frequency_response(omega)
     else:
         raise ValueError(f"input = {name!r}: must be one of {PHYSICAL_INPUTS}")
     return r
@@ -119,25 +123,33 @@ def build_io_model(model: TireModel) -> InputOutputModel:
     n = model.n_dof
     t, s = model.translation, model.horizontal
     k_s, d_s = model.structure.stiffness, model.structure.damping
-    k_c, c_c = model.contact_stiffness, model.contact_damping
-    nodes = model.patch.node_indices  # tread DOFs in contact
-    node_delays = model.patch.road_delays_s[nodes]
-    # Nodes that see the road at the same time share one input (at rest: the whole patch,
-    # a shaker plate), which keeps the input vector, and the cost of a step, small.
-    delays, group = np.unique(np.round(node_delays, 15), return_inverse=True)
-    grouping = sp.csr_matrix((np.ones(len(nodes)), (np.arange(len(nodes)), group)),
-                             shape=(len(nodes), len(delays)))
-    delays = np.r_[0.0, delays]
+    patch = model.patch
+    positions = patch.contact_positions  # zone positions of the nodes with a spring
+    nodes = patch.zone.nodes[positions]  # their tread DOFs
+    k_node = patch.node_stiffness_n_per_m[positions]
+    c_node = patch.node_damping_n_s_per_m[positions]
+    cos = patch.zone.cos[positions]
+    sec = 1.0 / cos
+    early, late = patch.road.early_s[positions], patch.road.late_s[positions]
+    # Nodes that see the same stretch of road at the same time share one input (at rest: the
+    # whole footprint, a shaker plate), which keeps the input vector, and a step, small.
+    keys = np.round(np.column_stack([early, late]), 15)
+    unique, group = np.unique(keys, axis=0, return_inverse=True)
+    group = np.asarray(group).reshape(-1)
+    windows = RoadWindows(unique[:, 0].copy(), unique[:, 1].copy(), patch.road.front_m)
+    n_road = unique.shape[0]
 
-    def road_columns(matrix):
-        # contact force per unit road rise at node j is matrix[:, j]·T_j; summed per group
-        if not len(nodes):
-            return np.zeros((n, 0))
-        cols = matrix[:, nodes].toarray() * t[nodes][None, :]
-        return np.asarray(cols @ grouping)
+    def on_nodes(per_node: np.ndarray, per_input: bool) -> np.ndarray:
+        """(n, inputs) with per-node values on the nodes' tread DOFs, summed per group."""
+        out = np.zeros((n, n_road if per_input else 1))
+        np.add.at(out, (nodes, group if per_input else np.zeros_like(group)), per_node)
+        return out
 
-    b_disp = np.column_stack([k_s @ t, road_columns(k_c)])
-    b_vel = np.column_stack([d_s @ t, road_columns(c_c)])
+    # contact force on DOF j: -(k p + c ṗ), p = u_j + (cos - sec) z_rim + sec z_j
+    b_disp = np.column_stack([k_s @ t - on_nodes(k_node * (cos - sec), False)[:, 0],
+                              -on_nodes(k_node * sec, True)])
+    b_vel = np.column_stack([d_s @ t - on_nodes(c_node * (cos - sec), False)[:, 0],
+                             -on_nodes(c_node * sec, True)])
     n_in = b_disp.shape[1]
 
     # Outputs. Internal force on the rim: T/S·[D_s(u̇ - T ż_rim) + K_s(u - T z_rim)].
@@ -150,11 +162,13 @@ def build_io_model(model: TireModel) -> InputOutputModel:
         out_vel[row] = d_s.T @ pattern
         d_disp[row, 0] = -pattern @ (k_s @ t)
         e_vel[row, 0] = -pattern @ (d_s @ t)
-    # Road on tire, vertical: -Tᵀ[C_c(u̇ - T ż_road) + K_c(u - T z_road)], per road node.
-    out_disp[2] = -(k_c.T @ t)
-    out_vel[2] = -(c_c.T @ t)
-    d_disp[2, 1:] = road_columns(k_c).T @ t
-    e_vel[2, 1:] = road_columns(c_c).T @ t
+    # Road on tire, vertical: Σ cos_j (k p_j + c ṗ_j) over the contact nodes.
+    out_disp[2, nodes] = cos * k_node
+    out_vel[2, nodes] = cos * c_node
+    d_disp[2, 0] = np.sum(cos * k_node * (cos - sec))
+    e_vel[2, 0] = np.sum(cos * c_node * (cos - sec))
+    np.add.at(d_disp[2], 1 + group, cos * k_node * sec)
+    np.add.at(e_vel[2], 1 + group, cos * c_node * sec)
     # Compression of the tread at the patch centre relative to the rim: -(u_r0 - T_0 z_rim).
     out_disp[3, 0] = -1.0
     d_disp[3, 0] = t[0]
@@ -176,7 +190,7 @@ def build_io_model(model: TireModel) -> InputOutputModel:
         c=c,
         d=d,
         e=e_vel,
-        input_delays_s=delays,
+        road_windows=windows,
         b_disp=b_disp,
         b_vel=b_vel,
         out_disp=out_disp,

@@ -4,39 +4,47 @@ Degrees of freedom are the radial displacements of the N tread nodes followed by
 nodes, absolute (ground frame). Per metre of circumference the model is (paper eqs. 10-11,
 rolling terms from :mod:`tire_fmu.core.rotation`)
 
-    ρA ü_r + EI/R⁴ ∂⁴w_r - P*/R² ∂²w_r + k_r1 (w_r - w_s) + k_cw χ (u_r - T z_road) = 0
+    ρA ü_r + EI/R⁴ ∂⁴w_r - P*/R² ∂²w_r + k_r1 (w_r - w_s) = -f
     m_s ü_s + k_r1 (w_s - w_r) + k_r2 w_s - G/R² ∂²w_s = 0,     w = u - T z_rim,
 
-with P* = p₀bR + ρA R²Ω², χ the patch indicator and T(θ) = -cos θ the radial pattern of a
-rigid upward translation. Internal forces act on the rim-relative displacement w; inertia stays
-absolute; the contact spring acts between the tread and the road. A rigid translation of rim
-and road together (u = T z, z_rim = z_road = z) therefore leaves every force unchanged: a
-radial-only ring is not stress-free under rigid translation, and coupling the rim to absolute
-displacements would add a spurious ground spring of about 0.5 MN/m.
+with P* = p₀bR + ρA R²Ω², T(θ) = -cos θ the radial pattern of a rigid upward translation and
+f the road's push on the tread (:mod:`.contact`). Internal forces act on the rim-relative
+displacement w; inertia stays absolute. A rigid translation of rim and road together
+(u = T z, z_rim = z_road = z) leaves every force unchanged: a radial-only ring is not
+stress-free under rigid translation, and coupling the rim to absolute displacements would add
+a spurious ground spring of about 0.5 MN/m.
+
+The model here is *linear*: the contact is linearised about a static state
+(:class:`~.contact.ContactPatch`): by default the footprint the model computes for the load,
+with k_j on each pushing node acting on the linearised gap
+p_j = w_j + (z_road,j - z_rim)/cos θ_j (+ const), or the paper's prescribed patch. Time
+stepping with the unilateral law itself is :mod:`.contact_dynamics`.
 
 Node quantities are line quantities times R·δθ, so matrices are in kg, N·s/m and N/m.
 Damping: material C = αM + βK₀ (K₀ the structure at rest, contact excluded) acting on the
-material rate of w; the contact spring carries β·k_cw acting on the ground-frame rate.
+material rate of w; the contact damper c_j = β·k_j acts on the ground-frame rate of p_j.
 """
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, replace
 from functools import cached_property
 
 import numpy as np
-import scipy.optimize as so
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .contact import (
     ContactPatch,
-    deflection_from_patch_length,
-    patch_weights,
-    road_delays_s,
+    FootprintError,
+    computed_patch,
+    contact_zone,
+    prescribed_patch,
+    zone_problems,
 )
 from .discretisation import Grid, RingOperators
+from .free_ring import ring_static_gain, zone_compliance
 from .parameters import OperatingPoint, ParameterError, TireParameters
 from .rotation import RollingTerms, rolling_terms
 
@@ -95,13 +103,6 @@ def structural_matrices(
     )
 
 
-def contact_stiffness(tire: TireParameters, grid: Grid, patch_length_m: float) -> sp.csr_matrix:
-    """k_cw·R·δθ times each tread node's in-patch fraction, on the tread DOFs."""
-    weights = patch_weights(grid, patch_length_m)
-    diagonal = np.r_[tire.k_cw * grid.node_arc_m * weights, np.zeros(grid.n_elements)]
-    return sp.diags(diagonal, format="csr")
-
-
 def translation_pattern(grid: Grid) -> np.ndarray:
     """Radial displacement of every DOF for a unit upward translation: T = -cos θ."""
     t = -np.cos(grid.theta)
@@ -116,18 +117,6 @@ def horizontal_pattern(grid: Grid) -> np.ndarray:
     """
     s = -np.sin(grid.theta)
     return np.r_[s, s]
-
-
-def vertical_stiffness(structure_stiffness, contact, translation) -> float:
-    """Static vertical stiffness K_v = Tᵀ K_s (K_s + K_c)⁻¹ K_c T (rim force per rim travel).
-
-    Rim pushed down by z with the road fixed: (K_s + K_c) u = K_s T z_rim, and the force on
-    the rim is Tᵀ K_s (u - T z_rim); eliminating u gives the series combination above.
-    """
-    if contact.nnz == 0 or not np.any(contact.diagonal()):
-        return 0.0
-    solve = spla.splu((structure_stiffness + contact).tocsc())
-    return float(translation @ (structure_stiffness @ solve.solve(contact @ translation)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,7 +151,8 @@ class TireModel:
     def contact_damping(self) -> sp.csr_matrix:
         # The contact spring stands for tread rubber in the patch: same β, but it deforms
         # against the road, so it is damped on the ground-frame rate, not the material rate.
-        return (self.tire.beta * self.contact_stiffness).tocsr()
+        return _on_tread(self.grid, self.patch.node_indices,
+                         self.patch.node_damping_n_s_per_m[self.patch.contact_positions])
 
     @cached_property
     def stiffness(self) -> sp.csr_matrix:
@@ -196,44 +186,34 @@ class TireModel:
         }
 
 
-def _patch_state(tire, grid, structure, length_m, speed_m_s):
-    contact = contact_stiffness(tire, grid, length_m)
-    k_v = vertical_stiffness(structure.stiffness, contact, translation_pattern(grid))
-    deflection = deflection_from_patch_length(tire.R, length_m)
-    patch = ContactPatch(
-        length_m=float(length_m),
-        deflection_m=deflection,
-        load_n=k_v * deflection,
-        vertical_stiffness_n_per_m=k_v,
-        weights=patch_weights(grid, length_m),
-        road_delays_s=road_delays_s(grid, length_m, speed_m_s),
-    )
-    return contact, patch
+def _on_tread(grid: Grid, nodes: np.ndarray, values: np.ndarray) -> sp.csr_matrix:
+    """A diagonal matrix on the 2N DOFs with ``values`` on the tread DOFs ``nodes``."""
+    diagonal = np.zeros(2 * grid.n_elements)
+    diagonal[nodes] = values
+    return sp.diags(diagonal, format="csr")
 
 
-def patch_for_load(tire: TireParameters, grid: Grid, structure, load_n: float, speed_m_s: float):
-    """Patch length whose secant load K_v(L)·δ(L) equals ``load_n`` (bisection on L).
-
-    Raises ParameterError when the load exceeds what the longest credible patch carries.
-    """
-    if load_n == 0.0:
-        return _patch_state(tire, grid, structure, 0.0, speed_m_s)
-    max_length = tire.max_patch_length_m
-    _, longest = _patch_state(tire, grid, structure, max_length, speed_m_s)
-    if load_n > longest.load_n:
-        raise ParameterError(
-            [
-                f"load_n = {load_n:g} N: must be in [0, {longest.load_n:.6g}] N for this tire; "
-                f"the longest credible patch ({max_length:.3g} m, "
-                f"deflection {longest.deflection_m * 1e3:.3g} mm) carries {longest.load_n:.6g} N"
-            ]
-        )
-
-    def excess(length):
-        return _patch_state(tire, grid, structure, length, speed_m_s)[1].load_n - load_n
-
-    length = so.brentq(excess, 0.0, max_length, xtol=1e-10, rtol=1e-12)
-    return _patch_state(tire, grid, structure, length, speed_m_s)
+def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> ContactPatch:
+    """The static contact ``op`` asks for: the computed footprint for its load, or the
+    paper's prescribed patch. Raises ParameterError with the allowed range of the load."""
+    problems = zone_problems(grid, op.contact_zone_length_m)
+    if problems:
+        raise ParameterError(problems)
+    spin = op.speed_m_s / tire.R
+    zone_length = op.contact_zone_length_m
+    if op.patch_length_m is not None:
+        # the patch must lie inside the zone: widen it if the patch asks for more
+        zone_length = max(zone_length, 2 * tire.R * math.tan(
+            0.5 * op.patch_length_m / tire.R + grid.dtheta))
+    zone = contact_zone(grid, tire.k_cw, tire.beta, zone_length)
+    compliance = zone_compliance(ring_static_gain(tire, grid, spin, zone.nodes))
+    if op.patch_length_m is not None:
+        return prescribed_patch(zone, compliance, float(op.patch_length_m), op.speed_m_s)
+    try:
+        return computed_patch(zone, compliance, float(op.requested_load_n), op.speed_m_s,
+                              tire.max_patch_length_m)
+    except FootprintError as error:
+        raise ParameterError([str(error)]) from error
 
 
 def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = None) -> TireModel:
@@ -267,10 +247,9 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
             stacklevel=2,
         )
     structure = structural_matrices(tire, grid, speed / tire.R)
-    if op.patch_length_m is not None:
-        contact, patch = _patch_state(tire, grid, structure, float(op.patch_length_m), speed)
-    else:
-        contact, patch = patch_for_load(tire, grid, structure, float(op.requested_load_n), speed)
+    patch = contact_patch(tire, grid, op)
+    contact = _on_tread(grid, patch.node_indices,
+                        patch.node_stiffness_n_per_m[patch.contact_positions])
     return TireModel(
         tire=tire,
         grid=grid,
@@ -284,5 +263,9 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
 
 def undeformed(model: TireModel) -> TireModel:
     """The same tire, mesh and speed without contact (for mode continuation and checks)."""
-    contact, patch = _patch_state(model.tire, model.grid, model.structure, 0.0, model.speed_m_s)
-    return replace(model, contact_stiffness=contact, patch=patch)
+    patch = model.patch
+    free = replace(patch, weights=np.zeros_like(patch.weights), deflection_m=0.0, load_n=0.0,
+                   length_m=0.0, vertical_stiffness_n_per_m=0.0, footprint=None,
+                   forces_n=np.zeros_like(patch.forces_n), centre_compression_m=0.0)
+    return replace(model, contact_stiffness=_on_tread(model.grid, free.node_indices,
+                                                      np.zeros(0)), patch=free)

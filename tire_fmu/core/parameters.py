@@ -172,8 +172,10 @@ class OperatingPoint:
     """Where the tire is linearised: mesh, contact (load or patch length) and speed.
 
     Give at most one of ``load_n`` and ``patch_length_m``; with neither, the load defaults to
-    :data:`DEFAULT_LOAD_N`. ``patch_length_m = 0`` is the undeformed tire (no contact).
+    :data:`DEFAULT_LOAD_N`. A load gives the footprint the model computes; a patch length is
+    the paper's prescribed patch (``patch_length_m = 0``: the undeformed tire, no contact).
     ``allow_supercritical`` lets a speed at or above the critical (standing-wave) speed through.
+    ``contact_zone_length_m`` is the length of road under the nodes that may meet the road.
     """
 
     n_elements: int = 100
@@ -181,6 +183,7 @@ class OperatingPoint:
     patch_length_m: float | None = None
     speed_m_s: float = 0.0
     allow_supercritical: bool = False
+    contact_zone_length_m: float = 0.6  # contact.DEFAULT_ZONE_LENGTH_M
 
     def __post_init__(self) -> None:
         problems = operating_point_problems(self.as_dict())

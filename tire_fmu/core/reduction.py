@@ -41,6 +41,7 @@ from .modal_form import (
     modal_frequency_response,
     real_block_form,
 )
+from .contact import RoadWindows
 from .model import TireModel
 
 METHODS = ("modal", "balanced")
@@ -123,7 +124,7 @@ class ErrorReport:
 class ReducedModel:
     """A reduced tire model in diagonal modal form, with what it came from and how good it is.
 
-    Inputs r = [rim_z, road_z at each patch node] (road nodes delayed by ``input_delays_s``),
+    Inputs r = [rim_z, road_z under each contact node group] (see ``road_windows``),
     their velocities ṙ feed only the direct term E. Outputs: rim_Fz, rim_Fx, contact_Fz,
     deflection (deviations from the static values in ``static_outputs``).
     """
@@ -133,7 +134,7 @@ class ReducedModel:
     c: np.ndarray  # (n_outputs, k) complex, pair factor 2 included
     d: np.ndarray  # (n_outputs, n_inputs) real
     e: np.ndarray  # (n_outputs, n_inputs) real, on ṙ
-    input_delays_s: np.ndarray
+    road_windows: RoadWindows
     static_outputs: dict[str, float]
     settings: ReductionSettings
     metadata: dict  # tire data, operating point, states kept, timing
@@ -160,7 +161,7 @@ class ReducedModel:
     def physical_frequency_response(self, name: str, freqs_hz) -> np.ndarray:
         """FRF for a unit harmonic of a physical input, "rim" or "road" (leading edge)."""
         omega = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
-        return self.frequency_response(physical_input(name, self.input_delays_s, omega), omega)
+        return self.frequency_response(physical_input(name, self.road_windows, omega), omega)
 
     def real_form(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Real block-diagonal (A, B, C, D, E): [[σ, -ω], [ω, σ]] per complex mode."""
@@ -217,7 +218,7 @@ def relative_contributions(decomp: ModalForm, io: InputOutputModel,
     rows = np.empty((len(full), lam.shape[0], omega.size), dtype=complex)
     for k, ((name, row), h_full) in enumerate(full.items()):
         if name not in forced:
-            r = physical_input(name, io.input_delays_s, omega)
+            r = physical_input(name, io.road_windows, omega)
             forced[name] = ((decomp.b @ r) * dyn, (np.conj(decomp.b) @ r) * dyn_partner)
         own, partner = forced[name]
         c = decomp.c[row][:, None]
@@ -282,25 +283,7 @@ def static_correction_matrix(io: InputOutputModel, eigenvalues, b, c) -> np.ndar
 
 def static_outputs(model: TireModel) -> dict[str, float]:
     """Output values at the static equilibrium the deviations are measured from."""
-    t, s = model.translation, model.horizontal
-    z_rim = -model.patch.deflection_m  # rim below its unloaded height, road at 0
-    k_s = model.structure.stiffness
-    if model.patch.in_contact:
-        import scipy.sparse.linalg as spla
-
-        u = spla.splu(model.stiffness.tocsc()).solve(k_s @ (t * z_rim))
-    else:
-        u = t * z_rim
-    internal = k_s @ (u - t * z_rim)
-    contact = -(t @ (model.contact_stiffness @ u))
-    return {
-        "rim_Fz": float(t @ internal),
-        "rim_Fx": float(s @ internal),
-        "contact_Fz": float(contact),
-        # the model's own compression of the tread at the patch centre, as the dynamic output
-        # measures it: the chord deflection less the contact spring's small give
-        "deflection": float(-(u[0] - t[0] * z_rim)),
-    }
+    return model.patch.static_outputs()
 
 
 def reduce(model: TireModel, settings: ReductionSettings | None = None,
@@ -326,7 +309,7 @@ def reduce(model: TireModel, settings: ReductionSettings | None = None,
     }
     reduced = ReducedModel(
         eigenvalues=lam, b=b, c=c, d=np.asarray(d, dtype=float), e=io.e.copy(),
-        input_delays_s=io.input_delays_s.copy(), static_outputs=static_outputs(model),
+        road_windows=io.road_windows, static_outputs=static_outputs(model),
         settings=settings, metadata=metadata,
     )
     if report:
@@ -346,7 +329,7 @@ def _balanced(decomp, io, settings: ReductionSettings, full, model):
 
     def error(k):
         lam, b, c, d = realization.truncate(k)
-        trial = ReducedModel(lam, b, c, np.asarray(d, float), io.e, io.input_delays_s, {},
+        trial = ReducedModel(lam, b, c, np.asarray(d, float), io.e, io.road_windows, {},
                              settings, {})
         return error_report(trial, io, full).max_relative_error
 

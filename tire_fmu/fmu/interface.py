@@ -13,7 +13,8 @@ from xml.etree import ElementTree
 from ..core.io_model import OUTPUT_UNITS
 from ..core.parameters import DEFAULT_LOAD_N, TIRE_FIELDS, TireParameters
 from ..core.reduction import ReductionSettings
-from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES
+from ..core.contact import DEFAULT_ZONE_LENGTH_M
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 
 #: Communication points closer than this (absolute s, or relative to the time) are the same.
 TIME_ABS_TOLERANCE_S = 1e-12
@@ -71,9 +72,11 @@ def _signals() -> list[FmuVariable]:
         FmuVariable("rim_vz", "Real", "input", 0.0, "m/s",
                     "rim vertical velocity: the rim ramps with it over the step"),
         FmuVariable("road_z", "Real", "input", 0.0, "m",
-                    "road height under the leading edge of the patch, from static equilibrium"),
+                    "road height at the front of the contact zone (contact_zone_length/2 ahead "
+                    "of the contact centre), from static equilibrium"),
         FmuVariable("road_vz", "Real", "input", 0.0, "m/s",
-                    "road vertical velocity at the leading edge: the road ramps with it"),
+                    "road vertical velocity at the front of the contact zone: the road ramps "
+                    "with it"),
         FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["rim_Fz"],
                     "vertical force of the tire on the rim, total (static load + dynamic)"),
         FmuVariable("rim_Fx", "Real", "output", 0.0, OUTPUT_UNITS["rim_Fx"],
@@ -81,10 +84,13 @@ def _signals() -> list[FmuVariable]:
         FmuVariable("contact_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["contact_Fz"],
                     "vertical force of the road on the tire (positive pushing up), total"),
         FmuVariable("deflection", "Real", "output", 0.0, OUTPUT_UNITS["deflection"],
-                    "radial compression of the tread at the patch centre relative to the rim, "
+                    "radial compression of the tread at the contact centre relative to the rim, "
                     "total"),
+        FmuVariable("contact_length", "Real", "output", 0.0, "m",
+                    "length of the footprint on the road (between the interpolated edges of the "
+                    "nodes that push)"),
         FmuVariable("in_contact", "Boolean", "output", True, "",
-                    "false while the linear contact would pull on the road (contact_Fz <= 0)"),
+                    "true while at least one tread node pushes on the road"),
     ]
 
 
@@ -113,6 +119,13 @@ def _parameters() -> list[FmuVariable]:
         FmuVariable("allow_supercritical", "Boolean", "parameter", False, "",
                     "run at or above the critical (standing-wave) speed of the mesh",
                     "--allow-supercritical"),
+        FmuVariable("contact_zone_length", "Real", "parameter", DEFAULT_ZONE_LENGTH_M, "m",
+                    "length of road under the tread nodes that may meet it, centred on the "
+                    "contact centre (road_z is measured at its front)", "--zone-length"),
+        FmuVariable("linear_contact", "Boolean", "parameter", False, "",
+                    "two-sided springs on the static footprint instead of the unilateral "
+                    "contact (the linearised tire, for comparison with linear tools)",
+                    "--linear-contact"),
     ]
     for f in fields(TireParameters):
         spec = TIRE_FIELDS[f.name]

@@ -1,8 +1,10 @@
 """``TireModal``: the ring tire as a pythonfmu co-simulation slave.
 
 A thin adapter: parameters are FMI variables; when initialisation ends they go through the
-core's validation, ``build_model`` and ``reduce``; ``do_step`` hands the four inputs to
-:class:`~tire_fmu.core.simulation.TireSimulator`. No physics and no parameter ranges live here.
+core's validation and :func:`~tire_fmu.core.contact_dynamics.build_contact_model` (the static
+footprint for the load, the free ring's modes for the speed); ``do_step`` hands the four inputs
+to :class:`~tire_fmu.core.contact_dynamics.ContactSimulator`. No physics and no parameter
+ranges live here.
 
 How failures surface, given what pythonfmu 0.7 can express (see docs/fmu.md):
 
@@ -33,14 +35,21 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 import tire_fmu
-from tire_fmu.core.model import build_model
+from tire_fmu.core.contact_dynamics import (
+    ContactSettings,
+    ContactSimulator,
+    ContactState,
+    ContactZoneWarning,
+    StateError,
+    StepError,
+    build_contact_model,
+)
+from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.parameters import (
     TIRE_FIELDS,
     ParameterError,
     validate,
 )
-from tire_fmu.core.reduction import ReductionSettings, reduce
-from tire_fmu.core.simulation import SimulatorState, StepError, TireSimulator
 from tire_fmu.fmu.interface import (
     IN_CONTACT,
     INPUTS,
@@ -84,7 +93,7 @@ class _Snapshot:
 
     values: tuple
     phase: str
-    simulator: SimulatorState | None
+    simulator: ContactState | None
     contact_warning_armed: bool
 
 
@@ -119,12 +128,12 @@ class TireModal(Fmi2Slave):
         self._phase = _Phase.INSTANTIATED
         self._why_not_running = "the FMU is not initialised (call fmi2ExitInitializationMode)"
         self._start_time = 0.0
-        self._simulator: TireSimulator | None = None
+        self._simulator: ContactSimulator | None = None
         self._built_for: tuple | None = None  # parameter values the simulator was built with
-        self._running: TireSimulator | None = None  # the simulator while do_step may run
-        self._contact_warning_armed = True
+        self._running: ContactSimulator | None = None  # the simulator while do_step may run
+        self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
         # Inputs set since the outputs were last computed: the next read recomputes the
-        # direct feedthrough with them (see TireSimulator.outputs_with).
+        # forces at the current point with them (see ContactSimulator.outputs_with).
         self._stale = False
         for vr, v in enumerate(self._table):
             self._register(vr, v)
@@ -187,11 +196,10 @@ class TireModal(Fmi2Slave):
             return self._discard(f"doStep at t = {current_time!r} s failed: {error}")
         values[OUTPUTS] = outputs
         self._stale = False
-        contact_force = outputs[2]
-        values[IN_CONTACT] = contact_force > 0.0
-        if contact_force < 0.0:
+        values[IN_CONTACT] = outputs[2] > 0.0
+        if simulator.at_zone_edge():
             if self._contact_warning_armed:
-                self._warn_contact_lost(simulator.time, contact_force)
+                self._warn_zone_edge(simulator.time)
         elif not self._contact_warning_armed:
             self._contact_warning_armed = True
         return True
@@ -201,49 +209,55 @@ class TireModal(Fmi2Slave):
         return tuple(self._values[vr] for vr in self._parameter_vrs)
 
     def _initialise(self, parameters: tuple) -> None:
-        """Validate every parameter, build and reduce the model, prepare the simulator."""
+        """Validate every parameter, build the contact model, prepare the simulator."""
         started = time.perf_counter()
         named = {self._table[vr].name: value for vr, value in zip(self._parameter_vrs,
                                                                    parameters)}
         tire_values = {name: named[name] for name in TIRE_FIELDS}
         op_values = {"n_elements": named["n_elements"], "load_n": named["load"],
                      "speed_m_s": named["speed"],
-                     "allow_supercritical": bool(named["allow_supercritical"])}
-        problems, model = [], None
+                     "allow_supercritical": bool(named["allow_supercritical"]),
+                     "contact_zone_length_m": named["contact_zone_length"]}
+        problems, contact = [], None
         f_max, n_modes = named["f_max"], named["n_modes"]
+        truncation = None
         try:
-            settings = ReductionSettings(f_max_hz=None if f_max == 0 else float(f_max),
-                                         n_modes=None if n_modes == 0 else int(n_modes),
-                                         static_correction=bool(named["static_correction"]))
+            truncation = RingTruncation(f_max_hz=None if f_max == 0 else float(f_max),
+                                        n_modes=None if n_modes == 0 else int(n_modes),
+                                        static_correction=bool(named["static_correction"]))
         except ParameterError as error:
             problems += error.problems
+        settings = ContactSettings(law="linear" if named["linear_contact"] else "unilateral")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:  # the load and speed checks need the assembled model: build it if we can
-                model = build_model(*validate(tire_values, op_values))
+                tire, op = validate(tire_values, op_values)
+                if not problems:
+                    contact = build_contact_model(tire, op, truncation, settings)
             except ParameterError as error:
                 problems += error.problems
             if problems:
                 self._reject(problems)
                 return
-            reduced = reduce(model, settings, report=False)
         for warning in caught:
             self.log(_fmu_wording(str(warning.message)), Fmi2Status.warning)
-        simulator = TireSimulator(reduced, start_time=self._start_time)
+        simulator = ContactSimulator(contact, start_time=self._start_time)
         self._simulator, self._built_for = simulator, parameters
         self._running, self._phase = simulator, _Phase.RUNNING
         self._contact_warning_armed = True
         self._show(simulator.output_dict(), simulator.in_contact)
         # inputs set during initialisation feed through on the first read
         self._stale = any(self._values[INPUTS])
-        summary = model.summary()
+        summary = contact.summary()
         self.log(
-            f"TireModal ready in {time.perf_counter() - started:.2f} s: N = {model.n_elements}, "
-            f"{reduced.n_modes} modes ({reduced.n_states} states), patch "
-            f"{summary['patch_length_m'] * 100:.3g} cm, static load {summary['load_n']:.6g} N, "
-            f"vertical stiffness {summary['vertical_stiffness_n_per_m']:.6g} N/m, critical "
-            f"speed {model.critical_speed_m_s:.4g} m/s; core tire_fmu {tire_fmu.__version__} "
-            f"from {tire_fmu.__file__}")
+            f"TireModal ready in {time.perf_counter() - started:.2f} s: N = "
+            f"{summary['n_elements']}, {summary['ring_modes']} of {summary['ring_modes_total']} "
+            f"ring modes, {summary['zone_nodes']} contact-zone nodes, footprint "
+            f"{summary['patch_length_m'] * 100:.3g} cm at {summary['load_n']:.6g} N, deflection "
+            f"{summary['deflection_m'] * 1e3:.4g} mm, vertical stiffness "
+            f"{summary['vertical_stiffness_n_per_m']:.6g} N/m, critical speed "
+            f"{summary['critical_speed_m_s']:.4g} m/s, {settings.law} contact; core tire_fmu "
+            f"{tire_fmu.__version__} from {tire_fmu.__file__}")
 
     def _reject(self, problems: list[str]) -> None:
         for number, problem in enumerate(problems, 1):
@@ -269,12 +283,11 @@ class TireModal(Fmi2Slave):
         self.log(message, Fmi2Status.discard)
         return False
 
-    def _warn_contact_lost(self, at_time: float, contact_force: float) -> None:
+    def _warn_zone_edge(self, at_time: float) -> None:
         self._contact_warning_armed = False
-        self.log(f"t = {at_time:.9g} s: contact force {contact_force:.6g} N < 0: the linear "
-                 "contact pulls on the road, so the tire has lost contact (in_contact = false) "
-                 "and the forces are not physical until it returns; logged once until contact "
-                 "returns", Fmi2Status.warning)
+        self.log(f"t = {at_time:.9g} s: the footprint reached the end of the contact zone, so "
+                 "road forces beyond it are missing; raise contact_zone_length (logged once "
+                 "until the footprint is back inside)", Fmi2Status.warning)
 
     # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
     # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
@@ -444,7 +457,7 @@ class TireModal(Fmi2Slave):
             if "invalid" in header:
                 return _InvalidState(header["invalid"])
             return _Snapshot(tuple(header["values"]), header["phase"],
-                             SimulatorState.from_bytes(simulator) if simulator else None,
+                             ContactState.from_bytes(simulator) if simulator else None,
                              bool(header["contact_warning_armed"]))
         except Exception as error:  # an escaping exception would be fmi2Fatal
             return _InvalidState(f"the serialized bytes are not a TireModal state ({error})")

@@ -1,0 +1,645 @@
+"""Time stepping of the tire with the unilateral contact: a linear ring, a nonlinear interface.
+
+The ring is linear, so it is stepped exactly in its free modal basis (:mod:`.free_ring`, built
+at initialisation for the speed), with the rim motion and the road's push f_j on each
+contact-zone node as inputs, each ramped over the step. Only the contact is nonlinear: over a
+step t -> t + h the forces ramp from their values at t to unknown values at t + h, and those
+are solved so that the law of :mod:`.contact` holds at t + h,
+
+    f_j = max(0, k_j p_j + c_j ṗ_j) where p_j > 0, else 0,
+    p(t + h) = a + W_p Δf,  ṗ(t + h) = a' + W_r Δf,
+
+where a, a' are the end-of-step penetrations and rates with the forces held at their deviation
+from the static footprint (Δf = f - f_static = 0 at t + h) and W_p, W_r the step's own
+interface flexibility (exact, from the modal step coefficients, cached per h). The solve is a
+primal-dual active set iteration on the few zone nodes, warm-started from the last step's set;
+no node ever pulls. An explicit contact at this stiffness would be unstable at h = 1e-4 s.
+
+The ramp makes the interface second order; like any such scheme it is stable only while
+ω_c·h stays small for the contact frequency ω_c = sqrt(k_cw/ρA) (about 5.5e3 rad/s with the
+paper's data), so a communication step longer than ``max_substep_s`` is divided into equal
+substeps, with the inputs ramped through them.
+
+At the start of each communication step the forces are re-evaluated from the ring's state and
+the inputs the host gave for that point (an algebraic evaluation: with every mode kept the
+zone displacements do not depend on the forces at an instant), so outputs read after new
+inputs, and the step that follows, use them.
+
+The model can also run ``law="linear"``: two-sided springs on the static footprint's nodes,
+f = f_static + k Δp + c Δṗ, which is exactly the linearised loaded model (a reference for the
+unilateral contact at small amplitude, and what a linear frequency-domain tool assumes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contact import ContactPatch, RoadWindows, _edges, contact_force
+from .free_ring import FreeRingModel, RingTruncation, free_ring_model
+from .model import TireModel, build_model
+from .parameters import OperatingPoint, TireParameters
+from .road import SAME_POINT_EPS, RoadReader
+from .stepping import phi_functions
+
+LAWS = ("unilateral", "linear")
+OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
+INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
+#: Longest internal step (s); shorter still if the contact frequency asks for it.
+MAX_SUBSTEP_S = 1e-4
+_STATE_FORMAT = "tire_fmu.contact-state/1"
+_KERNEL_CACHE_SIZE = 32
+_SOLVE_CACHE_SIZE = 256
+
+
+class StepError(ValueError):
+    """A step the simulator refuses (bad h, non-finite input); nothing was changed."""
+
+
+class ContactZoneWarning(UserWarning):
+    """The footprint reached the end of the contact zone: forces beyond it are missing."""
+
+
+@dataclass(frozen=True)
+class ContactSettings:
+    law: str = "unilateral"
+    max_substep_s: float = MAX_SUBSTEP_S
+
+    def __post_init__(self) -> None:
+        problems = []
+        if self.law not in LAWS:
+            problems.append(f"law = {self.law!r}: must be one of {LAWS}")
+        if not (isinstance(self.max_substep_s, (int, float)) and 0 < self.max_substep_s <= 1.0):
+            problems.append(f"max_substep_s = {self.max_substep_s!r} s: must be in (0, 1] s")
+        if problems:
+            from .parameters import ParameterError
+
+            raise ParameterError(problems)
+
+
+@dataclass(frozen=True, eq=False)
+class ContactModel:
+    """Everything a contact simulation needs, built once for an operating point."""
+
+    model: TireModel  # the linearised loaded model (its patch is the static footprint)
+    ring: FreeRingModel
+    settings: ContactSettings
+    substep_s: float  # the longest internal step used
+
+    @property
+    def patch(self) -> ContactPatch:
+        return self.model.patch
+
+    @property
+    def windows(self) -> RoadWindows:
+        return self.patch.road
+
+    @property
+    def static_outputs(self) -> dict[str, float]:
+        return {**self.patch.static_outputs(), "contact_length": self.patch.length_m}
+
+    def summary(self) -> dict:
+        return {**self.model.summary(), "law": self.settings.law,
+                "ring_modes": self.ring.n_modes, "ring_states": self.ring.n_states,
+                "ring_modes_total": self.ring.total_modes, "zone_nodes": self.ring.n_zone,
+                "substep_s": self.substep_s}
+
+
+def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint | None = None,
+                        truncation: RingTruncation | None = None,
+                        settings: ContactSettings | None = None) -> ContactModel:
+    """The static footprint for the load, the free ring for the speed, the interface."""
+    tire = tire or TireParameters()
+    op = op or OperatingPoint()
+    settings = settings or ContactSettings()
+    model = build_model(tire, op)
+    ring = free_ring_model(tire, model.grid, model.spin_rad_s, model.patch.zone.nodes,
+                           truncation)
+    contact_rad_s = math.sqrt(tire.k_cw / tire.rhoA)
+    substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
+    return ContactModel(model=model, ring=ring, settings=settings, substep_s=substep)
+
+
+@dataclass(frozen=True, eq=False)
+class _Interface:
+    """The law's linear part on one problem: [σ; p; ṗ] = base + M f for the total forces f,
+    with σ = k p + c ṗ, and the inverses (I - S_AA)⁻¹ of the active sets met so far."""
+
+    m: np.ndarray  # (3Z, Z), Fortran order: [S; W_p; W_r]
+    solves: dict = field(default_factory=dict)
+
+    @property
+    def s(self) -> np.ndarray:
+        return self.m[: self.m.shape[1]]
+
+
+@dataclass(frozen=True, eq=False)
+class _Step:
+    """A communication step of length h: ``n_sub`` equal substeps of ``last``."""
+
+    h: float
+    n_sub: int
+    last: _Kernel
+
+
+@dataclass(frozen=True, eq=False)
+class _Kernel:
+    """One internal step of length h on the simulator's buffer (see ContactSimulator).
+
+    ``base`` @ buffer gives, at t + h with the end forces at their static values, the rows
+    [σ0, p, ṗ] of the interface (Z each) and the ring outputs rim_Fz, rim_Fx, deflection;
+    ``interface.m`` adds the end forces. ``gain`` @ buffer[inputs] advances q after ``decay``.
+    """
+
+    h: float
+    decay: np.ndarray  # (K,) complex
+    base: np.ndarray  # (3Z + 3, buffer), Fortran order
+    out_f: np.ndarray  # (3, Z): ring outputs per unit Δf at t + h
+    gain: np.ndarray  # (2K, 2 + 2Z): on [z, ż, Δf(t), Δf(t + h)]
+    interface: _Interface
+
+
+def _pairs(matrix: np.ndarray) -> np.ndarray:
+    """Re(M q) as a real matrix on q stored as (re, im) pairs."""
+    out = np.empty((matrix.shape[0], 2 * matrix.shape[1]))
+    out[:, 0::2], out[:, 1::2] = matrix.real, -matrix.imag
+    return out
+
+
+def _gain_pairs(gain: np.ndarray) -> np.ndarray:
+    """A complex (K, m) gain as (2K, m) real rows, re and im interleaved as q is stored."""
+    out = np.empty((2 * gain.shape[0], gain.shape[1]), order="F")
+    out[0::2], out[1::2] = gain.real, gain.imag
+    return out
+
+
+class ContactSimulator:
+    """Steps a :class:`ContactModel` from communication point to communication point.
+
+    Outputs are totals: rim_Fz, rim_Fx (tire on rim), contact_Fz (road on tire, never
+    negative with the unilateral law), deflection (tread compression at the contact centre
+    relative to the rim) and contact_length (footprint length on the road, m).
+
+    The state lives in one real buffer [q as (re, im) pairs, z, ż, Δf(t), Δf(t + h), road
+    heights, road slopes, 1] that a step reads with one matrix-vector product. Besides q it
+    keeps what the contact saw at the current time (penetrations, rates, the inputs the last
+    step ramped to), so the forces for new inputs follow by the law alone (module doc).
+    """
+
+    def __init__(self, contact: ContactModel, start_time: float = 0.0):
+        self.contact = contact
+        ring, patch = contact.ring, contact.patch
+        self.ring = ring
+        self.zone = patch.zone
+        self.n_zone = z = ring.n_zone
+        self.k = patch.zone.stiffness_n_per_m
+        self.c = patch.zone.damping_n_s_per_m
+        self.cos = patch.zone.cos
+        self.sec = 1.0 / self.cos
+        self.f_static = patch.forces_n.copy()
+        self.pen_static = (patch.footprint.penetration_m.copy() if patch.footprint is not None
+                           else self.f_static / self.k)
+        self.static_active = self.f_static > 0
+        self.linear = contact.settings.law == "linear"
+        self.x_road = self.zone.road_positions_m(patch.deflection_m)
+        statics = contact.static_outputs
+        self.static_ring = np.array([statics["rim_Fz"], statics["rim_Fx"],
+                                     statics["deflection"]])
+        self._w, self._rate = slice(3, 3 + z), slice(3 + z, 3 + 2 * z)
+        self.road = RoadReader(contact.windows)
+        d, e = ring.d, ring.e
+        # how the rim's own motion moves the penetrations and the ring outputs at an instant
+        self._pen_rim = d[self._w, 0] - self.sec
+        self._rate_rim = e[self._rate, 0] - self.sec
+        self._out_rim, self._out_rim_rate = d[:3, 0].copy(), e[:3, 0].copy()
+        d_f = d[:, 1:]
+        self._truncated = bool(np.any(d_f) or np.any(e[:, 1:]))
+        self._instant = None
+        if self._truncated:
+            m = np.vstack([self.k[:, None] * d_f[self._w] + self.c[:, None] * d_f[self._rate],
+                           d_f[self._w], d_f[self._rate]])
+            self._instant = _Interface(np.asfortranarray(m))
+            self._out_f_instant = d_f[:3].copy()
+        k2 = 2 * ring.n_modes
+        self._q_slice = slice(0, k2)
+        self._in_slice = slice(k2, k2 + 2 + 2 * z)  # z, ż, Δf(t), Δf(t+h)
+        self._df0 = slice(k2 + 2, k2 + 2 + z)
+        self._df1 = slice(k2 + 2 + z, k2 + 2 + 2 * z)
+        self._heights = slice(k2 + 2 + 2 * z, k2 + 2 + 3 * z)
+        self._slopes = slice(k2 + 2 + 3 * z, k2 + 2 + 4 * z)
+        self._buffer = np.zeros(k2 + 3 + 4 * z)
+        self._buffer[-1] = 1.0
+        self._q_pairs = self._buffer[self._q_slice]
+        self._q = self._q_pairs.view(complex)
+        self._kernels: dict[float, _Step] = {}
+        self._road_h = np.zeros(z)
+        self._road_v = np.zeros(z)
+        self.solver_fallbacks = 0
+        self.reset(start_time)
+
+    # -- state ---------------------------------------------------------------------------
+    def reset(self, start_time: float = 0.0) -> None:
+        self.time = float(start_time)
+        self._buffer[:-1] = 0.0
+        z = self.n_zone
+        self.df = np.zeros(z)  # force deviation from static at `time`
+        self.active = self.static_active.copy()
+        # what the contact saw at `time`, and the inputs it saw it with
+        self.penetration = self.pen_static.copy()
+        self.rate = np.zeros(z)
+        self._seen = (0.0, 0.0, np.zeros(z), np.zeros(z))  # z, ż, heights, slopes
+        self._ring_out = np.zeros(3)  # deviation of rim_Fz, rim_Fx, deflection at `time`
+        self._last: _Kernel | None = None  # the last substep, whose end _start may re-solve
+        self._last_step_s = math.nan
+        self.road.reset()
+        self._values = self._outputs()
+
+    @property
+    def q(self) -> np.ndarray:
+        return self._q.copy()
+
+    @property
+    def forces(self) -> np.ndarray:
+        """The road's push on each zone node at ``time`` (N)."""
+        return self.f_static + self.df
+
+    @property
+    def in_contact(self) -> bool:
+        return bool(np.any(self.forces > 0.0))
+
+    @property
+    def outputs(self) -> np.ndarray:
+        return np.array(self._values)
+
+    def output_dict(self) -> dict[str, float]:
+        return dict(zip(OUTPUT_NAMES, self._values))
+
+    def at_zone_edge(self) -> bool:
+        """Whether a zone end node pushes: the footprint may reach beyond the zone."""
+        active = self.df > -self.f_static
+        return bool(active[0] or active[-1])
+
+    # -- stepping ----------------------------------------------------------------------------
+    def step(self, h: float, rim_z: float, rim_vz: float, road_z: float, road_vz: float
+             ) -> np.ndarray:
+        return np.array(self.step_values(h, rim_z, rim_vz, road_z, road_vz))
+
+    def step_values(self, h: float, rim_z: float, rim_vz: float, road_z: float,
+                    road_vz: float) -> tuple[float, ...]:
+        """Advance from ``time`` to ``time + h`` with the inputs given at ``time`` (ramped
+        with their rates); returns the total outputs at the new time."""
+        if not (h > 0.0 and math.isfinite(h)) or \
+                (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0:
+            self._check(h, (rim_z, rim_vz, road_z, road_vz))
+        step = self._kernels.get(h) or self._kernel(h)
+        kernel, n_sub = step.last, step.n_sub
+        heights, slopes = self._road_h, self._road_v
+        self.road.read(self.time, road_z, road_vz, h, heights, slopes)
+        self._start(rim_z, rim_vz, heights, slopes)
+        buffer = self._buffer
+        buffer[self._heights], buffer[self._slopes] = heights, slopes
+        for i in range(n_sub):
+            self._substep(kernel, rim_z + i * kernel.h * rim_vz, rim_vz)
+        self.time += h
+        self._last_step_s = h
+        self._values = self._outputs()
+        return self._values
+
+    def outputs_with(self, rim_z: float, rim_vz: float, road_z: float, road_vz: float
+                     ) -> tuple[float, ...]:
+        """Total outputs at ``time`` for inputs given at ``time``; the state keeps the
+        re-evaluated forces, which the next step starts from."""
+        self._check(1.0, (rim_z, rim_vz, road_z, road_vz))
+        heights, slopes = self._road_h, self._road_v
+        # recorded like a step's own sample: the step at this point replaces it
+        self.road.read(self.time, road_z, road_vz, self._last_step_s, heights, slopes)
+        self._start(rim_z, rim_vz, heights, slopes)
+        self._values = self._outputs()
+        return self._values
+
+    def _check(self, h: float, values: tuple) -> None:
+        if not (h > 0.0 and math.isfinite(h)):
+            raise StepError(f"step size h = {h!r} s: must be finite and > 0")
+        bad = [f"{n} = {v!r}" for n, v in zip(INPUT_NAMES, values) if not math.isfinite(v)]
+        if bad:
+            raise StepError("non-finite input: " + ", ".join(bad))
+
+    def _start(self, z: float, vz: float, heights: np.ndarray, slopes: np.ndarray) -> None:
+        """Forces at ``time`` for the inputs given at ``time``.
+
+        The last step ended with the inputs it ramped to; the host's inputs for this point
+        differ from those by O(h²) in position and O(h) in rate, and at a contact this stiff
+        (k/K_v ~ 70) that difference matters. So the last step's end is solved again with the
+        inputs given now: the penetrations move with the inputs' change (geometry at an
+        instant) and with the end forces through the step's own flexibility, and the modal
+        state takes the corrected force ramp. Without a previous step (after a reset) the
+        forces follow from the law at the instant.
+        """
+        z_seen, vz_seen, heights_seen, slopes_seen = self._seen
+        dz, dvz = z - z_seen, vz - vz_seen
+        pen = self.penetration + self._pen_rim * dz + self.sec * (heights - heights_seen)
+        rate = self.rate + self._rate_rim * dvz + self.sec * (slopes - slopes_seen)
+        self._ring_out = self._ring_out + self._out_rim * dz + self._out_rim_rate * dvz
+        last = self._last
+        if last is not None:
+            f_old = self.f_static + self.df
+            m = last.interface.m
+            nz = self.n_zone
+            base = np.concatenate([self.k * pen + self.c * rate, pen, rate]) - m @ f_old
+            f = self._solve(last.interface, base)
+            change = f - f_old
+            self._q_pairs += last.gain[:, 2 + nz:] @ change
+            self._ring_out = self._ring_out + last.out_f @ change
+            combined = base + m @ f
+            pen, rate = combined[nz:2 * nz], combined[2 * nz:]
+        elif self.linear:
+            f = np.where(self.static_active, self.f_static + self.k * (pen - self.pen_static)
+                         + self.c * rate, 0.0)
+        elif self._instant is not None:  # a truncated ring couples the forces at an instant
+            f_old = self.f_static + self.df
+            base = np.concatenate([self.k * pen + self.c * rate, pen, rate])
+            base -= self._instant.m @ f_old
+            f = self._solve(self._instant, base)
+            self._ring_out = self._ring_out + self._out_f_instant @ (f - f_old)
+            combined = base + self._instant.m @ f
+            pen, rate = combined[self.n_zone:2 * self.n_zone], combined[2 * self.n_zone:]
+        else:
+            f = contact_force(pen, rate, self.k, self.c)
+            self.active = f > 0.0
+        self.df = f - self.f_static
+        self.penetration, self.rate = pen, rate
+        self._seen = (z, vz, heights.copy(), slopes.copy())
+
+    def _substep(self, k: _Kernel, z: float, vz: float) -> None:
+        buffer = self._buffer
+        h = k.h
+        buffer[self._q_slice.stop], buffer[self._q_slice.stop + 1] = z, vz
+        buffer[self._df0] = self.df
+        buffer[self._df1] = 0.0
+        base = k.base @ buffer
+        nz = self.n_zone
+        f = self._solve(k.interface, base[:3 * nz])
+        df_end = f - self.f_static
+        combined = base[:3 * nz] + k.interface.m @ f
+        buffer[self._df1] = df_end
+        self._q *= k.decay
+        buffer[self._q_slice] += k.gain @ buffer[self._in_slice]
+        self._ring_out = base[3 * nz:] + k.out_f @ df_end
+        self.df = df_end
+        self._last = k
+        self.penetration = combined[nz:2 * nz]
+        self.rate = combined[2 * nz:]
+        heights = buffer[self._heights]
+        slopes = buffer[self._slopes]
+        heights += h * slopes  # the road ramps on into the next substep
+        self._seen = (z + h * vz, vz, heights.copy(), slopes.copy())
+
+    def _solve(self, interface: _Interface, base: np.ndarray) -> np.ndarray:
+        """Total forces with [σ; p; ṗ] = base + M f and the law (or two-sided springs on the
+        static footprint for the linear law)."""
+        nz = self.n_zone
+        sigma0 = base[:nz]
+        if self.linear:
+            f = np.zeros(nz)
+            f[self.static_active] = self._active_solve(interface, self.static_active, sigma0)
+            return f
+        active = self.active
+        m = interface.m
+        for _ in range(2 * nz + 4):
+            f = np.zeros(nz)
+            if active.any():
+                f[active] = self._active_solve(interface, active, sigma0)
+            combined = base + m @ f
+            new = (combined[nz:2 * nz] > 0.0) & (combined[:nz] > 0.0)
+            if np.array_equal(new, active):
+                self.active = active
+                return np.maximum(f, 0.0)
+            active = new
+        return self._fallback(interface, base)
+
+    @staticmethod
+    def _active_solve(interface: _Interface, active: np.ndarray, sigma0: np.ndarray):
+        key = active.tobytes()
+        inverse = interface.solves.get(key)
+        if inverse is None:
+            block = interface.s[np.ix_(active, active)]
+            inverse = np.linalg.inv(np.eye(block.shape[0]) - block)
+            if len(interface.solves) >= _SOLVE_CACHE_SIZE:
+                interface.solves.pop(next(iter(interface.solves)))
+            interface.solves[key] = inverse
+        return inverse @ sigma0[active]
+
+    def _fallback(self, interface: _Interface, base: np.ndarray) -> np.ndarray:
+        """Projected Gauss-Seidel on the same law, for an active set that cycles."""
+        self.solver_fallbacks += 1
+        nz = self.n_zone
+        s, w_p = interface.m[:nz], interface.m[nz:2 * nz]
+        f = np.maximum(self.forces, 0.0)
+        for _ in range(1000):
+            previous = f.copy()
+            for j in range(nz):
+                pen_j = base[nz + j] + w_p[j] @ f
+                rest = base[j] + s[j] @ f - s[j, j] * f[j]
+                f[j] = max(0.0, rest / (1.0 - s[j, j])) if pen_j > 0.0 else 0.0
+            if np.max(np.abs(f - previous)) <= 1e-13 * max(1.0, float(np.max(np.abs(f)))):
+                break
+        self.active = f > 0.0
+        return f
+
+    def _kernel(self, h: float) -> _Step:
+        """The communication step h: its substep's coefficients, cached per h (a step within
+        rounding of a cached one is that step: hosts jitter h in the last bits)."""
+        for cached_h, step in self._kernels.items():
+            if abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
+                return step
+        n_sub = max(1, math.ceil(h / self.contact.substep_s * (1 - 1e-12)))
+        step = _Step(h, n_sub, self._make_kernel(h / n_sub))
+        if len(self._kernels) >= _KERNEL_CACHE_SIZE:
+            self._kernels.pop(next(iter(self._kernels)))
+        self._kernels[h] = step
+        return step
+
+    def _make_kernel(self, h: float) -> _Kernel:
+        ring = self.ring
+        lam = ring.eigenvalues
+        nz = self.n_zone
+        phi1, phi2 = phi_functions(lam * h)
+        decay = np.exp(lam * h)
+        b_rim, b_f = ring.b[:, :1], ring.b[:, 1:]
+        # q(t+h) = e^{λh} q + hφ1 b_rim z + h²φ2 b_rim ż + h(φ1 - φ2) b_f Δf(t) + hφ2 b_f Δf(t+h)
+        g_in = np.hstack([(h * phi1)[:, None] * b_rim, (h * h * phi2)[:, None] * b_rim,
+                          (h * (phi1 - phi2))[:, None] * b_f])
+        g_f = (h * phi2)[:, None] * b_f
+        c = ring.c
+        d_rim, e_rim = ring.d[:, 0], ring.e[:, 0]
+        d_f, e_f = ring.d[:, 1:], ring.e[:, 1:]
+        # ring outputs at t + h: Re(C q(t+h)) + D r + E ṙ, r = [z + h ż, Δf(t+h)],
+        # ṙ = [ż, (Δf(t+h) - Δf(t))/h]
+        on_in = np.real(c @ g_in) + np.column_stack([d_rim, h * d_rim + e_rim, -e_f / h])
+        on_f = np.real(c @ g_f) + d_f + e_f / h
+        on_q = _pairs(c * decay[None, :])
+        rows = 3 + 2 * nz
+        size = self._buffer.size
+        y = np.zeros((rows, size))
+        y[:, self._q_slice] = on_q
+        y[:, self._q_slice.stop:self._q_slice.stop + 2 + nz] = on_in
+        w, rate = self._w, self._rate
+        # penetrations and rates at t + h (Δf(t+h) = 0): the gap's rim, road and static parts
+        pen = y[w].copy()
+        pen[:, self._q_slice.stop] -= self.sec  # -(z + h ż)/cos
+        pen[:, self._q_slice.stop + 1] -= h * self.sec
+        pen[:, self._heights] += np.diag(self.sec)  # road at t + h: heights + h slopes
+        pen[:, self._slopes] += h * np.diag(self.sec)
+        pen[:, -1] += self.pen_static
+        pen_rate = y[rate].copy()
+        pen_rate[:, self._q_slice.stop + 1] -= self.sec
+        pen_rate[:, self._slopes] += np.diag(self.sec)
+        w_p, w_r = on_f[w], on_f[rate]
+        # rows in terms of the total end forces f: Δf(t+h) = f - f_static
+        pen[:, -1] -= w_p @ self.f_static
+        pen_rate[:, -1] -= w_r @ self.f_static
+        sigma0 = self.k[:, None] * pen + self.c[:, None] * pen_rate
+        s = self.k[:, None] * w_p + self.c[:, None] * w_r
+        base = np.vstack([sigma0, pen, pen_rate, y[:3]])
+        interface = _Interface(np.asfortranarray(np.vstack([s, w_p, w_r])))
+        return _Kernel(h=h, decay=decay, base=np.ascontiguousarray(base),
+                       out_f=on_f[:3].copy(),
+                       gain=_gain_pairs(np.hstack([g_in, g_f])), interface=interface)
+
+    # -- outputs -------------------------------------------------------------------------------
+    def _outputs(self) -> tuple[float, ...]:
+        ring = self.static_ring + self._ring_out
+        contact_fz = float(self.cos @ (self.f_static + self.df))
+        return (float(ring[0]), float(ring[1]), contact_fz, float(ring[2]),
+                self.contact_length())
+
+    def contact_length(self) -> float:
+        """Footprint length on the road (m) at ``time``: between the interpolated edges."""
+        active = (self.f_static + self.df) > 0.0
+        front, rear = _edges(self.x_road, self.penetration, active)
+        return front - rear
+
+
+# -- state ------------------------------------------------------------------------------------
+
+class StateError(ValueError):
+    """Bytes that are not a state of this simulator (format, checksum, shape, values)."""
+
+
+@dataclass(frozen=True, eq=False)
+class ContactState:
+    """Everything a :class:`ContactSimulator` needs to resume exactly (copies)."""
+
+    time: float
+    last_step_s: float  # the communication step whose end the next start re-solves (nan: none)
+    q: np.ndarray  # complex modal state
+    df: np.ndarray
+    active: np.ndarray
+    penetration: np.ndarray
+    rate: np.ndarray
+    seen: np.ndarray  # [z, ż, heights (Z), slopes (Z)] the contact last saw
+    ring_out: np.ndarray
+    history_t: np.ndarray
+    history_z: np.ndarray
+    history_v: np.ndarray
+    outputs: np.ndarray
+
+    _ARRAYS = ("q", "df", "active", "penetration", "rate", "seen", "ring_out", "history_t",
+               "history_z", "history_v", "outputs")
+
+    def to_bytes(self) -> bytes:
+        """A self-checking byte string: a JSON header (format, scalars, array layout, SHA-256
+        of everything after it) on one line, then the raw little-endian arrays."""
+        arrays = {name: np.ascontiguousarray(getattr(self, name)) for name in self._ARRAYS}
+        payload = b"".join(a.astype(a.dtype.newbyteorder("<")).tobytes()
+                           for a in arrays.values())
+        header = {"format": _STATE_FORMAT, "time": self.time, "last_step_s": self.last_step_s,
+                  "arrays": {name: [a.dtype.str.replace(">", "<"), list(a.shape)]
+                             for name, a in arrays.items()},
+                  "sha256": hashlib.sha256(payload).hexdigest()}
+        return json.dumps(header, allow_nan=True).encode() + b"\n" + payload
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> ContactState:
+        data = bytes(data)
+        head, sep, payload = data.partition(b"\n")
+        try:
+            header = json.loads(head.decode("utf-8"))
+        except (UnicodeDecodeError, ValueError) as error:
+            raise StateError(f"not a tire_fmu contact state: header unreadable ({error})")
+        if not isinstance(header, dict) or header.get("format") != _STATE_FORMAT:
+            raise StateError(f"not a tire_fmu contact state: format "
+                             f"{header.get('format') if isinstance(header, dict) else header!r}")
+        if not sep or hashlib.sha256(payload).hexdigest() != header.get("sha256"):
+            raise StateError("contact state damaged: its checksum does not match")
+        arrays, offset = {}, 0
+        try:
+            for name in cls._ARRAYS:
+                dtype, shape = header["arrays"][name]
+                dtype = np.dtype(dtype)
+                count = int(np.prod(shape, dtype=int))
+                size = count * dtype.itemsize
+                arrays[name] = np.frombuffer(payload, dtype, count, offset).reshape(shape).copy()
+                offset += size
+            time, last = float(header["time"]), float(header["last_step_s"])
+        except (KeyError, TypeError, ValueError) as error:
+            raise StateError(f"contact state damaged: {error}") from error
+        if offset != len(payload):
+            raise StateError(f"contact state damaged: {len(payload) - offset} bytes too many")
+        if not math.isfinite(time) or not (math.isnan(last) or (last > 0 and
+                                                                  math.isfinite(last))):
+            raise StateError(f"contact state has time = {time!r}, last step = {last!r}")
+        for name, array in arrays.items():
+            if array.dtype.kind in "fc" and not np.all(np.isfinite(array)):
+                raise StateError(f"contact state has non-finite values in {name}")
+        arrays["active"] = arrays["active"].astype(bool)
+        return cls(time=time, last_step_s=last, **arrays)
+
+
+def _state_methods():
+    def get_state(self: ContactSimulator) -> ContactState:
+        z, vz, heights, slopes = self._seen
+        t, zz, vv = self.road.history()
+        return ContactState(
+            time=self.time, last_step_s=self._last_step_s, q=self._q.copy(), df=self.df.copy(),
+            active=self.active.copy(), penetration=self.penetration.copy(),
+            rate=self.rate.copy(), seen=np.concatenate([[z, vz], heights, slopes]),
+            ring_out=self._ring_out.copy(), history_t=t, history_z=zz, history_v=vv,
+            outputs=np.array(self._values))
+
+    def set_state(self: ContactSimulator, state: ContactState) -> None:
+        nz = self.n_zone
+        expected = {"q": (self.ring.n_modes,), "df": (nz,), "active": (nz,),
+                    "penetration": (nz,), "rate": (nz,), "seen": (2 + 2 * nz,),
+                    "ring_out": (3,), "outputs": (len(OUTPUT_NAMES),)}
+        wrong = [f"{name} has shape {getattr(state, name).shape}, expected {shape}"
+                 for name, shape in expected.items() if getattr(state, name).shape != shape]
+        sizes = {state.history_t.shape, state.history_z.shape, state.history_v.shape}
+        if len(sizes) != 1 or len(next(iter(sizes))) != 1:
+            wrong.append("the road history arrays differ in shape")
+        if wrong:
+            raise StateError("state of another model (build both with the same parameters): "
+                             + "; ".join(wrong))
+        self.time = state.time
+        self._q[:] = state.q
+        self.df = state.df.copy()
+        self.active = state.active.copy()
+        self.penetration, self.rate = state.penetration.copy(), state.rate.copy()
+        seen = state.seen
+        self._seen = (float(seen[0]), float(seen[1]), seen[2:2 + nz].copy(),
+                      seen[2 + nz:].copy())
+        self._ring_out = state.ring_out.copy()
+        self._last_step_s = state.last_step_s
+        self._last = (None if math.isnan(state.last_step_s)
+                      else self._kernel(state.last_step_s).last)
+        self.road.set_history(state.history_t, state.history_z, state.history_v)
+        self._values = tuple(float(v) for v in state.outputs)
+
+    return get_state, set_state
+
+
+ContactSimulator.get_state, ContactSimulator.set_state = _state_methods()

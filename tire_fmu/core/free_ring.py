@@ -1,0 +1,279 @@
+"""The free rolling ring (no contact) in diagonal modal form, order by order.
+
+Without contact the ground-frame ring is circulant: every operator of :mod:`.model` (bending,
+tension, foundation springs, material damping, gyroscopic, convective, circulatory and spin
+softening terms) is a block-circulant matrix, so the discrete Fourier basis
+Φ_n = e^{inθ} ⊗ (tread, sidewall) diagonalises it exactly. Order n is a 2-DOF system
+
+    M ü_n + D_n u̇_n + K_n u_n = F_n,
+    K_n = K*_n - Ω²κ_n² M + iΩκ_n C_n,   D_n = C_n + 2iΩκ_n M   (per node, see dispersion),
+
+with F_n = Φ_nᴴ F / N the order's share of the node forces. The rim enters orders ±1 only
+(T = -cos θ); a force on one tread node excites every order. Orders n and -n are complex
+conjugates, so only n = 0..N/2 are solved, each in the momentum state of :mod:`.io_model`
+(x = [u_n, M u̇_n - B_v r]) and diagonalised as a 4x4 system: the whole eigenproblem costs
+O(N), not O(N³), and gives exactly the modes of the assembled undeformed model.
+
+Inputs r = [rim_z, f_1 .. f_Z]: the rim displacement and the road's push on each contact-zone
+node (newtons, inwards), with their rates ṙ in the direct term. Outputs (deviations):
+rim_Fz, rim_Fx (force of the tire on the rim), deflection (-w at the contact centre), then
+w_j and ẇ_j at each zone node (rim-relative radial displacement and its rate), which is what
+the contact law needs.
+
+Truncation keeps the modes with natural frequency |λ|/2π up to ``f_max_hz`` (and at most
+``n_modes``, lowest first); with ``static_correction`` the dropped modes enter quasi-
+statically, Σ -c b/λ on r and Σ -c b/λ² on ṙ, so static compliances at the zone nodes and
+the rim are exact and the zone rates are the rates of those displacements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg as sla
+
+from .discretisation import Grid
+from .discretisation import symbols as fdm_symbols
+from .dispersion import per_order_matrices
+from .modal_form import ModalForm, diagonalise
+from .parameters import TireParameters
+
+RIM_OUTPUTS = ("rim_Fz", "rim_Fx", "deflection")
+
+
+@dataclass(frozen=True)
+class RingTruncation:
+    """Which free-ring modes to keep; frequencies in Hz. None keeps everything."""
+
+    f_max_hz: float | None = None
+    n_modes: int | None = None
+    static_correction: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class FreeRingModel:
+    """The free ring in diagonal modal form q̇ = Λq + B r, y = Re(C q) + D r + E ṙ, with the
+    exact static gain and the zone's static compliance alongside."""
+
+    eigenvalues: np.ndarray  # (k,) complex
+    b: np.ndarray  # (k, 1 + Z)
+    c: np.ndarray  # (3 + 2Z, k), pair factor included
+    d: np.ndarray  # (3 + 2Z, 1 + Z)
+    e: np.ndarray  # (3 + 2Z, 1 + Z), on ṙ
+    static_gain: np.ndarray  # exact DC gain of the whole ring (3 + 2Z, 1 + Z)
+    zone_nodes: np.ndarray
+    n_elements: int
+    total_modes: int  # before truncation
+    truncation: RingTruncation
+
+    @property
+    def n_zone(self) -> int:
+        return self.zone_nodes.size
+
+    @property
+    def n_modes(self) -> int:
+        return self.eigenvalues.size
+
+    @property
+    def n_states(self) -> int:
+        return 2 * self.n_modes
+
+    @property
+    def zone_compliance(self) -> np.ndarray:
+        return zone_compliance(self.static_gain)
+
+    def rows(self, name: str) -> slice | int:
+        z = self.n_zone
+        if name in RIM_OUTPUTS:
+            return RIM_OUTPUTS.index(name)
+        return {"w": slice(3, 3 + z), "w_rate": slice(3 + z, 3 + 2 * z)}[name]
+
+    def frequency_response(self, omega) -> np.ndarray:
+        """H(iω) (outputs, inputs, freqs) of the modal form, for real signals."""
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        iw = 1j * omega[None, None, :]
+        lam = self.eigenvalues[:, None, None]
+        own = self.b[:, :, None] / (iw - lam)
+        partner = np.conj(self.b)[:, :, None] / (iw - np.conj(lam))
+        modal = 0.5 * (np.einsum("ok,kif->oif", self.c, own)
+                       + np.einsum("ok,kif->oif", np.conj(self.c), partner))
+        return modal + self.d[:, :, None] + iw * self.e[:, :, None]
+
+
+def _order_weights(n_elements: int, orders: np.ndarray) -> np.ndarray:
+    """How many signed orders each half order stands for: 2 for 0 < n < N/2 (n and -n)."""
+    return np.where((orders == 0) | (2 * orders == n_elements), 1.0, 2.0)
+
+
+def order_matrices(tire: TireParameters, grid: Grid, spin_rad_s: float, orders):
+    """Per-node ground-frame (M, D_n, K_n) for each order n: M (2,), D and K (n, 2, 2)."""
+    orders = np.asarray(orders)
+    sym = fdm_symbols(orders, grid.dtheta)
+    (k_tt, k_ss, k_ts), (c_tt, c_ss, c_ts) = per_order_matrices(tire, sym, spin_rad_s)
+    arc = grid.node_arc_m
+    mass = arc * np.array([tire.rhoA, tire.m_s])
+    kappa = (sym["d1"] / 1j).real
+
+    def block(tt, ss, ts):
+        tt, ss = np.broadcast_to(tt, orders.shape), np.broadcast_to(ss, orders.shape)
+        ts = np.broadcast_to(ts, orders.shape)
+        return arc * np.stack([np.stack([tt, ts], -1), np.stack([ts, ss], -1)], -2)
+
+    k_star, c_mat = block(k_tt, k_ss, k_ts), block(c_tt, c_ss, c_ts)
+    w = (spin_rad_s * kappa)[:, None, None]
+    m_mat = np.zeros_like(k_star)
+    m_mat[:, 0, 0], m_mat[:, 1, 1] = mass
+    stiffness = k_star - w**2 * m_mat + 1j * w * c_mat
+    damping = c_mat + 2j * w * m_mat
+    return mass, damping, stiffness
+
+
+@dataclass(frozen=True, eq=False)
+class _Orders:
+    """Everything per half order n = 0..N/2 before the eigen-decomposition."""
+
+    orders: np.ndarray
+    weight: np.ndarray  # signed orders each half order stands for
+    mass: np.ndarray  # (2,) per node
+    damping: np.ndarray  # (n, 2, 2) complex
+    stiffness: np.ndarray
+    b_z: np.ndarray  # (n, 2, inputs): forcing on u
+    b_v: np.ndarray  # (n, 2, inputs): forcing on u̇ (the rim's damper)
+    l_u: np.ndarray  # (n, outputs, 2): readout of u_n
+    l_v: np.ndarray  # (n, outputs, 2): readout of u̇_n
+    d_direct: np.ndarray  # (outputs, inputs): the rim-relative parts, on r
+    e_direct: np.ndarray  # on ṙ
+
+    @cached_property
+    def static_gain(self) -> np.ndarray:
+        """Exact DC gain: u_n = K_n⁻¹ B_z,n r, summed over the signed orders."""
+        k_inv = np.linalg.inv(self.stiffness)
+        per_order = np.einsum("noi,nij,njk->nok", self.l_u, k_inv, self.b_z)
+        return np.einsum("n,nok->ok", self.weight, per_order.real) + self.d_direct
+
+
+def _orders(tire: TireParameters, grid: Grid, spin_rad_s: float,
+            zone_nodes: np.ndarray) -> _Orders:
+    n_el = grid.n_elements
+    n_zone = zone_nodes.size
+    n_in, n_out = 1 + n_zone, 3 + 2 * n_zone
+    orders = np.arange(n_el // 2 + 1)
+    weight = _order_weights(n_el, orders)
+    mass, damping, stiffness = order_matrices(tire, grid, spin_rad_s, orders)
+
+    # Patterns: T = -cos θ (rim translation), S = -sin θ (forward component), on both blocks.
+    theta = grid.theta
+    trans, fwd = -np.cos(theta), -np.sin(theta)
+    # Σ_m p_m e^{inθ_m} (output side) and (1/N) Σ_m p_m e^{-inθ_m} (input side)
+    tau = (n_el * np.fft.ifft(trans))[orders]
+    sig = (n_el * np.fft.ifft(fwd))[orders]
+    t_in = (np.fft.fft(trans) / n_el)[orders]
+    ones = np.ones(2)
+    phase = np.exp(1j * np.outer(orders, theta[zone_nodes]))  # e^{inθ_j}, (orders, Z)
+
+    # Per order: B_z, B_v (2 x inputs); output readouts on u and on u̇ (outputs x 2).
+    b_z = np.zeros((orders.size, 2, n_in), dtype=complex)
+    b_v = np.zeros_like(b_z)
+    b_z[:, :, 0] = np.einsum("nij,j->ni", stiffness, ones) * t_in[:, None]
+    b_v[:, :, 0] = np.einsum("nij,j->ni", damping, ones) * t_in[:, None]
+    b_z[:, 0, 1:] = -np.conj(phase) / n_el  # a push f_j inwards is a force -f_j on u_j
+    l_u = np.zeros((orders.size, n_out, 2), dtype=complex)
+    l_v = np.zeros_like(l_u)
+    k_ones = np.einsum("j,nji->ni", ones, stiffness)  # 1ᵀ K_n
+    d_ones = np.einsum("j,nji->ni", ones, damping)
+    l_u[:, 0], l_v[:, 0] = tau[:, None] * k_ones, tau[:, None] * d_ones
+    l_u[:, 1], l_v[:, 1] = sig[:, None] * k_ones, sig[:, None] * d_ones
+    l_u[:, 2, 0] = -1.0  # deflection = -w at node 0
+    l_u[:, 3:3 + n_zone, 0] = phase
+    l_v[:, 3 + n_zone:, 0] = phase
+
+    # Direct terms not carried by the orders: the rim-relative parts -T z and -T ż.
+    d_direct = np.zeros((n_out, n_in))
+    e_direct = np.zeros((n_out, n_in))
+    # rim forces on the rim's own motion: -pᵀ K_s T z - pᵀ D_s T ż, through the orders
+    k_11 = np.einsum("i,nij,j->n", ones, stiffness, ones)
+    d_11 = np.einsum("i,nij,j->n", ones, damping, ones)
+    for row, pattern in ((0, tau), (1, sig)):
+        d_direct[row, 0] = -np.sum(weight * np.real(pattern * t_in * k_11))
+        e_direct[row, 0] = -np.sum(weight * np.real(pattern * t_in * d_11))
+    d_direct[2, 0] = trans[0]  # deflection = -(u_0 - T_0 z) = -u_0 + T_0 z
+    cos_zone = np.cos(theta[zone_nodes])
+    d_direct[3:3 + n_zone, 0] = cos_zone  # w_j = u_j - T_j z
+    e_direct[3 + n_zone:, 0] = cos_zone  # ẇ_j = u̇_j - T_j ż
+    return _Orders(orders, weight, mass, damping, stiffness, b_z, b_v, l_u, l_v,
+                   d_direct, e_direct)
+
+
+def ring_static_gain(tire: TireParameters, grid: Grid, spin_rad_s: float,
+                     zone_nodes) -> np.ndarray:
+    """The free ring's exact DC gain (outputs x [rim_z, zone forces]) without any modes."""
+    return _orders(tire, grid, spin_rad_s, np.asarray(zone_nodes, dtype=int)).static_gain
+
+
+def zone_compliance(static_gain: np.ndarray) -> np.ndarray:
+    """G (Z x Z, m/N) from a ring's static gain: rim-relative radial displacement of zone
+    node i per newton pushed outwards at zone node j (the contact forces push inwards,
+    so w = -G f)."""
+    n_zone = static_gain.shape[1] - 1
+    return -static_gain[3:3 + n_zone, 1:]
+
+
+def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
+                    zone_nodes: np.ndarray,
+                    truncation: RingTruncation | None = None) -> FreeRingModel:
+    """Modal form of the free rolling ring with rim and zone-force inputs (module doc)."""
+    truncation = truncation or RingTruncation()
+    n_el = grid.n_elements
+    zone_nodes = np.asarray(zone_nodes, dtype=int)
+    o = _orders(tire, grid, spin_rad_s, zone_nodes)
+    orders, weight, mass, damping, stiffness = o.orders, o.weight, o.mass, o.damping, o.stiffness
+    b_z, b_v, l_u, l_v, d_direct, e_direct = o.b_z, o.b_v, o.l_u, o.l_v, o.d_direct, o.e_direct
+    static_gain = o.static_gain
+    m_inv = 1.0 / mass
+
+    # Momentum form per order and its eigen-decomposition.
+    a_n = np.zeros((orders.size, 4, 4), dtype=complex)
+    a_n[:, 0, 2], a_n[:, 1, 3] = m_inv
+    a_n[:, 2:, :2] = -stiffness
+    a_n[:, 2:, 2:] = -damping * m_inv[None, None, :]
+    mb_v = b_v * m_inv[None, :, None]
+    b_n = np.concatenate([mb_v, b_z - np.einsum("nij,njk->nik", damping, mb_v)], axis=1)
+    c_n = np.concatenate([l_u, l_v * m_inv[None, None, :]], axis=2)
+    feedthrough = np.einsum("n,nok->ok", weight,
+                            np.einsum("noi,nik->nok", l_v * m_inv[None, None, :], b_v).real)
+    values, modal_b, modal_c = [], [], []
+    for index, n in enumerate(orders):
+        if weight[index] == 1.0:  # n = 0 or N/2: a real system, conjugate pairs inside it
+            form: ModalForm = diagonalise(a_n[index].real, b_n[index].real, c_n[index].real)
+            values.append(form.eigenvalues)
+            modal_b.append(form.b)
+            modal_c.append(form.c)
+            continue
+        lam, vectors = sla.eig(a_n[index])
+        values.append(lam)
+        modal_b.append(np.linalg.solve(vectors, b_n[index]))
+        modal_c.append(2.0 * c_n[index] @ vectors)  # order -n is the conjugate
+    lam = np.concatenate(values)
+    b_all = np.vstack(modal_b)
+    c_all = np.hstack(modal_c)
+    order = np.argsort(np.abs(lam), kind="stable")
+    lam, b_all, c_all = lam[order], b_all[order], c_all[:, order]
+
+    keep = np.ones(lam.size, dtype=bool)
+    if truncation.f_max_hz is not None:
+        keep &= np.abs(lam) <= 2 * np.pi * truncation.f_max_hz
+    if truncation.n_modes is not None:
+        keep &= np.cumsum(keep) <= truncation.n_modes
+    d = d_direct + feedthrough
+    e = e_direct.copy()
+    if truncation.static_correction and not keep.all():
+        dropped = ~keep
+        kept_dc = np.real(-(c_all[:, keep] / lam[keep]) @ b_all[keep])
+        d = static_gain - kept_dc  # the exact DC gain, whatever is dropped
+        e = e + np.real(-(c_all[:, dropped] / lam[dropped] ** 2) @ b_all[dropped])
+    return FreeRingModel(
+        eigenvalues=lam[keep], b=b_all[keep], c=c_all[:, keep], d=d, e=e,
+        static_gain=static_gain, zone_nodes=zone_nodes, n_elements=n_el,
+        total_modes=lam.size, truncation=truncation)
