@@ -14,6 +14,7 @@ this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import sys
@@ -25,7 +26,7 @@ from xml.etree import ElementTree
 
 import tire_fmu
 
-from .interface import CAPABILITIES, fmu_variables, unit_definitions
+from .interface import BAKED_PARAMETERS_FILE, CAPABILITIES, fmu_variables, unit_definitions
 
 MODEL_IDENTIFIER = "TireModal"
 SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
@@ -41,14 +42,21 @@ class FmuBuildError(RuntimeError):
     """The FMU could not be built, or what was built does not validate."""
 
 
-def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
+def build_fmu(out_dir: str | Path = ".", validate: bool = True, tire=None) -> Path:
     """Write ``TireModal.fmu`` into ``out_dir`` (created if missing) and return its path.
 
+    ``tire`` (a :class:`~tire_fmu.core.parameters.TireParameters`) becomes the start values
+    of the tire parameters (default: GL073A); the slave reads them from
+    ``resources/tire_parameters.json``, so the model description and the running FMU agree.
     ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
     :class:`FmuBuildError` listing any problem.
     """
     with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
         project = _stage_project(Path(staging) / "project")
+        if tire is not None:
+            baked = Path(staging) / "project" / BAKED_PARAMETERS_FILE
+            baked.write_text(json.dumps(tire.as_dict(), indent=1) + "\n")
+            project.append(baked)
         return build_pythonfmu(
             _SLAVE_SOURCE, Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu", SLAVE_MODULE,
             project_files=project, capabilities=CAPABILITIES,
