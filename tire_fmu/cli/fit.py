@@ -16,7 +16,6 @@ from .common import (
     elements_problem,
     plot_with,
     positive_problem,
-    raise_problems,
     range_problem,
     table,
     write_plot,
@@ -100,13 +99,14 @@ def run_fit(args: argparse.Namespace) -> Output:
     if args.out is not None and not args.out.parent.exists():
         problems.append(f"--out {args.out}: folder {args.out.parent} does not exist")
     start = checked_tire(args, problems)
+    static = _static(args)
     try:
         modes = read_modes(args.measured)
     except MeasurementError as error:
         raise CliError(f"MEASURED {error}") from error
     free = [name.strip() for name in args.free.split(",") if name.strip()]
     try:
-        result = fit_tire(modes, free, start, n_elements=args.elements, static=_static(args),
+        result = fit_tire(modes, free, start, n_elements=args.elements, static=static,
                           criterion=args.criterion, confidence=args.confidence,
                           determined_within=args.determined_within)
     except FitError as error:
@@ -118,7 +118,8 @@ def run_fit(args: argparse.Namespace) -> Output:
         try:
             write_tire_file(args.out, result.tire, name=args.name,
                             description=args.description or _description(result, args),
-                            source=f"tire-fmu fit {args.measured.name}", metadata={"fit": fit_metadata(result)})
+                            source=f"tire-fmu fit {args.measured.name}",
+                            metadata={"fit": fit_metadata(result)})
         except TireFileError as error:
             raise CliError(f"--out: {error}") from error
         output.written.append(args.out)

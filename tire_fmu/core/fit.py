@@ -369,8 +369,8 @@ def fit_tire(modes: Sequence[MeasuredMode], free: Sequence[str],
     None fits the analytic ring; an integer fits the FDM model of that mesh (per-order
     symbols, as fast). ``criterion`` "least_squares" minimises the sum of squared weighted
     relative residuals; "max" then minimises the largest one (SLSQP on min t subject to
-    |r_i| <= t), for a re-identification that must stay within a tolerance of every mode. A parameter is
-    reported weakly determined when its ``confidence`` interval reaches further than
+    |r_i| <= t), for a re-identification that must stay within a tolerance of every mode.
+    A parameter is reported weakly determined when its ``confidence`` interval reaches further than
     ``determined_within`` (relative) from the value, undetermined when it lies in a direction
     the data do not see at all (numerical rank of the Jacobian).
 
