@@ -203,7 +203,7 @@ class TireParameters:
 
         A pneumatic sidewall is a pressurised membrane: its radial and shear stiffness grow
         with inflation pressure, which the paper's constant k_r1, k_r2 leave out, so the
-        vertical stiffness falls too little with pressure (see docs/theory.md, §4.4).
+        vertical stiffness falls too little with pressure (see docs/theory.md, §4).
         """
         if self.sidewall_pressure_exponent == 0.0:
             return 1.0
