@@ -351,3 +351,40 @@ def plot_bode(responses, path: Path, title: str = "") -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_fit(result, path: Path) -> Path:
+    """Measured against fitted natural frequencies per order (a :class:`FitResult`), with the
+    relative residual of every mode below."""
+    plt = _pyplot()
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True,
+                                      gridspec_kw={"height_ratios": [3, 1.4]})
+    orders = np.array([m.order for m in result.modes])
+    branches = np.array([m.branch for m in result.modes])
+    residual = result.residual_percent
+    for branch, colour, label in (("in", "C0", "in-phase"), ("out", "C3", "out-of-phase")):
+        pick = branches == branch
+        if not pick.any():
+            continue
+        order = np.argsort(orders[pick])
+        n = orders[pick][order]
+        top.plot(n, result.measured_hz[pick][order], "o", color=colour, mfc="none",
+                 label=f"{label}, measured")
+        top.plot(n, result.fitted_hz[pick][order], "-", marker=".", color=colour,
+                 label=f"{label}, fitted")
+        bottom.plot(n, residual[pick][order], "o-", color=colour, ms=4, label=label)
+    bottom.axhline(0.0, color="0.5", lw=0.8)
+    top.set_ylabel("natural frequency [Hz]")
+    bottom.set_ylabel("fitted / measured - 1 [%]")
+    bottom.set_xlabel("circumferential order n")
+    top.legend(fontsize=8)
+    top.grid(alpha=0.3)
+    bottom.grid(alpha=0.3)
+    model = "analytic ring" if result.n_elements is None else f"FDM N = {result.n_elements}"
+    top.set_title(f"Fit of {', '.join(result.free)} ({model}, {result.criterion}); "
+                  f"rms residual {100 * result.residual_rms:.2g} %", fontsize=10)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

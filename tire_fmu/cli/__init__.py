@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from ..core import ParameterError
 from .common import CliError, Output, to_jsonable
 
-COMMAND_MODULES = ("ring", "rolling", "reduce", "fmu")
+COMMAND_MODULES = ("ring", "rolling", "reduce", "fmu", "fit")
 
 
 class _Parser(argparse.ArgumentParser):

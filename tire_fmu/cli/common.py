@@ -63,7 +63,12 @@ def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> No
 
 
 def add_tire_options(parser: argparse.ArgumentParser) -> None:
-    names = ", ".join(f"{name} [{spec.unit}]" for name, spec in TIRE_FIELDS.items())
+    names = ", ".join(f"{name} [{spec.unit or '1'}]" for name, spec in TIRE_FIELDS.items())
+    parser.add_argument(
+        "--tire-file", metavar="FILE",
+        help="read the tire data from a TOML tire file, or a shipped one by name (GL073A, "
+        "GL073A_shear); --tire and --inflation-pressure override its values",
+    )
     parser.add_argument(
         "--tire", metavar="NAME=VALUE", action="append", default=[],
         help="override a tire parameter (repeatable); defaults are the GL073A tire. "
@@ -93,8 +98,22 @@ def add_speed_options(parser: argparse.ArgumentParser) -> None:
                         help="run at or above the mesh's critical (standing-wave) speed")
 
 
+def tire_file_values(args: argparse.Namespace) -> dict[str, Any]:
+    """The tire data of --tire-file (empty without one); a bad file is a one-line error."""
+    spec = getattr(args, "tire_file", None)
+    if spec is None:
+        return {}
+    from ..tire_files import TireFileError, read_tire_file
+
+    try:
+        return read_tire_file(spec).tire.as_dict()
+    except TireFileError as error:
+        raise CliError(f"--tire-file: {error}") from error
+
+
 def parse_tire_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    values: dict[str, Any] = {}
+    """Tire values: --tire-file first, then --tire NAME=VALUE and --inflation-pressure."""
+    values: dict[str, Any] = tire_file_values(args)
     for item in getattr(args, "tire", []) or []:
         name, sep, text = item.partition("=")
         if not sep:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import CliError, Output, add_output_options
+from .common import CliError, Output, add_output_options, add_tire_options, checked_tire
 
 
 def register(subparsers) -> None:
@@ -14,10 +14,12 @@ def register(subparsers) -> None:
         help="build TireModal.fmu, the FMI 2.0 co-simulation FMU",
         description="Build TireModal.fmu (pythonfmu) into OUT: the tire_fmu core ships inside, "
         "the model description is completed (units, initial unknowns, capability flags) and "
-        "checked with fmpy's validator when fmpy is installed. A host needs Python with numpy "
-        "and scipy (pythonfmu embeds the host's Python).",
+        "checked with fmpy's validator when fmpy is installed. The tire parameters start from "
+        "--tire-file / --tire (default GL073A). A host needs Python with numpy and scipy "
+        "(pythonfmu embeds the host's Python).",
     )
     p.add_argument("out", metavar="OUT", type=Path, help="folder to write TireModal.fmu into")
+    add_tire_options(p)  # the tire the FMU's parameters start from
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_build_fmu)
 
@@ -25,12 +27,14 @@ def register(subparsers) -> None:
 def run_build_fmu(args: argparse.Namespace) -> Output:
     from ..fmu.builder import FmuBuildError, build_fmu
 
+    tire = checked_tire(args)
     try:
-        path = build_fmu(args.out)
+        path = build_fmu(args.out, tire=tire)
     except FmuBuildError as error:
         raise CliError(str(error)) from error
     validated = _fmpy_installed()  # build_fmu validated, and raised on any problem
-    data = {"path": path, "size_bytes": path.stat().st_size, "validated_with_fmpy": validated}
+    data = {"path": path, "size_bytes": path.stat().st_size, "validated_with_fmpy": validated,
+            "tire": tire.as_dict()}
     check = "fmpy validate: no problems" if validated else "not validated (fmpy not installed)"
     output = Output(text=f"{path} ({data['size_bytes'] / 1e3:.0f} kB; {check})", data=data)
     output.written.append(path)

@@ -223,7 +223,8 @@ EXPLANATION = (
     "with the mesh, so the critical speed, about ω_s·R·δθ, belongs to the mesh and falls as N "
     "grows. It is an artefact of the lumped sidewall, not a property of the tire. A "
     "circumferential sidewall shear stiffness (--tire sidewall_shear=G with G > 0) gives the "
-    "band a wave speed of order sqrt(G/m_s) and a critical speed that converges as N grows."
+    "band a wave speed of order sqrt(G/m_s) and a critical speed that converges as N grows; "
+    "--tire-file GL073A_shear is the GL073A tire re-identified with it (docs/theory.md §8.8)."
 )
 
 

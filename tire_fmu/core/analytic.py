@@ -7,7 +7,9 @@ For a harmonic u_r = A cos nθ, u_s = B cos nθ, eq. 12 reads
 a quadratic in ω² whose two roots are the in-phase (A, B same sign) and out-of-phase
 frequencies of order n. The paper's eqs. 13-18 print garbled coefficients; this module does not
 use them. Nothing here touches the finite-difference code, so it is an independent reference.
-The optional sidewall shear G adds G n²/R² to the sidewall stiffness (0 in the paper).
+The optional sidewall shear G adds G n²/R² to the sidewall stiffness (0 in the paper). The
+sidewall stiffnesses are taken at the inflation pressure (``TireParameters.effective_k_r1`` etc.,
+the optional pressure law; equal to k_r1, k_r2, G when it is off).
 """
 
 from __future__ import annotations
@@ -43,12 +45,13 @@ class AnalyticModes:
 def tread_stiffness(tire: TireParameters, orders) -> np.ndarray:
     """a_n = EI n⁴/R⁴ + p₀ b n²/R + k_r1 (N/m per metre), the tread's modal stiffness."""
     n = np.asarray(orders, dtype=float)
-    return tire.EI * n**4 / tire.R**4 + tire.pretension_n * n**2 / tire.R**2 + tire.k_r1
+    return tire.EI * n**4 / tire.R**4 + tire.pretension_n * n**2 / tire.R**2 + tire.effective_k_r1
 
 
 def sidewall_stiffness(tire: TireParameters, orders) -> np.ndarray:
     n = np.asarray(orders, dtype=float)
-    return tire.k_r1 + tire.k_r2 + tire.sidewall_shear * n**2 / tire.R**2
+    return (tire.effective_k_r1 + tire.effective_k_r2
+            + tire.effective_sidewall_shear * n**2 / tire.R**2)
 
 
 def two_mass_eigenvalues(k_tread, k_sidewall, k_coupling, m_tread, m_sidewall):
@@ -70,10 +73,11 @@ def analytic_modes(tire: TireParameters, orders) -> AnalyticModes:
     """Both roots of eq. 12 for each order n (Hz), with their amplitude ratios."""
     n = np.asarray(orders, dtype=int)
     a = tread_stiffness(tire, n)
-    low, high = two_mass_eigenvalues(a, sidewall_stiffness(tire, n), tire.k_r1, tire.rhoA, tire.m_s)
+    k_r1 = tire.effective_k_r1
+    low, high = two_mass_eigenvalues(a, sidewall_stiffness(tire, n), k_r1, tire.rhoA, tire.m_s)
 
     def ratio(lam):  # B/A from the first row of eq. 12
-        return (a - tire.rhoA * lam) / tire.k_r1
+        return (a - tire.rhoA * lam) / k_r1
 
     return AnalyticModes(
         orders=n,

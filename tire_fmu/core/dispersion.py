@@ -39,13 +39,14 @@ def per_order_matrices(tire: TireParameters, sym, spin_rad_s: float):
     pre = tire.pretension_n
     centrifugal = tire.rhoA * tire.R**2 * spin_rad_s**2
     bend = tire.EI / tire.R**4 * lam4
-    k0_tt = bend + pre / tire.R**2 * lam2 + tire.k_r1
-    k0_ss = tire.k_r1 + tire.k_r2 + tire.sidewall_shear / tire.R**2 * lam2
+    k_r1 = tire.effective_k_r1  # sidewall stiffnesses at the inflation pressure
+    k0_tt = bend + pre / tire.R**2 * lam2 + k_r1
+    k0_ss = k_r1 + tire.effective_k_r2 + tire.effective_sidewall_shear / tire.R**2 * lam2
     k_tt = k0_tt + centrifugal / tire.R**2 * lam2 - tire.rhoA * spin_rad_s**2
     k_ss = k0_ss - tire.m_s * spin_rad_s**2
     c_tt = tire.alpha * tire.rhoA + tire.beta * k0_tt
     c_ss = tire.alpha * tire.m_s + tire.beta * k0_ss
-    return (k_tt, k_ss, -tire.k_r1), (c_tt, c_ss, -tire.beta * tire.k_r1)
+    return (k_tt, k_ss, -k_r1), (c_tt, c_ss, -tire.beta * k_r1)
 
 
 def body_frequencies(tire: TireParameters, orders, spin_rad_s: float = 0.0, n_elements=None):

@@ -84,9 +84,11 @@ def structural_matrices(
     ops = RingOperators(grid)
     eye = sp.identity(n, format="csr")
     arc = grid.node_arc_m
-    tread = tire.EI / tire.R**4 * ops.d4 - tire.pretension_n / tire.R**2 * ops.d2 + tire.k_r1 * eye
-    sidewall = (tire.k_r1 + tire.k_r2) * eye - tire.sidewall_shear / tire.R**2 * ops.d2
-    coupling = -tire.k_r1 * eye
+    k_r1 = tire.effective_k_r1  # sidewall stiffnesses at the inflation pressure
+    tread = tire.EI / tire.R**4 * ops.d4 - tire.pretension_n / tire.R**2 * ops.d2 + k_r1 * eye
+    sidewall = ((k_r1 + tire.effective_k_r2) * eye
+                - tire.effective_sidewall_shear / tire.R**2 * ops.d2)
+    coupling = -k_r1 * eye
     stiffness = arc * sp.bmat([[tread, coupling], [coupling, sidewall]], format="csr")
     mass = arc * sp.diags(np.r_[np.full(n, tire.rhoA), np.full(n, tire.m_s)], format="csr")
     damping = (tire.alpha * mass + tire.beta * stiffness).tocsr()

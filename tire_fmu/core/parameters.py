@@ -98,8 +98,28 @@ TIRE_FIELDS: dict[str, FieldSpec] = {
             1.0e9,
             True,
         ),
+        FieldSpec(
+            "sidewall_pressure_exponent",
+            "",
+            "exponent e of the sidewall stiffness law: k_r1, k_r2 and sidewall_shear scale with "
+            "(inflation_pressure/reference_pressure)^e (0 = off, the paper's pressure-free "
+            "sidewall)",
+            0.0,
+            3.0,
+            True,
+        ),
+        FieldSpec(
+            "reference_pressure",
+            "Pa",
+            "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)",
+            0.0,
+            3.0e6,
+        ),
     )
 }
+
+#: The sidewall stiffnesses the pressure law scales.
+PRESSURE_SCALED_FIELDS = ("k_r1", "k_r2", "sidewall_shear")
 
 
 def tire_problems(values: Mapping[str, Any]) -> list[str]:
@@ -113,7 +133,21 @@ def tire_problems(values: Mapping[str, Any]) -> list[str]:
     unknown = sorted(set(values) - set(TIRE_FIELDS))
     if unknown:
         problems.append(f"unknown tire parameter(s) {unknown}; known: {sorted(TIRE_FIELDS)}")
+    if not problems:
+        problems += _pressure_law_problems(values)
     return problems
+
+
+def _pressure_law_problems(values: Mapping[str, Any]) -> list[str]:
+    defaults = {f.name: f.default for f in fields(TireParameters)}
+    exponent = float(values.get("sidewall_pressure_exponent",
+                                defaults["sidewall_pressure_exponent"]))
+    pressure = float(values.get("inflation_pressure", defaults["inflation_pressure"]))
+    if exponent > 0.0 and pressure == 0.0:
+        return [f"inflation_pressure = 0 Pa with sidewall_pressure_exponent = {exponent:g}: the "
+                "pressure law would leave the sidewall without stiffness; give a pressure > 0 "
+                "or set the exponent to 0"]
+    return []
 
 
 @dataclass(frozen=True)
@@ -137,6 +171,8 @@ class TireParameters:
     alpha: float = 8.2e-5
     beta: float = 1.1e-4
     sidewall_shear: float = 0.0
+    sidewall_pressure_exponent: float = 0.0
+    reference_pressure: float = 7.9e5
 
     def __post_init__(self) -> None:
         problems = tire_problems(self.as_dict())
@@ -162,9 +198,38 @@ class TireParameters:
         return MAX_PATCH_FRACTION * self.circumference_m
 
     @property
+    def sidewall_stiffness_factor(self) -> float:
+        """(p0/p_ref)^e, the pressure law's factor on the sidewall stiffnesses (1 when off).
+
+        A pneumatic sidewall is a pressurised membrane: its radial and shear stiffness grow
+        with inflation pressure, which the paper's constant k_r1, k_r2 leave out, so the
+        vertical stiffness falls too little with pressure (see docs/theory.md, §4).
+        """
+        if self.sidewall_pressure_exponent == 0.0:
+            return 1.0
+        ratio = self.inflation_pressure / self.reference_pressure
+        return ratio**self.sidewall_pressure_exponent
+
+    @property
+    def effective_k_r1(self) -> float:
+        """k_r1 at the inflation pressure (N/m per metre): what the model uses."""
+        return self.k_r1 * self.sidewall_stiffness_factor
+
+    @property
+    def effective_k_r2(self) -> float:
+        """k_r2 at the inflation pressure (N/m per metre): what the model uses."""
+        return self.k_r2 * self.sidewall_stiffness_factor
+
+    @property
+    def effective_sidewall_shear(self) -> float:
+        """sidewall_shear at the inflation pressure (N): what the model uses."""
+        return self.sidewall_shear * self.sidewall_stiffness_factor
+
+    @property
     def sidewall_band_hz(self) -> float:
         """Natural frequency of a sidewall mass between fixed tread and rim, the band limit."""
-        return math.sqrt((self.k_r1 + self.k_r2) / self.m_s) / (2.0 * math.pi)
+        k = self.effective_k_r1 + self.effective_k_r2
+        return math.sqrt(k / self.m_s) / (2.0 * math.pi)
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
 import sys
@@ -25,7 +26,7 @@ from xml.etree import ElementTree
 
 import tire_fmu
 
-from .interface import CAPABILITIES, fmu_variables, unit_definitions
+from .interface import BAKED_PARAMETERS_FILE, CAPABILITIES, fmu_variables, unit_definitions
 
 MODEL_IDENTIFIER = "TireModal"
 SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
@@ -41,29 +42,39 @@ class FmuBuildError(RuntimeError):
     """The FMU could not be built, or what was built does not validate."""
 
 
-def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
+def build_fmu(out_dir: str | Path = ".", validate: bool = True, tire=None) -> Path:
     """Write ``TireModal.fmu`` into ``out_dir`` (created if missing) and return its path.
 
+    ``tire`` (a :class:`~tire_fmu.core.parameters.TireParameters`) becomes the start values
+    of the tire parameters (default: GL073A); the slave reads them from
+    ``resources/tire_parameters.json``, so the model description and the running FMU agree.
     ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
     :class:`FmuBuildError` listing any problem.
     """
     with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
         project = _stage_project(Path(staging) / "project")
+        if tire is not None:
+            baked = Path(staging) / "project" / BAKED_PARAMETERS_FILE
+            baked.write_text(json.dumps(tire.as_dict(), indent=1) + "\n")
+            project.append(baked)
         return build_pythonfmu(
             _SLAVE_SOURCE, Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu", SLAVE_MODULE,
             project_files=project, capabilities=CAPABILITIES,
-            units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate)
+            units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate,
+            real_starts=None if tire is None else tire.as_dict())
 
 
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                     project_files=(), capabilities: dict, units: dict[str, str],
-                    validate: bool = True) -> Path:
+                    validate: bool = True, real_starts: dict[str, float] | None = None
+                    ) -> Path:
     """Build a pythonfmu FMU from ``slave_source`` and complete its model description.
 
     The slave is built under ``module_name``: every pythonfmu FMU in a process shares
     ``sys.modules``, and two slave modules with one name would run the first one's code.
     ``units`` maps variable names to the units written into the model description (pythonfmu
-    0.7 writes none); ``capabilities`` are the flags the slave really supports.
+    0.7 writes none); ``capabilities`` are the flags the slave really supports;
+    ``real_starts`` are Real start values to write exactly (pythonfmu rounds to 16 digits).
     """
     try:
         from pythonfmu.builder import FmuBuilder
@@ -81,7 +92,7 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                                             **capabilities))
         finally:
             _forget_build_imports(script)
-    complete_fmu(fmu, capabilities, units)
+    complete_fmu(fmu, capabilities, units, real_starts)
     if validate:
         problems = validation_problems(fmu)
         if problems:
@@ -125,7 +136,8 @@ def _forget_build_imports(script: Path) -> None:
 
 # -- the model description -----------------------------------------------------------------
 
-def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str]) -> None:
+def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
+                 real_starts: dict[str, float] | None = None) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`."""
     fmu = Path(fmu)
     rewritten = fmu.with_suffix(".fmu.tmp")
@@ -134,14 +146,16 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str]) -> 
         for item in source.infolist():
             data = source.read(item.filename)
             if item.filename == "modelDescription.xml":
-                data = complete_model_description(data, capabilities, units)
+                data = complete_model_description(data, capabilities, units, real_starts)
             target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
     rewritten.replace(fmu)
 
 
-def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str]) -> bytes:
-    """Write the units and their definitions, the outputs and initial unknowns, and pin the
-    capability flags."""
+def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str],
+                               real_starts: dict[str, float] | None = None) -> bytes:
+    """Write the units and their definitions, the outputs and initial unknowns, exact Real
+    start values (``repr``, which reads back to the same double), and pin the capability
+    flags."""
     root = ElementTree.fromstring(xml)
     co_simulation = root.find("CoSimulation")
     for name, value in capabilities.items():
@@ -151,6 +165,8 @@ def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, 
         real = variable.find("Real")
         if real is not None and units.get(variable.get("name")):
             real.set("unit", units[variable.get("name")])
+        if real is not None and variable.get("name") in (real_starts or {}):
+            real.set("start", repr(float(real_starts[variable.get("name")])))
     used = {real.get("unit") for real in root.iter("Real") if real.get("unit")}
     if used:
         for old in root.findall("UnitDefinitions"):

@@ -16,6 +16,10 @@ from ..core.reduction import ReductionSettings
 from ..core.contact import DEFAULT_ZONE_LENGTH_M
 from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 
+#: JSON file in an FMU's resources/ with the tire data its parameters start from (written by
+#: ``build_fmu(tire=...)``, e.g. from ``tire-fmu build-fmu --tire-file``); absent: GL073A.
+BAKED_PARAMETERS_FILE = "tire_parameters.json"
+
 #: Communication points closer than this (absolute s, or relative to the time) are the same.
 TIME_ABS_TOLERANCE_S = 1e-12
 TIME_REL_TOLERANCE = 1e-9

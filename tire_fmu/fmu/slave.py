@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
 import time
 import warnings
@@ -51,6 +52,7 @@ from tire_fmu.core.parameters import (
     validate,
 )
 from tire_fmu.fmu.interface import (
+    BAKED_PARAMETERS_FILE,
     IN_CONTACT,
     INPUTS,
     OUTPUTS,
@@ -118,7 +120,7 @@ class TireModal(Fmi2Slave):
     def __init__(self, **kwargs):
         # Cheap on purpose: pythonfmu instantiates the slave at build time and on every reset.
         super().__init__(**kwargs)
-        self._table = fmu_variables()
+        self._table = fmu_variables(parameter_values=_baked_parameter_values(self.resources))
         self._values: list = [v.start for v in self._table]
         self._index = {v.name: vr for vr, v in enumerate(self._table)}
         self._parameter_vrs = [vr for vr, v in enumerate(self._table)
@@ -461,6 +463,17 @@ class TireModal(Fmi2Slave):
                              bool(header["contact_warning_armed"]))
         except Exception as error:  # an escaping exception would be fmi2Fatal
             return _InvalidState(f"the serialized bytes are not a TireModal state ({error})")
+
+
+def _baked_parameter_values(resources: str | None) -> dict | None:
+    """Tire data the FMU was built for (resources/tire_parameters.json), if any."""
+    if not resources:
+        return None
+    path = os.path.join(resources, BAKED_PARAMETERS_FILE)
+    if not os.path.isfile(path):
+        return None
+    with open(path, encoding="utf-8") as stream:  # written by the builder: small, trusted
+        return {str(k): float(v) for k, v in json.load(stream).items()}
 
 
 def _fmu_wording(message: str) -> str:

@@ -1,0 +1,253 @@
+"""Tire data files: TOML with a ``[parameters]`` table and a ``[units]`` table naming the unit
+of every value, read by every CLI command (``--tire-file``), written by ``tire-fmu fit`` and
+baked into FMUs as parameter start values.
+
+::
+
+    format = "tire_fmu-tire/1"
+    name = "GL073A"
+    description = "..."
+    source = "..."
+
+    [parameters]
+    R = 0.65
+    k_r1 = 6686000.0
+
+    [units]
+    R = "m"
+    k_r1 = "N/m^2"
+
+Units are checked, not converted: each must be the SI unit of
+:data:`~tire_fmu.core.parameters.TIRE_FIELDS` (``""`` or ``"1"`` for a pure number), so a value
+in mm or kPa is refused with its name instead of silently misread. Parameters a file leaves out
+take the GL073A defaults, with a warning naming them. Optional tables (``[fit]`` from
+``tire-fmu fit``) are kept as metadata. Floats are written with ``repr``, which reads back to
+the same double, so a file reproduces its tire exactly.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import warnings
+from dataclasses import dataclass, field, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from .core.parameters import TIRE_FIELDS, TireParameters, tire_problems
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - exercised on 3.10 only
+    import tomli as tomllib
+
+FORMAT = "tire_fmu-tire/1"
+#: Top-level keys a tire file may hold; tables beyond [parameters] and [units] are metadata.
+TEXT_KEYS = ("format", "name", "description", "source")
+METADATA_TABLES = ("fit",)
+DIMENSIONLESS = ("", "1")
+_SHIPPED = ("data", "tires")
+
+
+class TireFileError(ValueError):
+    """A tire file that cannot be read or written; the message names the file and key."""
+
+
+@dataclass(frozen=True)
+class TireFile:
+    """A tire file's contents: the tire and what the file says about it."""
+
+    tire: TireParameters
+    name: str = ""
+    description: str = ""
+    source: str = ""
+    path: Path | None = None
+    #: parameters the file did not give (they took the GL073A defaults)
+    defaulted: tuple[str, ...] = ()
+    metadata: dict = field(default_factory=dict)
+
+
+def shipped_tire_names() -> list[str]:
+    """Names of the tire files that ship with the package (``GL073A``, ...)."""
+    folder = resources.files("tire_fmu").joinpath(*_SHIPPED)
+    return sorted(item.name[:-5] for item in folder.iterdir() if item.name.endswith(".toml"))
+
+
+def shipped_tire_path(name: str) -> Path:
+    """Path of a shipped tire file by name (case-insensitive), e.g. ``GL073A``."""
+    by_key = {n.lower(): n for n in shipped_tire_names()}
+    if name.lower() not in by_key:
+        raise TireFileError(f"tire file {name!r}: no such file and no shipped tire of that "
+                            f"name (shipped: {', '.join(shipped_tire_names())})")
+    resource = resources.files("tire_fmu").joinpath(*_SHIPPED, f"{by_key[name.lower()]}.toml")
+    return Path(str(resource))
+
+
+def resolve_tire_file(spec: str | Path) -> Path:
+    """An existing path as given, else the shipped tire file of that name."""
+    path = Path(spec)
+    if path.is_file():
+        return path
+    if path.suffix or path.parent != Path("."):
+        raise TireFileError(f"tire file {str(spec)!r}: no such file (shipped tires: "
+                            f"{', '.join(shipped_tire_names())})")
+    return shipped_tire_path(str(spec))
+
+
+def read_tire_file(spec: str | Path, warn: bool = True) -> TireFile:
+    """Read a tire file (a path, or the name of a shipped one); every problem at once."""
+    path = resolve_tire_file(spec)
+    try:
+        document = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        raise TireFileError(f"{path}: not valid TOML: {error}") from error
+    except OSError as error:
+        raise TireFileError(f"{path}: cannot be read: {error}") from error
+    values, problems = _parameters(document)
+    if problems:
+        raise TireFileError(f"{path}: " + "; ".join(problems))
+    defaulted = tuple(f.name for f in fields(TireParameters) if f.name not in values)
+    if defaulted and warn:
+        warnings.warn(f"{path} does not give {', '.join(defaulted)}: using the GL073A "
+                      "defaults for them", stacklevel=2)
+    return TireFile(
+        tire=TireParameters(**values), path=path, defaulted=defaulted,
+        name=str(document.get("name", "")), description=str(document.get("description", "")),
+        source=str(document.get("source", "")),
+        metadata={k: document[k] for k in METADATA_TABLES if k in document})
+
+
+def _parameters(document: dict) -> tuple[dict[str, float], list[str]]:
+    problems = []
+    allowed = {*TEXT_KEYS, "parameters", "units", *METADATA_TABLES}
+    for key in sorted(set(document) - allowed):
+        problems.append(f"unknown key {key!r} (a tire file holds {sorted(allowed)})")
+    fmt = document.get("format", FORMAT)
+    if fmt != FORMAT:
+        problems.append(f"format = {fmt!r}: this version reads {FORMAT!r}")
+    for key in TEXT_KEYS:
+        if key in document and not isinstance(document[key], str):
+            problems.append(f"{key} = {document[key]!r}: must be a string")
+    parameters = document.get("parameters")
+    units = document.get("units", {})
+    if not isinstance(parameters, dict):
+        problems.append("no [parameters] table")
+        return {}, problems
+    if not isinstance(units, dict):
+        problems.append("[units] must be a table of NAME = \"unit\"")
+        units = {}
+    values: dict[str, float] = {}
+    for name, value in parameters.items():
+        if name not in TIRE_FIELDS:
+            problems.append(f"parameters.{name}: not a tire parameter; known: "
+                            f"{sorted(TIRE_FIELDS)}")
+            continue
+        expected = TIRE_FIELDS[name].unit
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            problems.append(f"parameters.{name} = {value!r}: must be a number in "
+                            f"{TIRE_FIELDS[name].range_text()}")
+            continue
+        unit = units.get(name)
+        shown = f'"{expected}"' if expected else '"1"'
+        if unit is None:
+            problems.append(f"units.{name} missing: state the unit of parameters.{name} "
+                            f"({name} = {shown})")
+        elif not _same_unit(unit, expected):
+            problems.append(f"units.{name} = {unit!r}: parameters.{name} must be given in "
+                            f"{shown} (units are checked, not converted)")
+        values[name] = float(value)
+    for name in sorted(set(units) - set(parameters)):
+        problems.append(f"units.{name}: no parameters.{name} to go with it")
+    problems += tire_problems(values)
+    return values, problems
+
+
+def _same_unit(given: Any, expected: str) -> bool:
+    if not isinstance(given, str):
+        return False
+    if expected == "":
+        return given.strip() in DIMENSIONLESS
+    return given.strip() == expected
+
+
+# -- writing --------------------------------------------------------------------------------
+
+def tire_file_text(tire: TireParameters, name: str = "", description: str = "",
+                   source: str = "", metadata: dict | None = None) -> str:
+    """The TOML text of a tire file (a small emitter: strings, numbers, flat arrays, tables)."""
+    lines = ["# tire_fmu tire data file: SI values in [parameters], their units in [units].",
+             f"format = {_toml(FORMAT)}"]
+    for key, value in (("name", name), ("description", description), ("source", source)):
+        if value:
+            lines.append(f"{key} = {_toml(value)}")
+    lines += ["", "[parameters]"]
+    for f in fields(TireParameters):
+        spec = TIRE_FIELDS[f.name]
+        lines.append(f"{f.name} = {_toml(getattr(tire, f.name))}  # {spec.description}")
+    lines += ["", "[units]"]
+    lines += [f"{f.name} = {_toml(TIRE_FIELDS[f.name].unit or '1')}"
+              for f in fields(TireParameters)]
+    for table, content in (metadata or {}).items():
+        if table not in METADATA_TABLES:
+            raise TireFileError(f"metadata table {table!r}: allowed are {list(METADATA_TABLES)}")
+        lines += _table([table], content)
+    return "\n".join(lines) + "\n"
+
+
+def write_tire_file(path: str | Path, tire: TireParameters, name: str = "",
+                    description: str = "", source: str = "", metadata: dict | None = None
+                    ) -> Path:
+    """Write a tire file and check that it reads back to the same tire."""
+    path = Path(path)
+    text = tire_file_text(tire, name, description, source, metadata)
+    try:  # the emitter's own guarantee: the text reads back to the same tire
+        same = tomllib.loads(text)["parameters"] == tire.as_dict()
+    except tomllib.TOMLDecodeError as error:
+        same, text = False, f"{error}"
+    if not same:
+        raise TireFileError(f"{path}: the text written does not read back to the tire")
+    try:
+        path.write_text(text, encoding="utf-8")
+    except OSError as error:
+        raise TireFileError(f"{path}: cannot be written: {error}") from error
+    return path
+
+
+def _table(keys: list[str], content: dict) -> list[str]:
+    scalars = {k: v for k, v in content.items() if not isinstance(v, dict)}
+    tables = {k: v for k, v in content.items() if isinstance(v, dict)}
+    lines = ["", "[" + ".".join(_key(k) for k in keys) + "]"]
+    lines += [f"{_key(k)} = {_toml(v)}" for k, v in scalars.items()]
+    for k, v in tables.items():
+        lines += _table(keys + [k], v)
+    return lines
+
+
+def _key(key: str) -> str:
+    bare = key.replace("_", "").replace("-", "").isalnum() and key.isascii()
+    return key if bare else _toml(key)
+
+
+def _toml(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(float(value))  # plain float: numpy's repr would add its type name
+    if isinstance(value, str):
+        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
+        escaped = escaped.replace("\n", "\\n").replace("\t", "\\t").replace("\r", "\\r")
+        return f'"{escaped}"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    if value is None:
+        raise TireFileError("TOML has no null: leave the key out instead")
+    if hasattr(value, "item"):  # numpy scalars
+        return _toml(value.item())
+    raise TireFileError(f"cannot write {value!r} ({type(value).__name__}) to a tire file")
