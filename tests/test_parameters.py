@@ -62,11 +62,19 @@ def test_patch_longer_than_the_safe_fraction_is_refused(tire):
     validate({}, {"patch_length_m": tire.max_patch_length_m})  # the limit itself is allowed
 
 
-def test_load_beyond_the_longest_credible_patch_is_refused(tire):
-    longest = build_model(tire, OperatingPoint(patch_length_m=tire.max_patch_length_m))
-    with pytest.raises(ParameterError, match=r"load_n = 2e\+06 N: must be in \[0, "):
+def test_load_beyond_the_largest_credible_footprint_is_refused(tire):
+    import re
+
+    with pytest.raises(ParameterError, match=r"load_n = 2e\+06 N: must be in \[0, ") as info:
         build_model(tire, OperatingPoint(load_n=2e6))
-    assert longest.patch.load_n > 1e5  # a truck tire carries its rated load comfortably
+    limit = float(re.search(r"must be in \[0, ([0-9.e+]+)\] N", str(info.value)).group(1))
+    assert "end of the contact zone" in str(info.value)
+    assert limit > 1e5  # a truck tire carries its rated load comfortably
+    near = build_model(tire, OperatingPoint(load_n=0.99 * limit))
+    assert near.patch.length_m < tire.max_patch_length_m
+    # a longer zone lets the footprint grow until the 1/8-circumference rule stops it
+    with pytest.raises(ParameterError, match="beyond which the linear ring is not credible"):
+        build_model(tire, OperatingPoint(load_n=2e6, contact_zone_length_m=1.0))
 
 
 def test_stencil_needs_eight_nodes():

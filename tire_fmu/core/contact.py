@@ -540,19 +540,20 @@ def max_credible_load(path: FootprintPath, max_length_m: float) -> Footprint:
 
 def prescribed_patch(zone: ContactZone, compliance: np.ndarray, patch_length_m: float,
                      speed_m_s: float) -> ContactPatch:
-    """The paper's patch |θ| <= L/(2R): fractional node weights and the flat-road chord as
-    its deflection; the load is what those springs, two-sided, carry at that deflection."""
+    """The paper's patch |θ| <= L/(2R): fractional node weights, the flat-road chord as its
+    deflection and, as the paper's rule, the load K_v·δ: the springs, two-sided and
+    unstressed when the undeformed ring touches, carry it with the rim lowered by δ."""
     grid = zone.grid
     weights = patch_weights(grid, patch_length_m)[zone.nodes]
     deflection = deflection_from_patch_length(grid.radius_m, patch_length_m)
     springs = weights * zone.stiffness_n_per_m
     k_v = linear_vertical_stiffness(zone, compliance, springs)
-    # bilateral springs on the patch, rim lowered by the chord deflection: f = k (-g - G f)
+    # two-sided springs on the patch, rim lowered by δ: f = k (δ/cos - G f)
     forces = np.zeros(zone.size)
     on = springs > 0
     if on.any():
         system = np.diag(1.0 / springs[on]) + compliance[np.ix_(on, on)]
-        forces[on] = np.linalg.solve(system, -zone.unloaded_gap_m(deflection)[on])
+        forces[on] = np.linalg.solve(system, deflection / zone.cos[on])
     return ContactPatch(zone=zone, weights=weights, deflection_m=deflection,
                         load_n=float(zone.cos @ forces), length_m=float(patch_length_m),
                         vertical_stiffness_n_per_m=k_v,

@@ -90,14 +90,15 @@ class StaticMeasurement:
 def static_contact(tire: TireParameters, load_n: float, n_elements: int) -> tuple[float, float]:
     """(vertical stiffness N/m, footprint length m) of ``tire`` at ``load_n``.
 
-    The one place the fit asks the model for its static contact: today the prescribed patch
-    whose chord deflection carries the load (``build_model(...).patch``); the computed
-    unilateral footprint of issue 10 replaces it here.
+    The one place the fit asks the model for its static contact: the footprint the model
+    computes for the load. The stiffness is the secant, load over rim deflection, what a
+    press test at that load reports; unlike the tangent it is smooth in the tire data (the
+    tangent steps where a node enters the footprint), which a least-squares fit needs.
     """
     from .model import build_model  # the fit of frequencies alone never assembles a model
 
     patch = build_model(tire, OperatingPoint(n_elements=n_elements, load_n=load_n)).patch
-    return patch.vertical_stiffness_n_per_m, patch.length_m
+    return patch.footprint.secant_stiffness_n_per_m, patch.length_m
 
 
 def model_frequencies_hz(tire: TireParameters, orders, n_elements: int | None = None):

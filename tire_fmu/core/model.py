@@ -198,12 +198,13 @@ def _on_tread(grid: Grid, nodes: np.ndarray, values: np.ndarray) -> sp.csr_matri
 def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> ContactPatch:
     """The static contact ``op`` asks for: the computed footprint for its load, or the
     paper's prescribed patch. Raises ParameterError with the allowed range of the load."""
-    problems = zone_problems(grid, op.contact_zone_length_m)
-    if problems:
-        raise ParameterError(problems)
     spin = op.speed_m_s / tire.R
     zone_length = op.contact_zone_length_m
-    if op.patch_length_m is not None:
+    if op.patch_length_m is None:
+        problems = zone_problems(grid, zone_length)
+        if problems:
+            raise ParameterError(problems)
+    else:
         # the patch must lie inside the zone: widen it if the patch asks for more
         zone_length = max(zone_length, 2 * tire.R * math.tan(
             0.5 * op.patch_length_m / tire.R + grid.dtheta))
