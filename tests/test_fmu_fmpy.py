@@ -28,9 +28,20 @@ from fmpy.fmi2 import (  # noqa: E402
 )
 from fmpy.validation import validate_fmu  # noqa: E402
 
-from tire_fmu.core import DEFAULT_LOAD_N, TireParameters, build_model, validate  # noqa: E402
-from tire_fmu.core.reduction import ReductionSettings, reduce  # noqa: E402
-from tire_fmu.core.simulation import INPUT_NAMES, OUTPUT_NAMES, TireSimulator  # noqa: E402
+from tire_fmu.core import (  # noqa: E402
+    DEFAULT_LOAD_N,
+    OperatingPoint,
+    TireParameters,
+    build_model,
+    validate,
+)
+from tire_fmu.core.io_model import build_io_model  # noqa: E402
+from tire_fmu.core.contact_dynamics import (  # noqa: E402
+    INPUT_NAMES,
+    OUTPUT_NAMES,
+    ContactSimulator,
+    build_contact_model,
+)
 from tire_fmu.fmu.builder import SLAVE_MODULE, build_fmu  # noqa: E402
 
 pytestmark = pytest.mark.fmu
@@ -121,8 +132,8 @@ def host(unpacked):
 
 def core_simulator(load=DEFAULT_LOAD_N, speed=0.0):
     tire, op = validate({}, {"n_elements": N, "load_n": load, "speed_m_s": speed})
-    model = build_model(tire, op)
-    return TireSimulator(reduce(model, ReductionSettings(), report=False)), model
+    contact = build_contact_model(tire, op)
+    return ContactSimulator(contact), contact.model
 
 
 def signals(t):
@@ -161,7 +172,7 @@ def test_capabilities_units_and_the_shipped_core(fmu_path, unpacked):
         names = set(archive.namelist())
         requirements = archive.read("resources/requirements.txt").decode()
         module = archive.read("resources/slavemodule.txt").decode().strip()
-    assert {"resources/tire_fmu/__init__.py", "resources/tire_fmu/core/simulation.py",
+    assert {"resources/tire_fmu/__init__.py", "resources/tire_fmu/core/contact_dynamics.py",
             "resources/tire_fmu/fmu/interface.py", f"resources/{SLAVE_MODULE}.py"} <= names
     # the core and the variable table only: no CLI, no builder, no slave twice, no caches
     shipped_fmu = {n for n in names if "/tire_fmu/fmu/" in n}
@@ -216,7 +227,7 @@ def test_simulate_fmu_equals_the_core_kernel(fmu_path):
     # fmpy sets the inputs of t = 0 during initialisation and samples before the first step:
     # the statics plus the direct feedthrough of those inputs (rim velocity on the dampers)
     first = core.outputs_with(*inputs[0])
-    assert abs(first[0] - core.static[0]) > 100.0
+    assert abs(first[0] - core.static_ring[0]) > 100.0
     expected = [core.step(h, *u) for u in inputs[:-1]]
     fmu_outputs = np.column_stack([result[n] for n in OUTPUT_NAMES])
     assert fmu_outputs.shape[0] == steps + 1
@@ -242,8 +253,8 @@ def test_rim_and_road_moving_together_leave_the_rim_force_static(host):
     z, v = _smooth_lift(t, height, 0.5)
     both = np.array([together.step(h, zi, vi, zi, vi)[0] for zi, vi in zip(z, v)])
     alone = np.array([rim_only.step(h, zi, vi)[0] for zi, vi in zip(z, v)])
-    # moving the rim alone by 5 mm changes the rim force by about K·5 mm ~ 10 kN ...
-    assert abs(alone[-1] - static) > 0.3 * static
+    # moving the rim alone by 5 mm changes the rim force by about K·5 mm ~ 7 kN ...
+    assert abs(alone[-1] - static) > 0.2 * static
     # ... together with the road only the tire's own inertia shows, at most its mass times
     # the peak acceleration (about 14 N here), and at rest at the new height the force is
     # the static load again
@@ -258,8 +269,8 @@ def test_static_stiffness_through_the_fmu_is_the_models(host):
     tire = host()
     _, model = core_simulator()
     static = tire.get("rim_Fz")[0]
-    dz, h = 1e-4, 1e-2  # rim 0.1 mm down, held, road fixed; exact steps: any h will do
-    for _ in range(600):  # 6 s: the slowest mode (~50 Hz, 2 % damping) has long settled
+    dz, h = 1e-4, 1e-2  # rim 0.1 mm down, held, road fixed; long steps are substepped
+    for _ in range(300):  # 3 s: the slowest mode (~50 Hz, 2 % damping) has long settled
         force = tire.step(h, rim_z=-dz)[0]
     previous = force
     force = tire.step(h, rim_z=-dz)[0]
@@ -439,3 +450,59 @@ def test_reset_returns_to_the_start_and_takes_new_parameters(host):
     tire.initialise(start_time=2.5, load=20_000.0)  # the first step starts at the start time
     core, _ = core_simulator(load=20_000.0)
     assert_equal_to_core(tire.step(1e-3, rim_z=1e-3), core.step(1e-3, 1e-3, 0, 0, 0))
+
+
+# -- the unilateral contact at small amplitude: the linearised loaded model -----------------
+
+def _sine_response(tire, source, f_hz, transients, amplitude=1e-4, h=1e-4):
+    """rim_Fz and contact_Fz per metre of a 0.1 mm sine of the rim or the road, through the
+    FMU: a host that sets the inputs of each new point before reading the outputs there.
+    The sine starts at t = 0; the fit takes the tire's own slowly decaying modes
+    (``transients``: their eigenvalues) alongside the sine, so no run waits for them."""
+    w = 2 * np.pi * f_hz
+    fit_s = max(0.25, 1.0 / f_hz)
+    n = int(round((0.05 + fit_s) / h))
+
+    def inputs(t):
+        z, v = amplitude * np.sin(w * t), amplitude * w * np.cos(w * t)
+        return (z, v, 0.0, 0.0) if source == "rim" else (0.0, 0.0, z, v)
+
+    names = [tire.variables[k].valueReference for k in INPUT_NAMES]
+    out_refs = [tire.variables[k].valueReference for k in ("rim_Fz", "contact_Fz")]
+    fmu = tire.fmu
+    ys = np.empty((n, 2))
+    for i in range(n):
+        t = i * h
+        fmu.setReal(names, list(inputs(t)))
+        fmu.doStep(t, h)
+        fmu.setReal(names, list(inputs(t + h)))
+        ys[i] = fmu.getReal(out_refs)
+    t = (np.arange(n) + 1) * h
+    keep = t > 0.05
+    tk = t[keep]
+    columns = [np.sin(w * tk), np.cos(w * tk), np.ones(tk.size)]
+    for lam in transients:
+        decay = np.exp(lam.real * (tk - tk[0]))
+        columns += [decay * np.cos(lam.imag * tk), decay * np.sin(lam.imag * tk)]
+    coef = np.linalg.lstsq(np.column_stack(columns), ys[keep], rcond=None)[0]
+    return (coef[0] + 1j * coef[1]) / amplitude  # y = Im(H e^{iωt}) for a unit sine
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("speed", [0.0, 10.0])
+def test_small_amplitude_sines_follow_the_linearised_loaded_model(host, speed):
+    """0.1 mm sines of the rim and of the road, 2-300 Hz, through the FMU: the unilateral
+    contact then keeps its static footprint, and rim_Fz and contact_Fz follow the FRF of the
+    model linearised about that footprint within 1 % in magnitude."""
+    model = build_contact_model(TireParameters(), OperatingPoint(speed_m_s=speed)).model
+    io = build_io_model(model)
+    lam = np.linalg.eigvals(io.a.toarray())
+    # the modes that ring long enough to matter in a fit window, one of each pair
+    transients = lam[(lam.imag >= 0) & (-lam.real < 200.0) & (np.abs(lam) < 2 * np.pi * 500)]
+    for source in ("rim", "road"):
+        for f_hz in (2.0, 20.0, 57.0, 120.0, 300.0):
+            measured = _sine_response(host(n_elements=100, speed=speed), source, f_hz,
+                                      transients)
+            expected = io.frequency_response(source, [f_hz])[[0, 2], 0]
+            error = np.abs(np.abs(measured) / np.abs(expected) - 1)
+            assert error.max() < 0.01, (source, f_hz, error)

@@ -13,8 +13,12 @@ import pytest
 from pythonfmu.enums import Fmi2Status
 
 from tire_fmu.core import DEFAULT_LOAD_N, build_model, validate
-from tire_fmu.core.reduction import ReductionSettings, reduce
-from tire_fmu.core.simulation import INPUT_NAMES, OUTPUT_NAMES, TireSimulator
+from tire_fmu.core.contact_dynamics import (
+    INPUT_NAMES,
+    OUTPUT_NAMES,
+    ContactSimulator,
+    build_contact_model,
+)
 from tire_fmu.fmu.slave import TireModal
 
 N = 40  # elements: enough for every check here, cheap to reduce
@@ -50,7 +54,7 @@ def initialised(**parameters):
 
 def core_simulator(load=DEFAULT_LOAD_N, speed=0.0):
     tire, op = validate({}, {"n_elements": N, "load_n": load, "speed_m_s": speed})
-    return TireSimulator(reduce(build_model(tire, op), ReductionSettings(), report=False))
+    return ContactSimulator(build_contact_model(tire, op))
 
 
 def set_inputs(slave, rim_z=0.0, rim_vz=0.0, road_z=0.0, road_vz=0.0):
@@ -87,7 +91,8 @@ def test_every_variable_has_unit_description_and_legal_attributes():
     expected = {"load", "speed", "inflation_pressure", "n_elements", "f_max", "n_modes",
                 "static_correction", "R", "b", "rhoA", "m_s", "k_r1", "k_r2", "EI", "k_cw",
                 "alpha", "beta", "sidewall_shear", "sidewall_pressure_exponent",
-                "reference_pressure", "allow_supercritical", *INPUT_NAMES,
+                "reference_pressure", "allow_supercritical", "contact_zone_length",
+                "linear_contact", *INPUT_NAMES,
                 *OUTPUT_NAMES, "in_contact"}
     assert set(variables) == expected
     units = {"load": "N", "speed": "m/s", "f_max": "Hz", "inflation_pressure": "Pa",
@@ -144,7 +149,7 @@ def test_a_load_the_model_cannot_carry_is_reported_with_the_other_problems():
     problems = [m for m in messages(slave, Fmi2Status.error) if "parameter problem" in m]
     assert len(problems) == 2
     assert "f_max = -1" in problems[0] and "or 0 for no frequency cut" in problems[0]
-    assert "load = 1e+07 N" in problems[1] and "longest credible patch" in problems[1]
+    assert "load = 1e+07 N" in problems[1] and "end of the contact zone" in problems[1]
     assert slave.do_step(0.0, 1e-3) is False
 
 
@@ -197,9 +202,9 @@ def test_a_communication_point_within_rounding_is_accepted_and_becomes_the_clock
     assert slave._simulator.time == 0.1 * (1 + 1e-12) + 0.1
 
 
-def test_loss_of_contact_is_warned_once_per_episode():
+def test_lift_off_is_physics_not_a_warning():
     slave = initialised()
-    lift, ramp = 0.05, 0.5  # rim up 5 cm, smoothly: the linear contact pulls on the road
+    lift, ramp = 0.05, 0.5  # rim up 5 cm, smoothly: the tire leaves the road
 
     def rim(t):  # up, hold, down, hold, up again: two episodes without contact
         phase = min(t % 2.0, 1.5)
@@ -207,18 +212,30 @@ def test_loss_of_contact_is_warned_once_per_episode():
         slope = (np.pi / 2 * np.sin(np.pi * s) / ramp if 0 < s < 1 else 0.0)
         return lift * (1 - np.cos(np.pi * s)) / 2, slope * lift * (1 if phase < 0.75 else -1)
 
-    t, h, warnings, contact = 0.0, 1e-3, [], []
+    t, h, warnings, contact, forces = 0.0, 1e-3, [], [], []
     while t < 3.5:
         set_inputs(slave, *rim(t))
         assert slave.do_step(t, h)
         t += h
         warnings += messages(slave, Fmi2Status.warning)
-        contact_fz = slave.get_real([vr(slave, "contact_Fz")])[0]
+        forces.append(slave.get_real([vr(slave, "contact_Fz")])[0])
         contact.append(slave.get_boolean([vr(slave, "in_contact")])[0])
-        assert contact[-1] == (contact_fz > 0)
+        assert contact[-1] == (forces[-1] > 0)
     episodes = np.count_nonzero(np.diff(np.array(contact, int)) == -1)
-    assert episodes == 2 and len(warnings) == 2
-    assert all("lost contact" in w and "contact force" in w for w in warnings)
+    assert episodes == 2 and not warnings
+    assert min(forces) == 0.0  # the road never pulls
+
+
+def test_a_footprint_reaching_the_zone_end_is_warned_once():
+    slave = initialised(contact_zone_length=0.2, n_elements=100)  # 5 zone nodes
+    t, h, warnings = 0.0, 1e-3, []
+    for _ in range(200):  # push the rim down 6 cm: the footprint grows past the zone
+        depth = -0.06 * min(t / 0.1, 1.0)
+        set_inputs(slave, depth, -0.6 if t < 0.1 else 0.0)
+        assert slave.do_step(t, h)
+        t += h
+        warnings += messages(slave, Fmi2Status.warning)
+    assert len(warnings) == 1 and "end of the contact zone" in warnings[0]
 
 
 def test_parameters_are_fixed_after_initialisation(running):

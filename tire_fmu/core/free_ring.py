@@ -51,6 +51,22 @@ class RingTruncation:
     n_modes: int | None = None
     static_correction: bool = True
 
+    def __post_init__(self) -> None:
+        problems = []
+        f_max = self.f_max_hz
+        if f_max is not None and not (isinstance(f_max, (int, float)) and not isinstance(
+                f_max, bool) and 0 < f_max <= 1e7):
+            problems.append(f"f_max_hz = {f_max!r}: must be in (0, 1e7] Hz, or None for no "
+                            "frequency cut")
+        n = self.n_modes
+        if n is not None and (isinstance(n, bool) or not isinstance(n, int)
+                              or not 1 <= n <= 100_000):
+            problems.append(f"n_modes = {n!r}: must be an integer in [1, 100000] or None")
+        if problems:
+            from .parameters import ParameterError
+
+            raise ParameterError(problems)
+
 
 @dataclass(frozen=True, eq=False)
 class FreeRingModel:

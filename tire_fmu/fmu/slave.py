@@ -68,6 +68,7 @@ _CORE_WORDING = [
     (re.compile(r"\bload_n\b"), "load"),
     (re.compile(r"\bspeed_m_s\b"), "speed"),
     (re.compile(r"\bf_max_hz\b"), "f_max"),
+    (re.compile(r"\bcontact_zone_length_m\b"), "contact_zone_length"),
     (re.compile(r"^((?:f_max|n_modes) = .*) or None\b"), r"\1 or 0"),
 ]
 
@@ -234,8 +235,7 @@ class TireModal(Fmi2Slave):
             warnings.simplefilter("always")
             try:  # the load and speed checks need the assembled model: build it if we can
                 tire, op = validate(tire_values, op_values)
-                if not problems:
-                    contact = build_contact_model(tire, op, truncation, settings)
+                contact = build_contact_model(tire, op, truncation, settings)
             except ParameterError as error:
                 problems += error.problems
             if problems:
