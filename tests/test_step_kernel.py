@@ -1,45 +1,26 @@
-"""The simulator's fast paths against the plain formulas they replace: the fused per-h step
-(FusedStep) against DiagonalStepper.step/output, the road delay line against the history
-search, and the step-size jitter hosts produce."""
+"""The contact simulator's fast paths against the plain formulas they replace: the road
+delay line against the history search and against exact window averages, restored states,
+and the step-size jitter hosts produce."""
 
 import numpy as np
 import pytest
 
-from tire_fmu.core import build_model, validate
-from tire_fmu.core.reduction import reduce
-from tire_fmu.core.simulation import SimulatorState, StepError, TireSimulator
-from tire_fmu.core.stepping import DiagonalStepper
+from tire_fmu.core import OperatingPoint, TireParameters
+from tire_fmu.core.contact import RoadWindows
+from tire_fmu.core.contact_dynamics import (
+    ContactSimulator,
+    ContactState,
+    StepError,
+    build_contact_model,
+)
+from tire_fmu.core.road import RoadReader, window_reads
 
 
 @pytest.fixture(scope="module")
-def reduced():
-    def make(speed):
-        tire, op = validate({}, {"n_elements": 40, "speed_m_s": speed})
-        return reduce(build_model(tire, op), report=False)
-
-    return {0.0: make(0.0), 15.0: make(15.0)}
-
-
-@pytest.mark.parametrize("speed", [0.0, 15.0])
-def test_fused_step_equals_the_diagonal_stepper(reduced, speed):
-    """Rim input only, so the delayed road plays no part: the outputs and the modal state
-    of the fused path are the stepper's, step after step, with the step size changing."""
-    model = reduced[speed]
-    sim, stepper = TireSimulator(model), DiagonalStepper.from_reduced(model)
-    q = np.zeros(model.n_modes, complex)
-    m = model.n_inputs
-    rng = np.random.default_rng(1)
-    for i in range(150):
-        h = (1e-4, 2.5e-4, 1e-3)[i % 3]
-        rim_z, rim_vz = rng.normal(scale=(1e-3, 1e-2))
-        y = sim.step(h, rim_z, rim_vz, 0.0, 0.0)
-        u = np.zeros(2 * m)
-        u[0], u[m] = rim_z, rim_vz
-        q = stepper.step(q, u, h)
-        u[0] += rim_vz * h  # the outputs are read at the ramp's end
-        expected = sim.static + stepper.output(q, u)
-        np.testing.assert_allclose(y, expected, rtol=1e-13, atol=1e-13 * sim.static[0])
-    np.testing.assert_allclose(sim.q, q, rtol=1e-12, atol=1e-14 * np.abs(q).max())
+def models():
+    return {speed: build_contact_model(TireParameters(),
+                                       OperatingPoint(n_elements=40, speed_m_s=speed))
+            for speed in (0.0, 15.0)}
 
 
 def _road(t):
@@ -47,58 +28,88 @@ def _road(t):
     return 1e-3 * np.sin(w * t), 1e-3 * w * np.cos(w * t)
 
 
-def test_the_delay_line_equals_the_history_search(reduced):
-    model = reduced[15.0]
-    line, search = TireSimulator(model), TireSimulator(model)
-    steps = [1e-4] * 250 + [2e-4] * 150 + [1e-4] * 250
+def test_window_reads_are_exact_averages_of_the_interpolant():
+    """A cubic road is its own Hermite interpolant: each window's mean and end-to-end slope
+    come out exactly, over any number of samples, with level road before the first."""
+    def profile(t):
+        return 1e-3 * (1 + t - 2 * t**2 + 3 * t**3), 1e-3 * (1 - 4 * t + 9 * t**2)
+
+    t = np.linspace(0.0, 0.5, 37)
+    z, v = profile(t)
+    windows = RoadWindows(np.array([0.0, 0.013, 0.1, 0.45]), np.array([0.01, 0.05, 0.31, 0.6]),
+                          0.3)
+    heights, slopes = window_reads(t, z, v, 0.5, windows)
+    for k, (a, b) in enumerate(zip(0.5 - windows.late_s, 0.5 - windows.early_s)):
+        fine = np.linspace(a, b, 20001)
+        inside = np.where(fine < 0, profile(0.0)[0], profile(np.maximum(fine, 0))[0])
+        mean = np.trapezoid(inside, fine) / (b - a)
+        ends = [profile(max(x, 0.0))[0] for x in (a, b)]
+        assert heights[k] == pytest.approx(mean, rel=1e-7)
+        assert slopes[k] == pytest.approx((ends[1] - ends[0]) / (b - a), rel=1e-12)
+
+
+def test_the_delay_line_equals_the_history_search(models):
+    windows = models[15.0].windows
+    line, search = RoadReader(windows), RoadReader(windows, delay_line=False)
+    n = windows.early_s.size
+    a, b = (np.zeros(n), np.zeros(n)), (np.zeros(n), np.zeros(n))
+    steps = [1e-4] * 650 + [2e-4] * 350 + [1e-4] * 700
     t, used = 0.0, []
     for h in steps:
-        search._delay_line_samples = 10**9  # never hands over to a delay line
-        inputs = (1e-4 * np.sin(50 * t), 0.0, *_road(t))
-        np.testing.assert_allclose(line.step(h, *inputs), search.step(h, *inputs),
-                                   rtol=1e-12, atol=1e-12 * line.static[0])
-        used.append(line._delay_line is not None)
+        z, v = _road(t)
+        line.read(t, z, v, h, *a)
+        search.read(t, z, v, h, *b)
+        np.testing.assert_allclose(a[0], b[0], rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(a[1], b[1], rtol=1e-9, atol=1e-12)
+        used.append(line._line is not None)
         t += h
-    assert search._delay_line is None
+    assert search._line is None
     # on after a full reach of uniform steps, off when h changes, on again later
-    assert used[200] and not used[260] and used[390] and not used[410] and used[-1]
+    assert used[640] and not used[660] and used[990] and not used[1010] and used[-1]
 
 
-@pytest.mark.parametrize("steps_before", [10, 200])
-def test_restoring_a_state_takes_the_same_path_bit_for_bit(reduced, steps_before):
+@pytest.mark.parametrize("steps_before", [10, 700])
+def test_restoring_a_state_takes_the_same_path_bit_for_bit(models, steps_before):
     """Before the delay line starts and after it: a restored state, also in a fresh
     simulator, reproduces the steps exactly."""
-    sim = TireSimulator(reduced[15.0])
+    sim = ContactSimulator(models[15.0])
     for i in range(steps_before):
         sim.step(1e-4, 0.0, 0.0, *_road(i * 1e-4))
     saved = sim.get_state().to_bytes()
-    future = [_road(j * 3e-4) for j in range(30)]
+    future = [_road((steps_before + j) * 1e-4) for j in range(30)]
     first = [sim.step(1e-4, 0.0, 0.0, *road) for road in future]
-    for target in (sim, TireSimulator(reduced[15.0])):
-        target.set_state(SimulatorState.from_bytes(saved))
+    for target in (sim, ContactSimulator(models[15.0])):
+        target.set_state(ContactState.from_bytes(saved))
         assert [target.step(1e-4, 0.0, 0.0, *road).tolist() for road in future] == \
             [y.tolist() for y in first]
 
 
-def test_step_size_jitter_of_a_host_reuses_the_coefficients(reduced):
+def test_step_size_jitter_of_a_host_reuses_the_coefficients(models):
     """fmpy steps by differences of communication points, h jitters in the last bits."""
-    model = reduced[15.0]
-    fixed, jittered = TireSimulator(model), TireSimulator(model)
+    model = models[15.0]
+    fixed, jittered = ContactSimulator(model), ContactSimulator(model)
     h, start = 1e-4, 7.0
     fixed.reset(start)
     jittered.reset(start)
-    for n in range(300):
+    for n in range(900):
         inputs = (0.0, 0.0, *_road(n * h))
         a = fixed.step(h, *inputs)
         t, t_next = start + n * h, start + (n + 1) * h
         jittered.time = t
         b = jittered.step(t_next - t, *inputs)
-        np.testing.assert_allclose(b, a, rtol=1e-11, atol=1e-12 * fixed.static[0])
-    assert len(jittered._kernels) == 1 and jittered._delay_line is not None
+        np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-9 * model.patch.load_n)
+    assert len(jittered._kernels) == 1 and jittered.road._line is not None
 
 
-def test_finite_inputs_whose_sum_overflows_are_accepted(reduced):
-    sim = TireSimulator(reduced[0.0])
-    sim.step(1e-4, 1e308, 0.0, 1e308, 0.0)  # the quick test says no, the exact one yes
-    with pytest.raises(StepError, match="road_z = inf"):
-        sim.step(1e-4, 0.0, 0.0, np.inf, 0.0)
+def test_inputs_out_of_range_are_refused_by_name_and_change_nothing(models):
+    sim = ContactSimulator(models[0.0])
+    sim.step(1e-4, 1e-3, 0.0, 0.0, 0.0)
+    before = sim.get_state().to_bytes()
+    with pytest.raises(StepError, match=r"rim_z = 1e\+308 m: must be in \[-10, 10\] m; "
+                       r"road_z = 1e\+308 m"):
+        sim.step(1e-4, 1e308, 0.0, 1e308, 0.0)  # finite, but a product would overflow
+    with pytest.raises(StepError, match="road_vz = inf m/s"):
+        sim.step(1e-4, 0.0, 0.0, 0.0, np.inf)
+    with pytest.raises(StepError, match=r"step size h = nan s"):
+        sim.step(float("nan"), 0.0, 0.0, 0.0, 0.0)
+    assert sim.get_state().to_bytes() == before

@@ -49,6 +49,10 @@ from .stepping import phi_functions
 LAWS = ("unilateral", "linear")
 OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
 INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
+#: Largest input magnitudes a step accepts (m, m/s): far beyond any tire's travel, but
+#: finite enough that no product inside a step can overflow.
+MAX_DISPLACEMENT_M = 10.0
+MAX_VELOCITY_M_S = 1000.0
 #: Longest internal step (s); shorter still if the contact frequency asks for it.
 MAX_SUBSTEP_S = 1e-4
 _STATE_FORMAT = "tire_fmu.contact-state/1"
@@ -292,8 +296,9 @@ class ContactSimulator:
                     road_vz: float) -> tuple[float, ...]:
         """Advance from ``time`` to ``time + h`` with the inputs given at ``time`` (ramped
         with their rates); returns the total outputs at the new time."""
-        if not (h > 0.0 and math.isfinite(h)) or \
-                (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0:
+        if not (h > 0.0 and math.isfinite(h)) or (rim_z + rim_vz + road_z + road_vz) * 0.0 \
+                != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
+                or abs(rim_vz) > MAX_VELOCITY_M_S or abs(road_vz) > MAX_VELOCITY_M_S:
             self._check(h, (rim_z, rim_vz, road_z, road_vz))
         step = self._kernels.get(h) or self._kernel(h)
         kernel, n_sub = step.last, step.n_sub
@@ -322,11 +327,18 @@ class ContactSimulator:
         return self._values
 
     def _check(self, h: float, values: tuple) -> None:
+        """Raise StepError naming every bad value (h, or an input outside its range)."""
+        problems = []
         if not (h > 0.0 and math.isfinite(h)):
-            raise StepError(f"step size h = {h!r} s: must be finite and > 0")
-        bad = [f"{n} = {v!r}" for n, v in zip(INPUT_NAMES, values) if not math.isfinite(v)]
-        if bad:
-            raise StepError("non-finite input: " + ", ".join(bad))
+            problems.append(f"step size h = {h!r} s: must be finite and > 0")
+        for name, value in zip(INPUT_NAMES, values):
+            limit, unit = ((MAX_VELOCITY_M_S, "m/s") if name.endswith("vz")
+                           else (MAX_DISPLACEMENT_M, "m"))
+            if not (math.isfinite(value) and abs(value) <= limit):
+                problems.append(f"{name} = {value!r} {unit}: must be in [-{limit:g}, "
+                                f"{limit:g}] {unit}")
+        if problems:
+            raise StepError("; ".join(problems))
 
     def _start(self, z: float, vz: float, heights: np.ndarray, slopes: np.ndarray) -> None:
         """Forces at ``time`` for the inputs given at ``time``.
@@ -546,10 +558,12 @@ class ContactState:
     history_t: np.ndarray
     history_z: np.ndarray
     history_v: np.ndarray
+    road_line: np.ndarray  # the delay line's buffer while it runs (empty otherwise)
+    road_run: np.ndarray  # uniform samples counted so far (-1: count again)
     outputs: np.ndarray
 
     _ARRAYS = ("q", "df", "active", "penetration", "rate", "seen", "ring_out", "history_t",
-               "history_z", "history_v", "outputs")
+               "history_z", "history_v", "road_line", "road_run", "outputs")
 
     def to_bytes(self) -> bytes:
         """A self-checking byte string: a JSON header (format, scalars, array layout, SHA-256
@@ -603,12 +617,11 @@ class ContactState:
 def _state_methods():
     def get_state(self: ContactSimulator) -> ContactState:
         z, vz, heights, slopes = self._seen
-        t, zz, vv = self.road.history()
         return ContactState(
             time=self.time, last_step_s=self._last_step_s, q=self._q.copy(), df=self.df.copy(),
             active=self.active.copy(), penetration=self.penetration.copy(),
             rate=self.rate.copy(), seen=np.concatenate([[z, vz], heights, slopes]),
-            ring_out=self._ring_out.copy(), history_t=t, history_z=zz, history_v=vv,
+            ring_out=self._ring_out.copy(), **self.road.get_state(),
             outputs=np.array(self._values))
 
     def set_state(self: ContactSimulator, state: ContactState) -> None:
@@ -624,6 +637,13 @@ def _state_methods():
         if wrong:
             raise StateError("state of another model (build both with the same parameters): "
                              + "; ".join(wrong))
+        road = RoadReader(self.contact.windows)
+        try:
+            road.set_state({name: getattr(state, name) for name in (
+                "history_t", "history_z", "history_v", "road_line", "road_run")})
+        except ValueError as error:
+            raise StateError(f"state of another model: {error}") from error
+        self.road = road  # checked in full before anything changes
         self.time = state.time
         self._q[:] = state.q
         self.df = state.df.copy()
@@ -636,7 +656,6 @@ def _state_methods():
         self._last_step_s = state.last_step_s
         self._last = (None if math.isnan(state.last_step_s)
                       else self._kernel(state.last_step_s).last)
-        self.road.set_history(state.history_t, state.history_z, state.history_v)
         self._values = tuple(float(v) for v in state.outputs)
 
     return get_state, set_state

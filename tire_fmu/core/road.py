@@ -87,10 +87,11 @@ def window_reads(t, z, v, now: float, windows: RoadWindows):
 class RoadReader:
     """Keeps the road history a set of windows needs and reads the road under each node."""
 
-    def __init__(self, windows: RoadWindows):
+    def __init__(self, windows: RoadWindows, delay_line: bool = True):
         self.windows = windows
         self.delayed = bool(np.any(windows.late_s > 0))
         self.horizon_s = windows.horizon_s
+        self.delay_line = delay_line  # False: always read the history (a reference path)
         self.reset()
 
     def reset(self) -> None:
@@ -107,10 +108,34 @@ class RoadReader:
             return self._line.history()
         return self.history_t.copy(), self.history_z.copy(), self.history_v.copy()
 
-    def set_history(self, t, z, v) -> None:
+    def get_state(self) -> dict[str, np.ndarray]:
+        """The history, and the delay line's own buffer while it runs, so that a restored
+        reader continues with the same arithmetic, bit for bit."""
+        t, z, v = self.history()
+        line = self._line
+        raw = (np.zeros(0) if line is None else np.concatenate(
+            [[line.h, line._start, line._count, line.newest_time], line._buffer]))
+        run = -1 if self._uniform_run is None else self._uniform_run
+        return {"history_t": t, "history_z": z, "history_v": v, "road_line": raw,
+                "road_run": np.array([run], dtype=np.int64)}
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
         self.reset()
-        self.history_t, self.history_z, self.history_v = (np.array(a, dtype=float)
-                                                          for a in (t, z, v))
+        self.history_t, self.history_z, self.history_v = (
+            np.array(state[k], dtype=float) for k in ("history_t", "history_z", "history_v"))
+        run = int(state["road_run"][0])
+        self._uniform_run = None if run < 0 else run
+        raw = np.asarray(state["road_line"], dtype=float)
+        if raw.size:
+            h = float(raw[0])
+            line = _DelayLine(self.windows, h, [], [], [])
+            if raw.size != 4 + line._buffer.size:
+                raise ValueError(f"road delay line of {raw.size - 4} values, expected "
+                                 f"{line._buffer.size}")
+            line._start, line._count = int(raw[1]), int(raw[2])
+            line.newest_time = float(raw[3])
+            line._buffer[:] = raw[4:]
+            self._line, self._line_h = line, h
 
     # -- reading ---------------------------------------------------------------------------
     def read(self, now: float, z: float, vz: float, h: float, heights: np.ndarray,
@@ -147,7 +172,7 @@ class RoadReader:
         elif appended:
             uniform = t.size > 1 and abs(t[-1] - t[-2] - h) <= resolution
             self._uniform_run = self._uniform_run + 1 if uniform else 1
-        if self._uniform_run >= needed:
+        if self._uniform_run >= needed and self.delay_line:
             self._line = _DelayLine(self.windows, h, self.history_t[-needed:],
                                     self.history_z[-needed:], self.history_v[-needed:])
             self._line_h = h
