@@ -432,3 +432,62 @@ def test_linear_contact_is_the_linearised_model(contact_models):
     sine = lambda t: (1e-5 * np.sin(300 * t), 3e-3 * np.cos(300 * t))  # noqa: E731
     a, b = (run(s, sine, 400) for s in small)
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-9)  # same while nothing lifts
+
+
+def _window_average(signal, times, early, late, points=48):
+    """The road under a node at each of ``times``: ``signal`` averaged over
+    [t - late, t - early] (Gauss-Legendre)."""
+    if late <= early:
+        return signal(times - early)
+    x, w = np.polynomial.legendre.leggauss(points)
+    mid, half = times - 0.5 * (early + late), 0.5 * (late - early)
+    return 0.5 * signal(mid[:, None] + half * x[None, :]) @ w
+
+
+@pytest.mark.parametrize("speed", [0.0, 15.0])
+def test_linear_contact_steps_match_scipy_on_the_linearised_model(speed):
+    """The two-sided contact is the linearised loaded model; stepped through its interface
+    solve at h = 1e-4 s, the forces follow that model's state space solved by scipy on a
+    ten times finer step, fed the road each node sees (its window average of the signal)."""
+    import scipy.signal as ss
+
+    contact = build_contact_model(TireParameters(),
+                                  OperatingPoint(n_elements=60, speed_m_s=speed),
+                                  settings=ContactSettings(law="linear"))
+    io = build_io_model(contact.model)
+    h, fine = 1e-4, 1e-5
+    duration, f0, f1 = 0.12, 5.0, 200.0
+    k = (f1 / f0) ** (1 / duration)
+
+    def height(time):  # a smooth sweep that starts at rest
+        time = np.clip(time, 0.0, None)
+        return 1e-3 * (1 - np.cos(2 * np.pi * f0 * (k**time - 1) / np.log(k)))
+
+    def rate(time):
+        time = np.clip(time, 0.0, None)
+        phase = 2 * np.pi * f0 * (k**time - 1) / np.log(k)
+        return 1e-3 * np.sin(phase) * 2 * np.pi * f0 * k**time
+
+    t = np.arange(0.0, duration, h)
+    sim = ContactSimulator(contact)
+    static = np.array([contact.static_outputs[n] for n in ("rim_Fz", "rim_Fx", "contact_Fz")])
+    ours = [np.zeros(3)]
+    for i in range(t.size - 1):
+        sim.step_values(h, 0.0, 0.0, height(t[i]), rate(t[i]))
+        ours.append(np.array(sim.outputs_with(0.0, 0.0, height(t[i + 1]),
+                                              rate(t[i + 1]))[:3]) - static)
+    ours = np.array(ours)
+    windows = io.road_windows
+    t_ref = np.arange(0.0, duration - h / 2, fine)
+    pairs = list(zip(windows.early_s, windows.late_s))
+    r = np.column_stack([np.zeros_like(t_ref)]
+                        + [_window_average(height, t_ref, a, b) for a, b in pairs])
+    rdot = np.column_stack([np.zeros_like(t_ref)]
+                           + [_window_average(rate, t_ref, a, b) for a, b in pairs])
+    _, full, _ = ss.lsim(ss.StateSpace(io.a.toarray(), io.b, io.c, io.d), r, t_ref,
+                         interp=True)
+    full = (full + rdot @ io.e.T)[np.round(t / fine).astype(int)]
+    for row in (0, 1, 2) if speed else (0, 2):  # rim_Fx is zero by symmetry at rest
+        scale = np.abs(full[:, row]).max()
+        error = np.abs(ours[:, row] - full[:, row]).max() / scale
+        assert error < 2e-3, (row, error)

@@ -26,7 +26,7 @@ from tire_fmu.core.reduction import (
     reduce,
     static_outputs,
 )
-from tire_fmu.core.simulation import OUTPUT_NAMES, StepError, TireSimulator
+from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
 from tire_fmu.core.stepping import DenseStepper, DiagonalStepper, phi_functions
 
 PAPER_SPEED = 20 * np.pi * 0.65
@@ -180,121 +180,11 @@ def test_diagonal_and_matrix_exponential_steps_agree(small_models):
         np.testing.assert_allclose(y_diag, y_dense, rtol=1e-9, atol=1e-9 * np.abs(y_dense).max())
 
 
-@pytest.mark.parametrize("speed", [0.0, 15.0])
-def test_variable_steps_equal_fixed_steps_where_they_coincide(small_models, speed):
-    """Ramped inputs are what a step integrates exactly, so any step sequence reaching the
-    same time gives the same state. At speed the road is only known at the communication
-    points and read back through the delay line, so there the road is held (a level road
-    reads back exactly) while the rim ramps."""
-    reduced = reduce(small_models[speed], report=False)
-    slope = 2e-3  # m/s
-    road_slope = slope if speed == 0.0 else 0.0
-
-    def run(steps):
-        sim = TireSimulator(reduced)
-        for h in steps:
-            t = sim.time
-            sim.step(h, 0.3 * slope * t, 0.3 * slope, 1e-3 + road_slope * t, road_slope)
-        return sim
-
-    fixed = run([1e-3] * 12)
-    variable = run([1e-3, 2e-3, 4e-3, 5e-4, 5e-4, 2e-3, 2e-3])
-    assert variable.time == pytest.approx(fixed.time, abs=1e-15)
-    np.testing.assert_allclose(variable.outputs, fixed.outputs, rtol=1e-10)
-    np.testing.assert_allclose(variable.q, fixed.q, rtol=1e-8, atol=1e-14)
-
-
-def _simulate(reduced, t, z, vz):
-    sim = TireSimulator(reduced)
-    out = [sim.outputs.copy()]
-    for k in range(t.size - 1):
-        out.append(sim.step(t[k + 1] - t[k], 0.0, 0.0, z[k], vz[k]).copy())
-    static = np.array([reduced.static_outputs[n] for n in OUTPUT_NAMES])
-    return np.array(out) - static
-
-
-@pytest.mark.parametrize("signal", ["step", "sweep"])
-def test_stepping_matches_scipy_signal_on_the_full_model_at_rest(small_models, signal):
-    model = small_models[0.0]
-    reduced = reduce(model)
-    io = build_io_model(model)
-    h = 1e-4
-    t = np.arange(0.0, 0.25, h)
-    if signal == "step":
-        z = np.where(t >= 0.01, 1e-3, 0.0)
-    else:
-        z = 1e-3 * ss.chirp(t, 2.0, t[-1], 300.0, method="logarithmic", phi=-90)
-    vz = np.r_[np.diff(z) / h, 0.0]  # secant slopes: the ramps lsim's linear hold also sees
-    ours = _simulate(reduced, t, z, vz)
-    inputs = np.column_stack([np.zeros_like(z), z])
-    _, full, _ = ss.lsim(ss.StateSpace(io.a.toarray(), io.b, io.c, io.d), inputs, t,
-                         interp=True)
-    full = full + np.column_stack([np.zeros_like(z), np.r_[0.0, vz[:-1]]]) @ io.e.T
-    for row in (0, 2, 3):  # rim_Fx is zero by symmetry at rest
-        scale = np.abs(full[:, row]).max()
-        error = np.abs(ours[:, row] - full[:, row]).max() / scale
-        assert error < 5 * reduced.report.max_relative_error + 1e-6, (OUTPUT_NAMES[row], error)
-
-
-def test_stepping_matches_scipy_signal_on_the_full_model_rolling(small_models):
-    """At speed each patch-node group sees the road delayed; scipy gets the same delayed
-    road, sampled from the exact signal, on a fine step."""
-    model = small_models[15.0]
-    reduced = reduce(model)
-    io = build_io_model(model)
-    h = 2.5e-5
-    t = np.arange(0.0, 0.12, h)
-    f0, f1, duration = 5.0, 200.0, t[-1]
-    k = (f1 / f0) ** (1 / duration)
-
-    def road(time):  # a smooth sweep that starts at rest
-        time = np.clip(time, 0.0, None)
-        phase = 2 * np.pi * f0 * (k**time - 1) / np.log(k)
-        return 1e-3 * (1 - np.cos(phase)), 1e-3 * np.sin(phase) * 2 * np.pi * f0 * k**time
-
-    z, vz = road(t)
-    ours = _simulate(reduced, t, z, vz)
-    delays = io.input_delays_s
-    r = np.column_stack([np.zeros_like(t)] + [road(t - d)[0] for d in delays[1:]])
-    # the direct velocity term reads the slope the step ramped with: the one at its start
-    rdot = np.column_stack([np.zeros_like(t)] + [road(t - h - d)[1] for d in delays[1:]])
-    _, full, _ = ss.lsim(ss.StateSpace(io.a.toarray(), io.b, io.c, io.d), r, t, interp=True)
-    full = full + rdot @ io.e.T
-    for row in range(4):
-        scale = np.abs(full[:, row]).max()
-        error = np.abs(ours[:, row] - full[:, row]).max() / scale
-        assert error < 5 * reduced.report.max_relative_error + 1e-3, (OUTPUT_NAMES[row], error)
-
-
-def test_simulator_refuses_bad_steps_and_keeps_its_state(small_models):
-    sim = TireSimulator(reduce(small_models[0.0], report=False))
-    sim.step(1e-3, 0.0, 0.0, 1e-3, 0.0)
-    before = sim.get_state()
-    for bad in ((0.0, 0, 0, 0, 0), (-1e-3, 0, 0, 0, 0), (1e-3, np.nan, 0, 0, 0),
-                (1e-3, 0, 0, np.inf, 0)):
-        with pytest.raises(StepError):
-            sim.step(*bad)
-    after = sim.get_state()
-    assert after.time == before.time and np.array_equal(after.q, before.q)
-
-
-def test_simulator_state_round_trip_reproduces_a_step(small_models):
-    sim = TireSimulator(reduce(small_models[15.0], report=False))
-    for i in range(20):
-        sim.step(1e-3, 0.0, 0.0, 1e-3 * np.sin(i), 0.0)
-    saved = sim.get_state().to_bytes()
-    first = sim.step(1e-3, 0.0, 0.0, 2e-3, 0.0).copy()
-    sim.step(1e-3, 0.0, 0.0, -1e-3, 0.0)
-    sim.set_state(type(sim.get_state()).from_bytes(saved))
-    again = sim.step(1e-3, 0.0, 0.0, 2e-3, 0.0)
-    np.testing.assert_array_equal(first, again)
-
-
 def test_npz_round_trip_is_bit_exact_and_rejects_tampering(small_models, tmp_path):
     reduced = reduce(small_models[15.0])
     path = save_npz(reduced, tmp_path / "tire.npz")
     back = load_npz(path)
-    for name in ("eigenvalues", "b", "c", "d", "e", "input_delays_s"):
+    for name in ("eigenvalues", "b", "c", "d", "e"):
         assert np.array_equal(getattr(back, name), getattr(reduced, name))
         assert getattr(back, name).dtype == getattr(reduced, name).dtype
     assert back.static_outputs == reduced.static_outputs
@@ -354,64 +244,3 @@ def test_python_control_state_space(small_models):
     dc = control.dcgain(system)
     assert dc[0, 0] == pytest.approx(-small_models[0.0].static_vertical_stiffness_n_per_m,
                                      rel=1e-9)
-
-
-@pytest.mark.parametrize("speed", [0.0, 15.0])
-def test_feedthrough_at_the_ramp_end_is_the_step_output(small_models, speed):
-    sim = TireSimulator(reduce(small_models[speed], report=False))
-    h = 2e-4
-    for _ in range(40):
-        t = sim.time
-        z, v = 1e-3 * np.sin(60 * t), 6e-2 * np.cos(60 * t)
-        stepped = sim.step(h, 0.5 * z, 0.5 * v, z, v).copy()
-    again = sim.outputs_with(0.5 * (z + v * h), 0.5 * v, z + v * h, v)
-    # at rest the step's own end-of-ramp inputs give its outputs back to rounding; at speed
-    # the delayed road is read from the history with the new sample in it rather than
-    # extrapolated along each group's ramp, which differs at O(h²)
-    np.testing.assert_allclose(again, stepped, rtol=1e-11 if speed == 0 else 2e-4, atol=1e-9)
-    # a different rim velocity now moves the rim force by the rim dampers, -Tᵀ D_s T per m/s
-    faster = sim.outputs_with(0.5 * (z + v * h), 0.5 * v + 0.1, z + v * h, v)
-    damper = build_io_model(small_models[speed]).e[0, 0]
-    assert faster[0] - again[0] == pytest.approx(0.1 * damper, rel=1e-9)
-
-
-def test_feedthrough_read_with_the_new_inputs_converges_at_second_order(small_models):
-    """The contact force passes the road velocity straight through the contact damper, and
-    the stiff contact amplifies any lag. Read at a communication point with that point's
-    inputs (outputs_with), it converges at second order in h to the continuous response; the
-    outputs a step reports at its end, with the slope it ramped with, only at first order."""
-    model = small_models[0.0]
-    reduced = reduce(model, ReductionSettings(contribution_threshold=0.0))
-    io = build_io_model(model)
-    static = np.array([reduced.static_outputs[n] for n in OUTPUT_NAMES])
-    duration, f0, f1 = 0.1, 2.0, 300.0
-    growth = (f1 / f0) ** (1 / duration)
-
-    def road(t):
-        phase = 2 * np.pi * f0 * (growth**t - 1) / np.log(growth)
-        return 1e-3 * (1 - np.cos(phase)), 1e-3 * np.sin(phase) * 2 * np.pi * f0 * growth**t
-
-    fine = 5e-6  # the continuous response: scipy on a step 20 times finer
-    t_ref = np.arange(0.0, duration, fine)
-    z_ref, v_ref = road(t_ref)
-    _, reference, _ = ss.lsim(ss.StateSpace(io.a.toarray(), io.b, io.c, io.d),
-                              np.column_stack([0 * z_ref, z_ref]), t_ref, interp=True)
-    reference = reference[:, 2] + v_ref * io.e[2, 1]
-    errors = {}
-    for h in (1e-4, 5e-5):
-        t = np.arange(0.0, duration - h, h)
-        z, v = road(t)
-        sim = TireSimulator(reduced)
-        stepped, read = [], []
-        for k in range(t.size - 1):
-            stepped.append(sim.step(h, 0.0, 0.0, z[k], v[k])[2] - static[2])
-            read.append(sim.outputs_with(0.0, 0.0, z[k + 1], v[k + 1])[2] - static[2])
-        exact = reference[np.round(t[1:] / fine).astype(int)]
-        scale = np.abs(exact).max()
-        errors[h] = (np.abs(np.array(stepped) - exact).max() / scale,
-                     np.abs(np.array(read) - exact).max() / scale)
-    (step_coarse, read_coarse), (step_fine, read_fine) = errors[1e-4], errors[5e-5]
-    assert read_coarse < 0.2 * step_coarse
-    assert read_coarse / read_fine > 3.2  # second order
-    assert step_coarse / step_fine < 2.5  # first order
-    assert read_fine < 0.02
