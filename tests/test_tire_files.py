@@ -10,7 +10,7 @@ from dataclasses import fields, replace
 import numpy as np
 import pytest
 
-from tire_fmu.core import TireParameters, analytic_modes, build_model, critical_speed, validate
+from tire_fmu.core import TireParameters, analytic_modes, critical_speed, validate
 from tire_fmu.tire_files import (
     TireFileError,
     read_tire_file,
@@ -153,8 +153,12 @@ def test_python_fmu_built_with_a_tire_file_runs_as_the_core_with_that_tire(tmp_p
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
-    from tire_fmu.core.reduction import ReductionSettings, reduce
-    from tire_fmu.core.simulation import INPUT_NAMES, OUTPUT_NAMES, TireSimulator
+    from tire_fmu.core.contact_dynamics import (
+        INPUT_NAMES,
+        OUTPUT_NAMES,
+        ContactSimulator,
+        build_contact_model,
+    )
 
     code, out, _ = run(capsys, "build-fmu", str(tmp_path), "--tire-file", "GL073A_shear",
                        "--json")
@@ -171,7 +175,7 @@ def test_python_fmu_built_with_a_tire_file_runs_as_the_core_with_that_tire(tmp_p
     speed = 12.0
     tire, op = validate(shear.as_dict(), {"n_elements": N, "load_n": 27_000.0,
                                           "speed_m_s": speed})
-    core = TireSimulator(reduce(build_model(tire, op), ReductionSettings(), report=False))
+    core = ContactSimulator(build_contact_model(tire, op))
     refs = {v.name: v.valueReference for v in description.modelVariables}
     fmu = FMU2Slave(guid=description.guid, unzipDirectory=extract(path),
                     modelIdentifier=description.coSimulation.modelIdentifier,
@@ -199,7 +203,7 @@ def test_python_fmu_built_with_a_tire_file_runs_as_the_core_with_that_tire(tmp_p
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-12 * 27_000.0)
     # and it is not the paper's tire that ran
     paper, op = validate({}, {"n_elements": N, "load_n": 27_000.0, "speed_m_s": speed})
-    other = TireSimulator(reduce(build_model(paper, op), ReductionSettings(), report=False))
+    other = ContactSimulator(build_contact_model(paper, op))
     differs = np.array([other.step(h, *u) for u in inputs]) - np.array(got)
     assert np.max(np.abs(differs)) > 1.0  # newtons
     del fmpy

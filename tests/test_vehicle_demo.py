@@ -198,7 +198,9 @@ def test_cosimulated_transfer_functions_agree_at_speed_with_a_finer_step(fmus):
     reference = ride_response(CAR, full_tire_two_port(model, estimate.freqs_hz))
     for name, a in agreement(estimate, reference, f_max_hz=300.0).items():
         assert a.max_deviation_db < 1.0, (name, a)
-        assert a.f_max_compared_hz > 190.0, (name, a)
+        # the body's response falls below the comparison floor first: at 20 m/s the
+        # footprint averages the road over its length
+        assert a.f_max_compared_hz > (140.0 if name == "body_acc" else 190.0), (name, a)
 
 
 def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, model):
