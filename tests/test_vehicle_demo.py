@@ -238,8 +238,8 @@ def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
         assert np.abs(states).max() < 1e-10
     for acc in (result.body_az_m_s2, result.wheel_az_m_s2):
         assert np.abs(acc).max() < 1e-8
-    assert np.abs(result.rim_fz_n - load).max() < 1e-9 * load
-    assert np.abs(result.contact_fz_n - load).max() < 1e-9 * load
+    assert np.abs(result.rim_Fz_n - load).max() < 1e-9 * load
+    assert np.abs(result.contact_Fz_n - load).max() < 1e-9 * load
     assert result.in_contact.all()
 
 

@@ -293,14 +293,14 @@ def plot_speed_sweep(result, path: Path) -> Path:
     if np.isfinite(critical) and critical <= 1.15 * v.max():
         right = max(right, critical) * 1.02
         ax.axvline(critical, color="C3", lw=1.4, ls="-.")
-        ax.text(critical, 0.985 * result.fmax_hz, f"critical speed {critical:.3g} m/s ",
+        ax.text(critical, 0.985 * result.f_max_hz, f"critical speed {critical:.3g} m/s ",
                 color="C3", fontsize=8, va="top", ha="right",
                 bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1})
     else:
         ax.text(0.99, 0.985, f"critical speed {critical:.3g} m/s (off scale)", ha="right",
                 va="top", transform=ax.transAxes, fontsize=8, color="C3")
     ax.set_xlim(v.min(), right)
-    ax.set_ylim(0.0, result.fmax_hz)
+    ax.set_ylim(0.0, result.f_max_hz)
     ax.set_xlabel("speed V [m/s]")
     ax.set_ylabel("ground-frame frequency [Hz]")
     radius = result.radius_m

@@ -211,8 +211,8 @@ class CoSimResult:
     wheel_z_m: np.ndarray
     wheel_vz_m_s: np.ndarray
     wheel_az_m_s2: np.ndarray
-    rim_fz_n: np.ndarray  # total
-    contact_fz_n: np.ndarray  # total
+    rim_Fz_n: np.ndarray  # total
+    contact_Fz_n: np.ndarray  # total
     in_contact: np.ndarray  # the tire FMU's flag
     static_load_n: float
     step_s: float
@@ -223,11 +223,11 @@ class CoSimResult:
     @property
     def rim_load_n(self) -> np.ndarray:
         """Dynamic rim load (total minus static)."""
-        return self.rim_fz_n - self.static_load_n
+        return self.rim_Fz_n - self.static_load_n
 
     @property
     def contact_force_n(self) -> np.ndarray:
-        return self.contact_fz_n - self.static_load_n
+        return self.contact_Fz_n - self.static_load_n
 
     @property
     def real_time_factor(self) -> float:
@@ -379,8 +379,8 @@ class QuarterCarCoSimulation:
             time_s=times, road_z_m=road_z, road_vz_m_s=road_vz,
             body_z_m=out[:, 3].copy(), body_az_m_s2=out[:, 4].copy(),
             wheel_z_m=out[:, 0].copy(), wheel_vz_m_s=out[:, 1].copy(),
-            wheel_az_m_s2=out[:, 2].copy(), rim_fz_n=out[:, 5].copy(),
-            contact_fz_n=out[:, 6].copy(), in_contact=flags, static_load_n=static_load,
+            wheel_az_m_s2=out[:, 2].copy(), rim_Fz_n=out[:, 5].copy(),
+            contact_Fz_n=out[:, 6].copy(), in_contact=flags, static_load_n=static_load,
             step_s=h, scheme=self.scheme, wall_s=wall, tire_log=tuple(tire.log),
         )
 

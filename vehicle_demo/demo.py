@@ -225,10 +225,10 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
     for label, run in (("ISO road", road_run_iso), ("cleat", cleat_run)):
         rows += [
             (f"{label}: body acceleration RMS", float(np.std(run.body_az_m_s2)), "m/s2"),
-            (f"{label}: rim load min / max", f"{run.rim_fz_n.min():.0f} / "
-             f"{run.rim_fz_n.max():.0f}", "N"),
-            (f"{label}: contact force min / max", f"{run.contact_fz_n.min():.0f} / "
-             f"{run.contact_fz_n.max():.0f}", "N"),
+            (f"{label}: rim load min / max", f"{run.rim_Fz_n.min():.0f} / "
+             f"{run.rim_Fz_n.max():.0f}", "N"),
+            (f"{label}: contact force min / max", f"{run.contact_Fz_n.min():.0f} / "
+             f"{run.contact_Fz_n.max():.0f}", "N"),
             (f"{label}: contact lost", 100 * run.contact_lost_fraction, "%"),
             (f"{label}: real-time factor", run.real_time_factor, "-"),
         ]

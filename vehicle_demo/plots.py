@@ -141,8 +141,8 @@ def plot_road_run(result, path, title: str = "") -> Path:
     road.plot(t, 1e3 * result.body_z_m, color="#2ca02c", lw=1.4, label="body")
     road.set_ylabel("displacement [mm]")
     road.legend(loc="upper right", fontsize=8, ncol=3)
-    force.plot(t, 1e-3 * result.rim_fz_n, color="#ff7f0e", lw=1, label="rim load (tire on rim)")
-    force.plot(t, 1e-3 * result.contact_fz_n, color=COLOURS["full"], lw=0.7, alpha=0.8,
+    force.plot(t, 1e-3 * result.rim_Fz_n, color="#ff7f0e", lw=1, label="rim load (tire on rim)")
+    force.plot(t, 1e-3 * result.contact_Fz_n, color=COLOURS["full"], lw=0.7, alpha=0.8,
                label="contact force (road on tire)")
     force.axhline(1e-3 * result.static_load_n, color="0.3", ls="--", lw=1,
                   label=f"static load {result.static_load_n / 1e3:.1f} kN")

@@ -42,7 +42,7 @@ def register(subparsers) -> None:
     add_mesh_option(p)
     add_contact_options(p, "default 0: the undeformed tire")
     add_speed_options(p)
-    p.add_argument("--fmax", metavar="HZ", type=float, default=300.0,
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=300.0,
                    help="highest frequency listed in Hz (default 300)")
     add_tire_options(p)
     add_output_options(p)
@@ -116,9 +116,9 @@ DEFAULT_ELEMENT_LIST = "20,40,60,80,100,150,200,300,400"
 
 
 def run_modes(args: argparse.Namespace) -> Output:
-    raise_problems([positive_problem("--fmax", args.fmax, "Hz")])
+    raise_problems([positive_problem("--max-frequency", args.max_frequency, "Hz")])
     model = model_from_args(args, undeformed_default=True)
-    result = modal_analysis(model, fmax_hz=args.fmax)
+    result = modal_analysis(model, f_max_hz=args.max_frequency)
     rolling = model.speed_m_s > 0
     header = ["#", "f [Hz]", "order", "phase", "symmetry" if not rolling else "direction",
               "zeta"]
@@ -128,7 +128,7 @@ def run_modes(args: argparse.Namespace) -> Output:
         rows.append([i + 1, m.frequency_hz, m.order, m.phase, label, m.damping_ratio])
     summary = model.summary()
     head = (
-        f"{len(result.modes)} modes up to {args.fmax:g} Hz; N = {model.n_elements}, "
+        f"{len(result.modes)} modes up to {args.max_frequency:g} Hz; N = {model.n_elements}, "
         f"patch {summary['patch_length_m'] * 100:.3g} cm, load {summary['load_n']:.4g} N, "
         f"speed {model.speed_m_s:g} m/s"
     )

@@ -41,8 +41,9 @@ class FmuBuildError(RuntimeError):
     """The FMU could not be built, or what was built does not validate."""
 
 
-def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
-    """Write ``TireModal.fmu`` into ``out_dir`` (created if missing) and return its path.
+def build_fmu(out: str | Path = ".", validate: bool = True) -> Path:
+    """Write the FMU to ``out`` and return its path: a path ending in ``.fmu``, or a folder
+    (created if missing) to hold ``TireModal.fmu``.
 
     ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
     :class:`FmuBuildError` listing any problem.
@@ -50,9 +51,17 @@ def build_fmu(out_dir: str | Path = ".", validate: bool = True) -> Path:
     with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
         project = _stage_project(Path(staging) / "project")
         return build_pythonfmu(
-            _SLAVE_SOURCE, Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu", SLAVE_MODULE,
+            _SLAVE_SOURCE, fmu_destination(out, MODEL_IDENTIFIER), SLAVE_MODULE,
             project_files=project, capabilities=CAPABILITIES,
             units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate)
+
+
+def fmu_destination(out: str | Path, model_identifier: str) -> Path:
+    """``out`` itself when it names a ``.fmu`` file, else ``out/<model_identifier>.fmu``."""
+    out = Path(out)
+    if out.suffix.lower() == ".fmu" and not out.is_dir():
+        return out
+    return out / f"{model_identifier}.fmu"
 
 
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
