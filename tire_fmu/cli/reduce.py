@@ -29,7 +29,6 @@ from .common import (
 )
 
 
-
 def output_name(text: str) -> str:
     """An output by its FMU name (rim_Fz, ...), whatever the letter case."""
     by_lower = {name.lower(): name for name in OUTPUT_NAMES}

@@ -212,8 +212,8 @@ def run_speed_sweep(args: argparse.Namespace) -> Output:
     ]
     if result.loaded is not None:
         counts = ", ".join(f"{len(r.modes)}" for r in result.loaded)
-        lines += ["", f"loaded, patch {args.patch_length * 100:.3g} cm: modes up to {f_max_hz:g} Hz "
-                  f"per speed: {counts} (all in --json)"]
+        lines += ["", f"loaded, patch {args.patch_length * 100:.3g} cm: modes up to "
+                  f"{f_max_hz:g} Hz per speed: {counts} (all in --json)"]
     output = Output(text="\n".join(lines), data=result.to_dict())
     write_plot(args, output, plot_with("plot_speed_sweep", result))
     return output
