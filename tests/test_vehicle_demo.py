@@ -142,15 +142,16 @@ def test_spring_damper_reference_is_the_classic_quarter_car():
 
 # -- the quarter-car FMU ---------------------------------------------------------------------
 
+@pytest.mark.fmu
 def test_quarter_car_fmu_validates_and_steps_exactly(fmus):
     from fmpy.validation import validate_fmu
 
-    from vehicle_demo.cosim import CAR_FMU_NAMES, FmuInstance
+    from vehicle_demo.cosim import FmuInstance
 
     assert validate_fmu(str(fmus.quarter_car)) == []
     unit = FmuInstance(fmus.quarter_car, "qc")
     try:
-        unit.start({CAR_FMU_NAMES[k]: v for k, v in CAR.as_dict().items()})
+        unit.start(CAR.fmu_values())
         force_step, h = 1000.0, 1e-3
         vrs = [unit.vr("rim_Fz"), unit.vr("rim_Fz_rate")]
         unit.fmu.setReal(vrs, [CAR.static_tire_load_n + force_step, 0.0])
@@ -169,6 +170,7 @@ def test_quarter_car_fmu_validates_and_steps_exactly(fmus):
 
 # -- the co-simulation: the acceptance -------------------------------------------------------
 
+@pytest.mark.fmu
 def test_cosimulated_transfer_functions_agree_with_the_full_model(transfer_run):
     result, estimate, reference = transfer_run
     assert result.contact_lost_fraction == 0.0  # the small-signal excitation keeps contact
@@ -182,6 +184,7 @@ def test_cosimulated_transfer_functions_agree_with_the_full_model(transfer_run):
         assert a.f_max_compared_hz > 200.0, (name, a)
 
 
+@pytest.mark.fmu
 def test_cosimulated_transfer_functions_agree_at_speed_with_a_finer_step(fmus):
     """At 20 m/s the road crosses the patch with delays; the contact force's road feedthrough
     needs the finer step for 1 dB there (its error is second order in h: about 1.4 dB at
@@ -201,6 +204,7 @@ def test_cosimulated_transfer_functions_agree_at_speed_with_a_finer_step(fmus):
         assert a.f_max_compared_hz > 190.0, (name, a)
 
 
+@pytest.mark.fmu
 def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, model):
     _, estimate, reference = transfer_run
     modes = quarter_car_modes(CAR, model)
@@ -222,6 +226,7 @@ def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, 
     assert modes.massless.wheel_hop_hz > 1.04 * modes.wheel_hop.frequency_hz
 
 
+@pytest.mark.fmu
 @pytest.mark.parametrize("speed", [0.0, 10.0])
 def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
     from vehicle_demo.cosim import cosimulate
@@ -310,6 +315,7 @@ def test_cleat_has_its_height_and_length(shape):
 
 # -- sweeps ----------------------------------------------------------------------------------
 
+@pytest.mark.fmu
 def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
     from vehicle_demo.sweep import (
         RESULT_COLUMNS,
@@ -341,6 +347,7 @@ def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
     assert serial.table["body_bounce_hz"][1] < serial.table["body_bounce_hz"][0]
 
 
+@pytest.mark.fmu
 def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
     from vehicle_demo.sweep import SweepError, run_sweep
 
@@ -350,6 +357,7 @@ def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
 
 # -- the demo and its command line -----------------------------------------------------------
 
+@pytest.mark.fmu
 def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
     import shutil
 
@@ -367,6 +375,68 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
     text = format_summary(summary)
     assert "wheel hop" in text and "body bounce" in text
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--road-speed", "1000"], "--road-speed = 1000.0 m/s: must be >= 0 and below the critical "
+                               "speed 42.67 m/s of the mesh (N = 100)"),
+    (["--n-elements", "3"], "--n-elements = 3: must be an integer in [8, 20000]"),
+    (["--quick", "--n-elements", "400", "--road-speed", "-1"],
+     "--road-speed = -1.0 m/s: must be >= 0 and below the critical speed 10.76"),
+])
+def test_demo_settings_are_refused_before_anything_is_built(tmp_path, capsys, monkeypatch,
+                                                             argv, message):
+    import vehicle_demo.demo as demo
+    from vehicle_demo.__main__ import main
+
+    monkeypatch.setattr(demo, "ensure_fmus", lambda *_, **__: pytest.fail("built the FMUs"))
+    out = tmp_path / "out"
+    assert main(["--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vehicle_demo: error: ") and message in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_demo_without_its_packages_names_the_extra_and_leaves_no_folder(tmp_path, capsys,
+                                                                        monkeypatch):
+    import sys
+
+    from vehicle_demo.__main__ import main
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if it were not installed
+    out = tmp_path / "out"
+    assert main(["--out", str(out), "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "the demo needs matplotlib: pip install 'tire_fmu[demo]'" in err
+    assert not out.exists()
+
+
+def test_the_quarter_car_is_defined_once():
+    from dataclasses import fields
+
+    from tire_fmu.core.parameters import DEFAULT_LOAD_N
+    from tire_fmu.fmu.interface import same_fixed_value
+    from vehicle_demo import quarter_car_fmu
+
+    # the FMU's parameters and the master's names come from QuarterCarParameters' fields
+    assert [p[:3] for p in quarter_car_fmu.PARAMETERS] == [
+        (f.metadata["fmu_name"], f.default, f.metadata["unit"]) for f in fields(CAR)]
+    assert QuarterCarParameters.from_fmu_values(CAR.fmu_values()) == CAR
+    assert quarter_car_fmu.INPUTS[0][:2] == ("rim_Fz", CAR.static_tire_load_n)
+    # the core's default load is its own number, which the demo car happens to carry
+    assert DEFAULT_LOAD_N != CAR.static_tire_load_n
+    assert same_fixed_value(CAR.static_tire_load_n, DEFAULT_LOAD_N)
+
+
+def test_fixed_parameters_match_within_the_stated_tolerance():
+    from tire_fmu.fmu.interface import FIXED_PARAMETER_REL_TOLERANCE, same_fixed_value
+
+    load = 27654.753
+    assert same_fixed_value(27654.752999999997, load)
+    assert same_fixed_value(load * (1 + 0.5 * FIXED_PARAMETER_REL_TOLERANCE), load)
+    assert not same_fixed_value(load * (1 + 2 * FIXED_PARAMETER_REL_TOLERANCE), load)
+    assert same_fixed_value(0.0, 0.0) and not same_fixed_value(1e-300, 0.0)
+    assert not same_fixed_value(math.nan, math.nan)
 
 
 def test_command_line_reports_user_errors_in_one_line(tmp_path, capsys):

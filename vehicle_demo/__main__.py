@@ -39,6 +39,10 @@ def _demo_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: The demo's settings under the names of their options, for error messages.
+OPTION_NAMES = {"n_elements": "--n-elements", "road_speed_m_s": "--road-speed"}
+
+
 def _sweep_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m vehicle_demo sweep",
@@ -87,7 +91,7 @@ def _demo(argv) -> int:
     if args.n_elements is not None:
         overrides["n_elements"] = args.n_elements
     settings = DemoSettings.quick(**overrides) if args.quick else DemoSettings(**overrides)
-    summary = run_demo(settings)
+    summary = run_demo(settings, names=OPTION_NAMES)
     print(format_summary(summary))
     return 0
 

@@ -45,15 +45,6 @@ from .quarter_car import QuarterCarParameters
 SCHEMES = ("gauss-seidel", "jacobi")
 DEFAULT_STEP_S = 1e-4
 
-#: Quarter-car FMU parameter for each field of :class:`QuarterCarParameters`.
-CAR_FMU_NAMES = {
-    "body_mass_kg": "body_mass",
-    "wheel_mass_kg": "wheel_mass",
-    "suspension_stiffness_n_per_m": "suspension_stiffness",
-    "suspension_damping_n_s_per_m": "suspension_damping",
-    "gravity_m_s2": "gravity",
-}
-
 
 class CoSimError(RuntimeError):
     """An FMU refused a call; the message carries what the FMU logged."""
@@ -164,7 +155,12 @@ class FmuInstance:
 
     def start(self, parameters: Mapping[str, float | int | bool], start_time: float = 0.0
               ) -> None:
-        """(Re)initialise with ``parameters`` (FMU names): reset, set, initialise."""
+        """(Re)initialise with ``parameters`` (FMU names): reset, set, initialise.
+
+        A Real parameter that is fixed at export (a native tire FMU's ``load``) gets its
+        declared value when the given one matches it within
+        :data:`tire_fmu.fmu.interface.FIXED_PARAMETER_REL_TOLERANCE`: the car's weight
+        (2500 + 320)·g is 27654.752999999997 N, the export's load 27654.753 N."""
         try:
             if not self._fresh:
                 self.fmu.reset()
@@ -175,7 +171,7 @@ class FmuInstance:
             for name, value in parameters.items():
                 vr, kind = self.vr(name), self.variables[name].type
                 if kind == "Real":
-                    self.fmu.setReal([vr], [float(value)])
+                    self.fmu.setReal([vr], [self._declared_if_same(name, float(value))])
                 elif kind == "Integer":
                     self.fmu.setInteger([vr], [int(value)])
                 elif kind == "Boolean":
@@ -187,6 +183,15 @@ class FmuInstance:
             raise
         except Exception as error:
             raise self.fail("initialisation", error) from error
+
+    def _declared_if_same(self, name: str, value: float) -> float:
+        from tire_fmu.fmu.interface import same_fixed_value
+
+        variable = self.variables[name]
+        if variable.causality == "parameter" and variable.variability == "fixed" \
+                and variable.start is not None and same_fixed_value(value, variable.start):
+            return float(variable.start)
+        return value
 
     def get(self, names) -> list[float]:
         return self.fmu.getReal([self.vr(n) for n in names])
@@ -295,7 +300,7 @@ class QuarterCarCoSimulation:
             raise ValueError("road height and velocity must be 1-D arrays of one length >= 2")
         car = self.car
         static_load = car.static_tire_load_n
-        self.car_fmu.start({CAR_FMU_NAMES[k]: v for k, v in car.as_dict().items()}, start_time)
+        self.car_fmu.start(car.fmu_values(), start_time)
         self.tire.start({"load": static_load, **self.tire_parameters}, start_time)
         return self._loop(road_z, road_vz, static_load, start_time, progress)
 

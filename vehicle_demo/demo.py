@@ -28,7 +28,12 @@ from .transfer import Multisine
 
 
 class DemoError(RuntimeError):
-    """Something the user can fix (a missing package, an unwritable folder)."""
+    """Something the user can fix (a missing package, an unwritable folder, a bad setting)."""
+
+
+#: What the demo imports beyond numpy and scipy, and the extra of tire_fmu that brings it.
+DEMO_PACKAGES = ("pythonfmu", "fmpy", "matplotlib", "tqdm")
+DEMO_EXTRA = "demo"
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,55 @@ class DemoSettings:
         values.update(overrides)
         return cls(**values)
 
+    def problems(self, names: dict[str, str] | None = None) -> list[str]:
+        """Every setting the demo cannot run with, found before anything is built: a mesh
+        outside the core's range and speeds at or above the mesh's critical speed (the tire
+        FMU would refuse them only after the runs before them). ``names`` renames settings in
+        the messages (the command line's options)."""
+        from tire_fmu.core import TireParameters, critical_speed
+        from tire_fmu.core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
+
+        names = names or {}
+        found = []
+        n = self.n_elements
+        if not (isinstance(n, int) and MIN_ELEMENTS <= n <= MAX_ELEMENTS):
+            found.append(f"{names.get('n_elements', 'n_elements')} = {n!r}: must be an "
+                         f"integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]")
+            critical = math.inf  # the speeds are checked against a valid mesh only
+        else:
+            critical = critical_speed(TireParameters(), n).speed_m_s
+        for name in ("tf_speed_m_s", "road_speed_m_s", "cleat_speed_m_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value < critical):
+                limit = (f"below the critical speed {critical:.4g} m/s of the mesh "
+                         f"(N = {n})" if math.isfinite(critical) else "finite")
+                found.append(f"{names.get(name, name)} = {value!r} m/s: must be >= 0 and "
+                             f"{limit}")
+        if not (math.isfinite(self.step_s) and self.step_s > 0):
+            found.append(f"{names.get('step_s', 'step_s')} = {self.step_s!r} s: must be > 0")
+        return found
+
+
+def check_settings(settings: DemoSettings, names: dict[str, str] | None = None) -> None:
+    """Raise DemoError naming every bad setting and every missing package, before any
+    folder is made or FMU built."""
+    import importlib.util
+
+    found = settings.problems(names)
+    missing = [name for name in DEMO_PACKAGES if _missing(name, importlib.util)]
+    if missing:
+        found.append(f"the demo needs {', '.join(missing)}: pip install "
+                     f"'tire_fmu[{DEMO_EXTRA}]' (or '.[{DEMO_EXTRA}]' in a clone)")
+    if found:
+        raise DemoError("; ".join(found))
+
+
+def _missing(name: str, util) -> bool:
+    try:
+        return util.find_spec(name) is None
+    except (ImportError, ValueError):  # a module set to None in sys.modules, a broken one
+        return True
+
 
 def _sources() -> list[Path]:
     import tire_fmu
@@ -65,7 +119,7 @@ def _sources() -> list[Path]:
     package = Path(tire_fmu.__file__).parent
     here = Path(__file__).parent
     return [*package.glob("core/*.py"), *package.glob("fmu/*.py"), package / "__init__.py",
-            here / "quarter_car_fmu.py"]
+            here / "quarter_car_fmu.py", here / "vehicle_demo_quarter_car_dynamics.py"]
 
 
 def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
@@ -75,8 +129,8 @@ def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
 
         from .quarter_car_fmu import build_quarter_car_fmu
     except ImportError as error:
-        raise DemoError(f"building the FMUs needs pythonfmu and fmpy ({error}); "
-                        "pip install -e '.[test]'") from error
+        raise DemoError(f"building the FMUs needs pythonfmu and fmpy ({error}): "
+                        f"pip install 'tire_fmu[{DEMO_EXTRA}]'") from error
     folder = Path(folder)
     paths = FmuPaths(folder / "TireModal.fmu", folder / "QuarterCar.fmu")
     newest = max(p.stat().st_mtime for p in _sources() if p.exists())
@@ -107,9 +161,13 @@ class DemoSummary:
     wall_s: float
 
 
-def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
+def run_demo(settings: DemoSettings | None = None, log=print,
+             names: dict[str, str] | None = None) -> DemoSummary:
+    """The whole demo; ``names`` names the settings in error messages (see
+    :meth:`DemoSettings.problems`)."""
     settings = settings or DemoSettings()
     started = time.perf_counter()
+    check_settings(settings, names)
     out = Path(settings.out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -117,12 +175,6 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
         (out / ".write_test").unlink()
     except OSError as error:
         raise DemoError(f"cannot write to {out}: {error.strerror or error}") from error
-    try:
-        import matplotlib  # noqa: F401
-        import tqdm  # noqa: F401
-    except ImportError as error:
-        raise DemoError(f"the demo needs matplotlib and tqdm ({error}); "
-                        "pip install -e '.[test]'") from error
     fmus = ensure_fmus(out / "fmus", settings.rebuild, log)
     rows: list[tuple[str, float | str, str]] = []
     figures, tables = [], []

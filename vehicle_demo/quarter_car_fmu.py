@@ -22,6 +22,7 @@ force at the end of the ramp. Bad parameters, non-finite inputs or h <= 0 refuse
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 
 import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
@@ -30,24 +31,26 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from scipy.linalg import expm
 
 try:  # inside the FMU the dynamics module sits next to the slave, in resources/
-    from vehicle_demo_quarter_car_dynamics import two_mass_state_space
+    from vehicle_demo_quarter_car_dynamics import (
+        QuarterCarError,
+        QuarterCarParameters,
+        two_mass_state_space,
+    )
 except ImportError:  # in the package
-    from vehicle_demo.vehicle_demo_quarter_car_dynamics import two_mass_state_space
+    from vehicle_demo.vehicle_demo_quarter_car_dynamics import (
+        QuarterCarError,
+        QuarterCarParameters,
+        two_mass_state_space,
+    )
 
 DYNAMICS_MODULE = "vehicle_demo_quarter_car_dynamics"
 
-GRAVITY_M_S2 = 9.80665
-
-#: (name, start, unit, description) of the parameters, inputs and outputs.
-PARAMETERS = (
-    ("body_mass", 2500.0, "kg", "sprung (body) mass of the corner"),
-    ("wheel_mass", 320.0, "kg", "unsprung mass: wheel and axle share, without the tire"),
-    ("suspension_stiffness", 80e3, "N/m", "suspension spring between body and wheel"),
-    ("suspension_damping", 8.5e3, "N.s/m", "suspension damper between body and wheel"),
-    ("gravity", GRAVITY_M_S2, "m/s2", "gravitational acceleration"),
-)
+#: (name, start, unit, description) of the parameters (from QuarterCarParameters), inputs and
+#: outputs.
+PARAMETERS = tuple((f.metadata["fmu_name"], f.default, f.metadata["unit"],
+                    f.metadata["description"]) for f in fields(QuarterCarParameters))
 INPUTS = (
-    ("rim_Fz", (2500.0 + 320.0) * GRAVITY_M_S2, "N",
+    ("rim_Fz", QuarterCarParameters().static_tire_load_n, "N",
      "vertical force of the tire on the rim, TOTAL (static load included), z up"),
     ("rim_Fz_rate", 0.0, "N/s", "slope of rim_Fz over the step (0 = held)"),
 )
@@ -97,18 +100,18 @@ class QuarterCar(Fmi2Slave):
                                         initial=Fmi2Initial.exact, description=text))
 
     def exit_initialization_mode(self):
-        values = {name: getattr(self, name) for name, *_ in PARAMETERS}
-        bad = [f"{name} = {value!r}" for name, value in values.items()
-               if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0)]
-        if bad:
-            self._problem = "parameters must be finite and > 0: " + ", ".join(bad)
-            self.log(f"QuarterCar rejected its parameters: {self._problem}", Fmi2Status.error)
+        try:
+            car = QuarterCarParameters.from_fmu_values(
+                {name: getattr(self, name) for name, *_ in PARAMETERS})
+        except QuarterCarError as error:
+            self._problem = f"parameters rejected: {error}"
+            self.log(f"QuarterCar rejected its parameters: {error}", Fmi2Status.error)
             self._system = None
             return
-        m_b, m_w = values["body_mass"], values["wheel_mass"]
-        a, b = two_mass_state_space(m_b, m_w, values["suspension_stiffness"],
-                                    values["suspension_damping"])
-        self._system = (a, b, (m_b + m_w) * values["gravity"])
+        a, b = two_mass_state_space(car.body_mass_kg, car.wheel_mass_kg,
+                                    car.suspension_stiffness_n_per_m,
+                                    car.suspension_damping_n_s_per_m)
+        self._system = (a, b, car.static_tire_load_n)
         self._cache.clear()
         self._problem = ""
 
