@@ -10,6 +10,7 @@ its target PSD; sweeps on dask against the serial run; the demo and its command 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -316,27 +317,43 @@ def test_cleat_has_its_height_and_length(shape):
 # -- sweeps ----------------------------------------------------------------------------------
 
 @pytest.mark.fmu
-def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
+@pytest.mark.slow
+def test_sweep_on_a_cluster_whose_workers_cannot_see_the_fmu_files(fmus, tmp_path):
+    import shutil
+
+    from vehicle_demo.cosim import FmuPaths
     from vehicle_demo.sweep import (
         RESULT_COLUMNS,
+        FmuBundle,
         SweepSettings,
         local_cluster,
         run_sweep,
     )
 
+    client = tmp_path / "client"
+    client.mkdir()
+    copies = FmuPaths(*(Path(shutil.copy2(p, client / p.name)) for p in (fmus.tire,
+                                                                           fmus.quarter_car)))
     settings = SweepSettings(n_elements=40, reference=False)
     points = [{"load": 22_000.0, "speed": 0.0}, {"load": CAR.static_tire_load_n, "speed": 5.0},
               {"load": CAR.static_tire_load_n, "speed": 500.0}]  # above the critical speed
-    serial = run_sweep(points, fmus, settings, scheduler="synchronous", progress=False)
-    cluster = local_cluster(n_workers=2)
+    serial = run_sweep(points, copies, settings, scheduler="synchronous", progress=False)
+    bundle = FmuBundle.from_paths(copies)
+    shutil.rmtree(client)  # from here on only the bytes exist
+    workers = tmp_path / "workers"
+    cluster = local_cluster(n_workers=2, local_directory=workers)
     try:
-        parallel = run_sweep(points, fmus, settings, address=cluster.scheduler_address,
+        parallel = run_sweep(points, bundle, settings, address=cluster.scheduler_address,
                              progress=False)
+        # each worker that ran a point wrote the FMUs once, into its own folder (which the
+        # worker removes when it closes)
+        written = sorted(workers.rglob("tire_fmu_sweep_*/TireModal.fmu"))
+        assert 1 <= len(written) <= 2 and all(p.read_bytes() == bundle.tire for p in written)
     finally:
         cluster.close()
     for result in (serial, parallel):
         table = result.table
-        assert list(table["status"]) == ["ok", "ok", "failed"]
+        assert list(table["status"]) == ["ok", "ok", "failed"], list(table["error"])
         assert "critical" in table["error"][2] and "500" in table["error"][2]
         assert table.loc[:1, "body_bounce_hz"].notna().all()
     numeric = [c for c in RESULT_COLUMNS if c not in ("status", "error", "seconds")]
@@ -345,6 +362,17 @@ def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
     assert np.allclose(a, b, rtol=1e-9, equal_nan=True)
     # a heavier body lowers body bounce
     assert serial.table["body_bounce_hz"][1] < serial.table["body_bounce_hz"][0]
+
+
+def test_auto_scheduler_runs_in_process_unless_workers_pay_off(monkeypatch):
+    from vehicle_demo.sweep import pick_scheduler
+
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    monkeypatch.setattr("os.getloadavg", lambda: (0.1, 0.1, 0.1))
+    assert pick_scheduler(8, 2) == "processes"
+    assert pick_scheduler(3, 2) == "synchronous"  # fewer than two points per worker
+    monkeypatch.setattr("os.getloadavg", lambda: (1.8, 1.8, 1.8))  # the cores are taken
+    assert pick_scheduler(8, 2) == "synchronous"
 
 
 @pytest.mark.fmu
@@ -358,6 +386,7 @@ def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
 # -- the demo and its command line -----------------------------------------------------------
 
 @pytest.mark.fmu
+@pytest.mark.slow
 def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
     import shutil
 
@@ -367,7 +396,7 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
     (out / "fmus").mkdir(parents=True)
     for path in (fmus.tire, fmus.quarter_car):  # reuse the built FMUs (they are up to date)
         shutil.copy2(path, out / "fmus" / path.name)
-    summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=1.0,
+    summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=0.5,
                                           progress=False), log=lambda *_: None)
     for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
                  "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv"):

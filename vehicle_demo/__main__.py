@@ -55,7 +55,10 @@ def _sweep_parser() -> argparse.ArgumentParser:
     p.add_argument("--table", default="sweep.csv", help="file name: .csv or .parquet")
     p.add_argument("--address", help="dask.distributed scheduler address (default: dask's "
                                      "local process scheduler)")
-    p.add_argument("--serial", action="store_true", help="run in this process, no dask")
+    p.add_argument("--scheduler", choices=("auto", "synchronous", "processes"), default="auto",
+                   help="synchronous: in this process; processes: dask's local processes; "
+                        "auto (default): processes when there are at least two points per "
+                        "worker and a free core for each, else synchronous")
     p.add_argument("--workers", type=int, default=2, help="local worker processes")
     p.add_argument("--n-elements", type=int, default=60, help="tire mesh unless a factor")
     p.add_argument("--rebuild", action="store_true", help="rebuild the FMUs")
@@ -105,7 +108,7 @@ def _sweep(argv) -> int:
     factors = _parse_factors(args.factor)
     fmus = ensure_fmus(args.out / "fmus", args.rebuild)
     result = run_sweep(full_factorial(factors), fmus, SweepSettings(n_elements=args.n_elements),
-                       scheduler="synchronous" if args.serial else "processes",
+                       scheduler=args.scheduler,
                        address=args.address, n_workers=args.workers,
                        progress=not args.no_progress)
     table = save_table(result, args.out / args.table)
