@@ -399,11 +399,24 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
     summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=0.5,
                                           progress=False), log=lambda *_: None)
     for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
-                 "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv"):
+                 "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv",
+                 "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
     text = format_summary(summary)
     assert "wheel hop" in text and "body bounce" in text
+    # one number per cell of summary.csv, so a spreadsheet reads it
+    import csv
+
+    with open(out / "summary.csv", newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == ["quantity", "value", "unit"]
+    for quantity, value, _ in rows[1:]:
+        assert math.isfinite(float(value)), (quantity, value)
+    # the resonance table's columns line up, whatever is missing ("-") in a row
+    lines = text.split("Resonances")[1].split("\n\n")[0].splitlines()[1:]
+    assert len(lines) == 1 + len(summary.resonances)
+    assert len({len(line.rstrip().rsplit(" ", 1)[0]) for line in lines}) == 1, lines
 
 
 @pytest.mark.parametrize("argv, message", [

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -277,10 +278,10 @@ def run_demo(settings: DemoSettings | None = None, log=print,
     for label, run in (("ISO road", road_run_iso), ("cleat", cleat_run)):
         rows += [
             (f"{label}: body acceleration RMS", float(np.std(run.body_az_m_s2)), "m/s2"),
-            (f"{label}: rim load min / max", f"{run.rim_Fz_n.min():.0f} / "
-             f"{run.rim_Fz_n.max():.0f}", "N"),
-            (f"{label}: contact force min / max", f"{run.contact_Fz_n.min():.0f} / "
-             f"{run.contact_Fz_n.max():.0f}", "N"),
+            (f"{label}: rim load min", float(run.rim_Fz_n.min()), "N"),
+            (f"{label}: rim load max", float(run.rim_Fz_n.max()), "N"),
+            (f"{label}: contact force min", float(run.contact_Fz_n.min()), "N"),
+            (f"{label}: contact force max", float(run.contact_Fz_n.max()), "N"),
             (f"{label}: contact lost", 100 * run.contact_lost_fraction, "%"),
             (f"{label}: real-time factor", run.real_time_factor, "-"),
         ]
@@ -293,7 +294,30 @@ def run_demo(settings: DemoSettings | None = None, log=print,
         [[*asdict(r).values(), r.cosim_vs_analytic_pct] for r in resonances]))
     tables.append(_write_csv(out / "agreement.csv", list(asdict(next(iter(
         agreements.values()))).keys()), [list(asdict(a).values()) for a in agreements.values()]))
-    return DemoSummary(rows, resonances, agreements, figures, tables, wall)
+    summary = DemoSummary(rows, resonances, agreements, figures, tables, wall)
+    tables.append(_write_json(out / "summary.json", summary, settings))
+    return summary
+
+
+def _write_json(path: Path, summary: DemoSummary, settings: DemoSettings) -> Path:
+    """Everything the summary tables hold, machine-readable (the docs quote it)."""
+    def plain(value):
+        return None if isinstance(value, float) and not math.isfinite(value) else value
+
+    data = {
+        "settings": {"n_elements": settings.n_elements, "step_s": settings.step_s,
+                     "tf_speed_m_s": settings.tf_speed_m_s,
+                     "road_speed_m_s": settings.road_speed_m_s,
+                     "excitation": {k: plain(v) for k, v in asdict(settings.excitation).items()}},
+        "rows": [{"quantity": q, "value": plain(v), "unit": u} for q, v, u in summary.rows],
+        "agreements": {name: {k: plain(v) for k, v in asdict(a).items()}
+                       for name, a in summary.agreements.items()},
+        "resonances": [{k: plain(v) for k, v in asdict(r).items()}
+                       for r in summary.resonances],
+        "wall_s": summary.wall_s,
+    }
+    path.write_text(json.dumps(data, indent=1) + "\n")
+    return path
 
 
 def _road_psd_figure(road, spectrum, path):
@@ -340,24 +364,31 @@ def format_summary(summary: DemoSummary) -> str:
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
         lines.append(f"  {quantity:<{width}}  {text:>14} {unit}")
     lines += ["", "Resonances (f in Hz; analytic = two-mass car, tire spring K_v, with and "
-              "without the tire's rim-side mass)"]
-    header = (f"  {'resonance':<12} {'response':<13} {'analytic':>9} {'massless':>9} "
-              f"{'reference':>10} {'co-sim':>9} {'Δ vs an.':>9} {'ζ ref':>7} {'ζ co-sim':>8} "
-              f"{'peak gain ref':>14} {'co-sim':>11}  unit")
-    lines.append(header)
+              "without the tire's rim-side mass; - = not applicable)"]
+    columns = [  # (header, width, format, value)
+        ("resonance", -12, "", lambda r: r.resonance),
+        ("response", -13, "", lambda r: r.response),
+        ("analytic", 9, ".3f", lambda r: r.f_analytic_hz),
+        ("massless", 9, ".3f", lambda r: r.f_analytic_massless_hz),
+        ("reference", 10, ".3f", lambda r: r.f_reference_hz),
+        ("co-sim", 9, ".3f", lambda r: r.f_cosim_hz),
+        ("vs an. %", 9, "+.2f", lambda r: r.cosim_vs_analytic_pct),
+        ("zeta ref", 9, ".3f", lambda r: r.zeta_reference),
+        ("zeta co-sim", 11, ".3f", lambda r: r.zeta_cosim),
+        ("gain ref", 11, ".4g", lambda r: r.gain_reference),
+        ("gain co-sim", 11, ".4g", lambda r: r.gain_cosim),
+        ("unit", -9, "", lambda r: r.gain_unit),
+    ]
 
-    def f(v, spec):
-        return "-" if isinstance(v, float) and math.isnan(v) else format(v, spec)
+    def cell(value, width, spec):
+        if isinstance(value, float) and math.isnan(value):
+            value, spec = "-", ""
+        text = format(value, spec)
+        return text.ljust(-width) if width < 0 else text.rjust(width)
 
-    def pct(v):
-        return f"{'-':>9}" if math.isnan(v) else f"{v:+8.2f}%"
-
+    lines.append("  " + " ".join(cell(h, w, "") for h, w, _, _ in columns).rstrip())
     for r in summary.resonances:
-        lines.append(
-            f"  {r.resonance:<12} {r.response:<13} {f(r.f_analytic_hz, '9.3f')} "
-            f"{f(r.f_analytic_massless_hz, '9.3f')} {f(r.f_reference_hz, '10.3f')} "
-            f"{f(r.f_cosim_hz, '9.3f')} {pct(r.cosim_vs_analytic_pct)} "
-            f"{f(r.zeta_reference, '7.3f')} {f(r.zeta_cosim, '8.3f')} "
-            f"{f(r.gain_reference, '14.4g')} {f(r.gain_cosim, '11.4g')}  {r.gain_unit}")
+        lines.append("  " + " ".join(cell(get(r), w, spec)
+                                     for _, w, spec, get in columns).rstrip())
     lines += ["", "Files"] + [f"  {p}" for p in [*summary.figures, *summary.tables]]
     return "\n".join(lines)
