@@ -156,6 +156,61 @@ def test_plot_writes_a_png(capsys, tmp_path, argv):
     assert f"wrote {path}" in err
 
 
+def _figures(monkeypatch):
+    """The figures the plots module saves, kept open for inspection."""
+    import tire_fmu.plots as plots
+
+    saved = []
+    original = plots._save
+
+    def keep(fig, plt, path):
+        saved.append(fig)
+        fig.canvas.draw()  # lay out the texts so their extents are real
+        return original(fig, plt, path)
+
+    monkeypatch.setattr(plots, "_save", keep)
+    return saved
+
+
+def _legend_texts(fig):
+    return [t.get_text() for ax in fig.axes if ax.get_legend()
+            for t in ax.get_legend().get_texts()]
+
+
+def test_patch_sweep_legend_says_what_the_members_are(capsys, monkeypatch, tmp_path):
+    saved = _figures(monkeypatch)
+    assert main(["patch-sweep", "--elements", "40", "--steps", "3", "--plot",
+                 str(tmp_path / "p.png")]) == 0
+    texts = " | ".join(_legend_texts(saved[0]))
+    assert "(extr)" not in texts and "(0)" not in texts
+    assert "antinode at the patch centre" in texts and "node at the patch centre" in texts
+
+
+def test_speed_sweep_figure_shows_the_data_not_the_sidewall_band(capsys, monkeypatch,
+                                                                  tmp_path):
+    saved = _figures(monkeypatch)
+    assert main(["speed-sweep", "--elements", "60", "--steps", "4", "--plot",
+                 str(tmp_path / "s.png")]) == 0
+    fig = saved[0]
+    ax = fig.axes[0]
+    # the critical speed is named in the legend, not written over the curves
+    assert not any("critical" in t.get_text() for t in ax.texts)
+    assert any(t.startswith("critical (standing-wave) speed") for t in _legend_texts(fig))
+    # the loaded modes outside the shown orders are one shaded span, not hundreds of dots
+    points = [len(c.get_offsets()) for c in ax.collections if hasattr(c, "get_offsets")
+              and len(c.get_offsets()) and c.get_label().startswith("loaded in-phase")]
+    assert len(points) == 1  # only the coloured markers of the orders shown
+    legend = ax.get_legend()
+    assert legend.get_window_extent().y1 < ax.get_window_extent().y0  # below the axes
+
+
+def test_convergence_table_says_exact_instead_of_nan(capsys):
+    code, out, _ = run(capsys, "convergence", "--elements-list", "20,40", "--nmax", "2")
+    assert code == 0 and "nan" not in out
+    rows = [line.split() for line in out.splitlines() if line.startswith("0 ")]
+    assert len(rows) == 2 and all(row[-1] == "exact" for row in rows)  # both n = 0 rows
+
+
 # ------------------------------------------------------------------ errors
 
 BAD_INPUTS = [

@@ -387,10 +387,19 @@ def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
 
 @pytest.mark.fmu
 @pytest.mark.slow
-def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
+def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
     import shutil
 
+    import vehicle_demo.plots as plots
     from vehicle_demo.demo import DemoSettings, format_summary, run_demo
+
+    figures, save = {}, plots._save
+
+    def keep(fig, path):
+        figures[path.name] = fig
+        return save(fig, path)
+
+    monkeypatch.setattr(plots, "_save", keep)
 
     out = tmp_path / "demo"
     (out / "fmus").mkdir(parents=True)
@@ -403,6 +412,13 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
                  "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
+    # the ride grid: one legend for all panels, readable, in several columns; no coherence
+    # row when every line is coherent (a noise-free multisine)
+    ride = figures["ride_transfer_functions.png"]
+    (legend,) = ride.legends
+    assert legend._ncols >= 4 and min(t.get_fontsize() for t in legend.get_texts()) >= 10
+    assert not any(ax.get_legend() for ax in ride.axes)
+    assert len(ride.axes) == 12 and not any("coherence" in ax.get_ylabel() for ax in ride.axes)
     text = format_summary(summary)
     assert "wheel hop" in text and "body bounce" in text
     # one number per cell of summary.csv, so a spreadsheet reads it

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core import analytic_modes, modal_analysis
 from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
-from ..core.studies import convergence_study, patch_sweep
+from ..core.studies import ROUNDING_LEVEL, convergence_study, patch_sweep
 from .common import (
     Output,
     add_contact_options,
@@ -186,13 +186,26 @@ def run_convergence(args: argparse.Namespace) -> Output:
     for phase, name in (("in", "in-phase"), ("out", "out-of-phase")):
         error = 100.0 * result.relative_error(phase)
         slopes = result.convergence_order(phase)
-        rows = [[n, result.exact_hz(phase)[j], *error[:, j], slopes[j]]
+        rows = [[n, result.exact_hz(phase)[j], *error[:, j],
+                 _order_cell(slopes[j], error[:, j] / 100.0)]
                 for j, n in enumerate(result.orders)]
         header = ["n", "exact [Hz]", *(f"N={c}" for c in counts), "p"]
         lines += ["", f"{name} error [%]", table(rows, header)]
+    lines += ["", "p = exact: the FDM reproduces that order to rounding on every mesh (n = 0: "
+              "uniform breathing, no stencil error); p = -: fewer than two meshes with "
+              "N >= 8n."]
     output = Output(text="\n".join(lines), data=result.to_dict())
     write_plot(args, output, plot_with("plot_convergence", result))
     return output
+
+
+def _order_cell(slope: float, relative_error: np.ndarray) -> float | str:
+    """The observed order, or why there is none (instead of nan)."""
+    if np.isfinite(slope):
+        return float(slope)
+    if np.all(np.abs(relative_error) <= ROUNDING_LEVEL):
+        return "exact"
+    return "-"
 
 
 def run_patch_sweep(args: argparse.Namespace) -> Output:
