@@ -249,6 +249,28 @@ def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
     assert result.in_contact.all()
 
 
+@pytest.mark.fmu
+def test_a_native_tire_exported_at_a_typed_load_runs_the_cars_computed_load(fmus, tmp_path,
+                                                                           capsys):
+    """`tire-fmu export --load 27654.753` and the car's weight (2500 + 320)·9.80665 =
+    27654.752999999997 are one load within FIXED_PARAMETER_REL_TOLERANCE: the master sends
+    the declared value, the native FMU accepts it, and the car stays in equilibrium."""
+    from tire_fmu.cli import main as tire_fmu
+    from vehicle_demo.cosim import FmuPaths, QuarterCarCoSimulation
+    from vehicle_demo.road import road_at_rest
+
+    native = tmp_path / "native.fmu"
+    assert tire_fmu(["export", str(native), "--load", "27654.753", "--elements",
+                     str(N_ELEMENTS)]) == 0
+    capsys.readouterr()
+    assert CAR.static_tire_load_n != 27654.753
+    road = road_at_rest(0.2, STEP_S)
+    with QuarterCarCoSimulation(FmuPaths(native, fmus.quarter_car), CAR, {}, STEP_S) as sim:
+        result = sim.run(road.height_m, road.velocity_m_s)
+    assert np.abs(result.rim_Fz_n - 27654.753).max() < 1e-9 * 27654.753
+    assert np.abs(result.wheel_z_m).max() < 1e-10 and result.in_contact.all()
+
+
 def test_coupling_is_stable_far_beyond_the_default_step(model):
     from tire_fmu.core.reduction import reduce
     from vehicle_demo.coupling import spectral_radius
