@@ -64,7 +64,7 @@ def main(argv=None) -> int:
         ("fit, FDM N = 400 (symbols)", lambda: fit_tire(modes, free, start, n_elements=400)),
         ("fit, analytic ring, minimax", lambda: fit_tire(modes, free, start, criterion="max")),
         ("reference: one assembled modal analysis, N = 100",
-         lambda: real_modes(model, fmax_hz=300.0)),
+         lambda: real_modes(model, f_max_hz=300.0)),
     ]
     print(f"{len(modes)} modes, {len(free)} free parameters, {args.repeats} repeats; "
           f"budget {BUDGET_S:g} s per fit")

@@ -231,7 +231,12 @@ def main(argv=None) -> None:
     parser.add_argument("--rounds", type=int, default=40, help="alternating rounds (40)")
     parser.add_argument("--steps", type=int, default=2000, help="steps per round (2000)")
     parser.add_argument("--init-repeats", type=int, default=3, help="initialisations (3)")
+    parser.add_argument("--record", metavar="JSON", help="also write the results there (the "
+                        "docs quote docs/measured/bench_fmu.json)")
     args = parser.parse_args(argv)
+    from record import load_average, write_record
+
+    load_at_start = load_average()
     with tempfile.TemporaryDirectory(prefix="bench_fmu_") as folder:
         folder = Path(folder)
         tire = build_fmu(folder / "tire")
@@ -265,6 +270,12 @@ def main(argv=None) -> None:
     print(textwrap.dedent(f"""
         Python {sys.version.split()[0]}; (a) runs TireModal's defaults (N = 100, at rest).
         """).rstrip())
+    if args.record:
+        write_record(args.record, {
+            "step_us": {name: cost * 1e6 for name, cost in costs.items()},
+            "init_s": {str(n): seconds for n, seconds in inits.items()},
+            "init_repeats": args.init_repeats,
+        }, load_at_start)
 
 
 if __name__ == "__main__":

@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MESHES = (100, 400)
 #: Rolling speed per mesh: below each mesh's critical (standing-wave) speed.
 ROLLING_SPEED_M_S = {100: 20.0, 400: 8.0}
-FMAX_HZ = 300.0
+F_MAX_HZ = 300.0
 
 
 def timed(function: Callable[[], object], repeats: int,
@@ -112,21 +112,21 @@ def run(repeats: int) -> tuple[list[list[str]], list[str]]:
         put("  patch length found [cm]", n, f"{100 * model.patch.length_m:9.2f}")
 
         for method in ("dense", "sparse"):
-            med, low, result = timed(partial(real_modes, model, FMAX_HZ, method), repeats)
-            put(f"real_modes {method}, <= {FMAX_HZ:g} Hz", n, ms(med, low))
+            med, low, result = timed(partial(real_modes, model, F_MAX_HZ, method), repeats)
+            put(f"real_modes {method}, <= {F_MAX_HZ:g} Hz", n, ms(med, low))
         put("  modes <= 300 Hz (real)", n, f"{len(result.modes):9d}")
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # N = 400 at 8 m/s is 74 % of critical: fine
             bare = build_model(tire, rolling_bare)
             loaded = build_model(tire, rolling_loaded)
-        med, low, result = timed(partial(complex_modes, bare, FMAX_HZ), repeats)
+        med, low, result = timed(partial(complex_modes, bare, F_MAX_HZ), repeats)
         put("complex_modes, undeformed, rolling", n, ms(med, low))
         # overdamped in the co-rotating frame (real body eigenvalue): listed at the Doppler
-        # frequency -κΩ/2π only, which is why fine meshes list more "modes" below fmax
+        # frequency -κΩ/2π only, which is why fine meshes list more "modes" below f_max
         overdamped = sum(1 for m in result.modes if abs(m.body_frequency_hz) < 1e-9)
         put("  modes <= 300 Hz (complex)", n, f"{len(result.modes)} ({overdamped} overdamped)")
-        med, low, _ = timed(partial(complex_modes, loaded, FMAX_HZ), repeats)
+        med, low, _ = timed(partial(complex_modes, loaded, F_MAX_HZ), repeats)
         put("complex_modes, 27.7 kN, rolling", n, ms(med, low))
 
         orders = all_orders(n)
@@ -178,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{scipy.__version__}, {os.cpu_count()} CPUs ({platform.machine()}), "
           f"BLAS threads: {threads}, load average before: "
           f"{', '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"median (fastest) of {args.repeats} runs in ms; fmax = {FMAX_HZ:g} Hz; "
+    print(f"median (fastest) of {args.repeats} runs in ms; f_max = {F_MAX_HZ:g} Hz; "
           "'27.7 kN' = the default load (quarter car weight)")
     print()
     table, notes = run(args.repeats)

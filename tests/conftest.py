@@ -4,6 +4,7 @@ import os
 # fight over a couple of shared cores (the FMU builds a reduced basis in every test).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import functools
 import warnings
 
 import pytest
@@ -24,3 +25,36 @@ def _no_supercritical_noise():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SupercriticalSpeedWarning)
         yield
+
+
+# -- the `fmu` marker: every test that builds an FMU carries it ------------------------------
+# so that `pytest -m "not fmu"` is a fast physics-only run. Building one outside such a test
+# fails it, whichever fixture or helper did the building.
+
+_BUILDING_ALLOWED = [True]
+
+
+def _only_in_fmu_tests(function):
+    @functools.wraps(function)
+    def guarded(*args, **kwargs):
+        if not _BUILDING_ALLOWED[0]:
+            pytest.fail(f"this test builds an FMU ({function.__module__}.{function.__name__}) "
+                        "but is not marked fmu", pytrace=False)
+        return function(*args, **kwargs)
+
+    return guarded
+
+
+def pytest_configure(config):
+    import tire_fmu.fmu.builder as python_builder
+    import tire_fmu.native.builder as native_builder
+
+    # the two steps every build goes through: pythonfmu's packaging and the C compiler
+    python_builder.build_pythonfmu = _only_in_fmu_tests(python_builder.build_pythonfmu)
+    native_builder.compile_sources = _only_in_fmu_tests(native_builder.compile_sources)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    # before the item's fixtures, module- and session-scoped ones included, are set up
+    _BUILDING_ALLOWED[0] = item.get_closest_marker("fmu") is not None

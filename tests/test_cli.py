@@ -1,16 +1,20 @@
 """The ``tire-fmu`` command line: JSON equal to the Python API, figures, one-line errors."""
 
 import json
+import os
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tire_fmu.cli import main
+from tire_fmu.cli import build_parser, main
 from tire_fmu.cli.common import to_jsonable
 from tire_fmu.core import (
     OperatingPoint,
+    ParameterError,
     analytic_modes,
     build_model,
     critical_speed,
@@ -41,8 +45,8 @@ def same(data, result):
 # ------------------------------------------------------------------ JSON equals the API
 
 FAST_COMMANDS = [
-    ["modes", "--patch-length", "0.204", "--fmax", "120"],
-    ["modes", "--speed", "10", "--fmax", "80", "--elements", "40"],
+    ["modes", "--patch-length", "0.204", "--max-frequency", "120"],
+    ["modes", "--speed", "10", "--max-frequency", "80", "--elements", "40"],
     ["analytic", "--nmax", "4"],
     ["patch", "--load", "27700"],
     ["convergence", "--elements-list", "20,40", "--nmax", "3"],
@@ -63,7 +67,7 @@ def test_every_command_prints_parseable_json_and_text(capsys, argv):
 
 def test_modes_json_equals_real_modes(capsys, tire):
     data = run_json(capsys, "modes", "--patch-length", "0.204")
-    expected = real_modes(build_model(tire, OperatingPoint(patch_length_m=0.204)), fmax_hz=300)
+    expected = real_modes(build_model(tire, OperatingPoint(patch_length_m=0.204)), f_max_hz=300)
     got = np.array([m["frequency_hz"] for m in data["modes"]])
     np.testing.assert_allclose(got, expected.frequencies_hz, rtol=1e-12, atol=0)
     assert [m["symmetry"] for m in data["modes"]] == [m.symmetry for m in expected.modes]
@@ -134,7 +138,7 @@ def test_python_dash_m_runs_the_cli(tire):
 # ------------------------------------------------------------------ figures
 
 PLOTS = [
-    ["modes", "--patch-length", "0.204", "--fmax", "100"],
+    ["modes", "--patch-length", "0.204", "--max-frequency", "100"],
     ["convergence", "--elements-list", "20,40,80", "--nmax", "4"],
     ["patch-sweep", "--elements", "40", "--steps", "4", "--out-of-phase"],
     ["dispersion", "--elements", "40", "--patch-length", "0.204", "--nmax", "6"],
@@ -152,13 +156,68 @@ def test_plot_writes_a_png(capsys, tmp_path, argv):
     assert f"wrote {path}" in err
 
 
+def _figures(monkeypatch):
+    """The figures the plots module saves, kept open for inspection."""
+    import tire_fmu.plots as plots
+
+    saved = []
+    original = plots._save
+
+    def keep(fig, plt, path):
+        saved.append(fig)
+        fig.canvas.draw()  # lay out the texts so their extents are real
+        return original(fig, plt, path)
+
+    monkeypatch.setattr(plots, "_save", keep)
+    return saved
+
+
+def _legend_texts(fig):
+    return [t.get_text() for ax in fig.axes if ax.get_legend()
+            for t in ax.get_legend().get_texts()]
+
+
+def test_patch_sweep_legend_says_what_the_members_are(capsys, monkeypatch, tmp_path):
+    saved = _figures(monkeypatch)
+    assert main(["patch-sweep", "--elements", "40", "--steps", "3", "--plot",
+                 str(tmp_path / "p.png")]) == 0
+    texts = " | ".join(_legend_texts(saved[0]))
+    assert "(extr)" not in texts and "(0)" not in texts
+    assert "antinode at the patch centre" in texts and "node at the patch centre" in texts
+
+
+def test_speed_sweep_figure_shows_the_data_not_the_sidewall_band(capsys, monkeypatch,
+                                                                  tmp_path):
+    saved = _figures(monkeypatch)
+    assert main(["speed-sweep", "--elements", "60", "--steps", "4", "--plot",
+                 str(tmp_path / "s.png")]) == 0
+    fig = saved[0]
+    ax = fig.axes[0]
+    # the critical speed is named in the legend, not written over the curves
+    assert not any("critical" in t.get_text() for t in ax.texts)
+    assert any(t.startswith("critical (standing-wave) speed") for t in _legend_texts(fig))
+    # the loaded modes outside the shown orders are one shaded span, not hundreds of dots
+    points = [len(c.get_offsets()) for c in ax.collections if hasattr(c, "get_offsets")
+              and len(c.get_offsets()) and c.get_label().startswith("loaded in-phase")]
+    assert len(points) == 1  # only the coloured markers of the orders shown
+    legend = ax.get_legend()
+    assert legend.get_window_extent().y1 < ax.get_window_extent().y0  # below the axes
+
+
+def test_convergence_table_says_exact_instead_of_nan(capsys):
+    code, out, _ = run(capsys, "convergence", "--elements-list", "20,40", "--nmax", "2")
+    assert code == 0 and "nan" not in out
+    rows = [line.split() for line in out.splitlines() if line.startswith("0 ")]
+    assert len(rows) == 2 and all(row[-1] == "exact" for row in rows)  # both n = 0 rows
+
+
 # ------------------------------------------------------------------ errors
 
 BAD_INPUTS = [
     (["speed-sweep", "--steps", "1", "--nmax", "0", "--max-speed", "-5", "--elements", "3"],
      ["--steps = 1", "--nmax = 0", "--max-speed = -5", "--elements = 3", "4 problems"]),
-    (["dispersion", "--speed", "-1", "--tire", "k_r1=-5", "--fmax", "0"],
-     ["--speed = -1", "k_r1 = -5", "--fmax = 0", "3 problems"]),
+    (["dispersion", "--speed", "-1", "--tire", "k_r1=-5", "--max-frequency", "0"],
+     ["--speed = -1", "k_r1 = -5", "--max-frequency = 0", "3 problems"]),
     (["patch-sweep", "--max-length", "0.9", "--steps", "1"],
      ["--max-length = 0.9", "0.5105", "--steps = 1"]),
     (["speed-sweep", "--patch-length", "0.8", "--elements", "2"],
@@ -168,7 +227,7 @@ BAD_INPUTS = [
     (["critical-speed", "--elements", "4", "--tire", "EI=-1"], ["--elements = 4", "EI = -1"]),
     (["analytic", "--nmax", "-1", "--inflation-pressure", "-3"],
      ["--nmax = -1", "inflation_pressure = -3"]),
-    (["modes", "--fmax", "-1"], ["--fmax = -1"]),
+    (["modes", "--max-frequency", "-1"], ["--max-frequency = -1"]),
     (["speed-sweep", "--max-speed", "60"], ["--max-speed = 60", "critical speed 42.67"]),
     (["dispersion", "--speed", "50", "--patch-length", "0.204"],
      ["--speed = 50", "critical speed 42.67"]),
@@ -200,13 +259,135 @@ def test_help(capsys, command):
     assert "--json" in capsys.readouterr().out
 
 
-def test_progress_bar_only_on_a_terminal(monkeypatch):
+def test_progress_bar_only_on_a_terminal(monkeypatch, capsys):
     from tire_fmu.cli.ring import progress_bar
 
-    with progress_bar("x") as progress:  # pytest captures stderr: not a terminal
+    with progress_bar("meshes") as progress:  # pytest captures stderr: not a terminal
         assert progress is None
-    pytest.importorskip("tqdm")
+    assert capsys.readouterr().err == ""
+    tqdm = pytest.importorskip("tqdm")
+    closed = []
+
+    class Recording(tqdm.tqdm):
+        def close(self):
+            if not self.disable:
+                closed.append((self.desc, self.n, self.total))
+            super().close()
+
+    monkeypatch.setattr(tqdm, "tqdm", Recording)
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
-    with progress_bar("x") as progress:
+    with progress_bar("meshes") as progress:
+        assert callable(progress)
         for done in range(1, 4):
             progress(done, 3)
+    assert closed == [("meshes", 3, 3)]  # one bar, counted to the total, then closed
+    assert "meshes" in capsys.readouterr().err  # drawn on stderr
+
+
+# ------------------------------------------------------------------ the command line itself
+
+def test_a_reader_that_stops_early_ends_the_output_quietly():
+    # `tire-fmu analytic --json | head -c 0`: the pipe's read end is already closed
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        done = subprocess.run([sys.executable, "-m", "tire_fmu", "analytic", "--json"],
+                              stdout=write, stderr=subprocess.PIPE, text=True, timeout=60)
+    finally:
+        os.close(write)
+    assert done.returncode == 0 and done.stderr == ""
+
+
+def test_debug_is_accepted_before_and_after_the_command(capsys):
+    with pytest.raises(ParameterError):  # --debug: the traceback, not the one-line message
+        main(["modes", "--elements", "3", "--debug"])
+    with pytest.raises(ParameterError):
+        main(["--debug", "modes", "--elements", "3"])
+    assert main(["modes", "--elements", "3"]) == 2
+    assert capsys.readouterr().err.startswith("tire-fmu modes: error: ")
+
+
+def _options():
+    parser = build_parser()
+    (commands,) = [a for a in parser._actions if a.dest == "command"]
+    for name, command in commands.choices.items():
+        yield name, [o for a in command._actions for o in a.option_strings if o.startswith("--")]
+
+
+def test_one_option_name_per_idea():
+    # --fmax and --f-max on one command meant two things: no two names may differ only by
+    # dashes, and the reduction's mode cut is --f-max (the FMU's f_max) everywhere
+    for command, options in _options():
+        squeezed = [o.replace("-", "") for o in options]
+        assert len(set(squeezed)) == len(squeezed), (command, options)
+        assert not {"--fmax", "--fmin"} & set(options), command
+    package = Path(__file__).resolve().parents[1]
+    for source in [*package.glob("tire_fmu/**/*.py"), *package.glob("vehicle_demo/*.py")]:
+        assert not re.search(r"\bfmax_hz\b", source.read_text()), source  # f_max_hz only
+
+
+@pytest.mark.parametrize("spelling", ["rim_Fz", "RIM_FZ", "rim_fz"])
+def test_frf_names_outputs_as_the_fmu_does_in_any_case(capsys, spelling):
+    data = run_json(capsys, "frf", "--elements", "40", "--load", "27700", "--output", spelling,
+                    "--points", "3")
+    assert data["responses"][0]["output"] == "rim_Fz"
+    with pytest.raises(SystemExit) as stop:
+        main(["frf", "--elements", "40", "--output", "rim_Fy"])
+    err = capsys.readouterr().err
+    assert stop.value.code == 2 and "'rim_Fz', 'rim_Fx', 'contact_Fz', 'deflection'" in err
+
+
+def _no_computation(*_, **__):
+    pytest.fail("computed before the command line was checked")
+
+
+BAD_PATHS = [
+    ("x.xyz", "unknown figure format .xyz"),
+    ("x", "no file extension"),
+    ("{file}/x.png", "is a file, not a folder"),
+    ("missing/x.png", "does not exist"),
+]
+
+
+@pytest.mark.parametrize("plot, fragment", BAD_PATHS)
+def test_a_bad_plot_path_is_refused_before_computing(capsys, monkeypatch, tmp_path, plot,
+                                                     fragment):
+    import tire_fmu.cli.ring as ring
+
+    monkeypatch.setattr(ring, "convergence_study", _no_computation)
+    (tmp_path / "file").write_text("")
+    path = str(tmp_path / plot.format(file="file"))
+    code, out, err = run(capsys, "convergence", "--plot", path)
+    assert code == 2 and out == ""
+    assert err.startswith("tire-fmu convergence: error: --plot = ") and fragment in err
+    assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("command", ["build-fmu", "export"])
+@pytest.mark.parametrize("out, fragment", [
+    ("missing/t.fmu", "folder '{tmp}/missing' does not exist"),
+    ("file/t.fmu", "folder '{tmp}/file' is a file, not a folder"),
+    ("t.zip", "must be a file name ending in .fmu"),
+])
+def test_fmu_outputs_are_checked_alike_before_building(capsys, monkeypatch, tmp_path, command,
+                                                       out, fragment):
+    import tire_fmu.cli.reduce as reduce_cli
+    import tire_fmu.fmu.builder as builder
+
+    monkeypatch.setattr(reduce_cli, "reduce", _no_computation)
+    monkeypatch.setattr(builder, "build_fmu", _no_computation)
+    (tmp_path / "file").write_text("")
+    extra = ["--format", "fmu"] if command == "export" else []
+    code, _, err = run(capsys, command, str(tmp_path / out), *extra)
+    assert code == 2
+    assert err.startswith(f"tire-fmu {command}: error: OUT = ")
+    assert fragment.format(tmp=tmp_path) in err, err
+
+
+def test_export_without_fmpy_names_the_extra(capsys, monkeypatch, tmp_path):
+    import tire_fmu.cli.reduce as reduce_cli
+
+    monkeypatch.setattr(reduce_cli, "reduce", _no_computation)
+    monkeypatch.setitem(sys.modules, "fmpy", None)  # import fmpy now raises ImportError
+    code, _, err = run(capsys, "export", str(tmp_path / "t.fmu"))
+    assert code == 2 and "pip install 'tire_fmu[fmu]'" in err

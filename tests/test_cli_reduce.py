@@ -30,8 +30,8 @@ def test_reduce_json_is_the_report_of_the_python_api(capsys, tire):
 
 
 def test_frf_json_matches_the_full_model_and_reports_the_reduced_error(capsys, tire):
-    data = run_json(capsys, "frf", *MODEL, "--input", "rim", "--output", "rim_fz", "--reduced",
-                    "--points", "50", "--fmin", "1", "--fmax", "300")
+    data = run_json(capsys, "frf", *MODEL, "--input", "rim", "--output", "rim_Fz", "--reduced",
+                    "--points", "50", "--min-frequency", "1", "--max-frequency", "300")
     full, reduced = data["responses"]
     model = build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.204))
     ref = full_frequency_response(model, "rim", "rim_Fz", np.geomspace(1, 300, 50))

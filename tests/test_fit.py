@@ -88,7 +88,7 @@ def test_fdm_frequencies_are_the_assembled_models():
     tire = TireParameters(sidewall_shear=5e3)
     low, high = model_frequencies_hz(tire, range(6), n_elements=40)
     model = build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.0))
-    result = real_modes(model, fmax_hz=400.0)
+    result = real_modes(model, f_max_hz=400.0)
     for n in range(6):
         for branch, expected in (("in", low[n]), ("out", high[n])):
             found = [m.frequency_hz for m in result.modes if m.order == n and m.phase == branch]

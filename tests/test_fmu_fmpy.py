@@ -186,8 +186,11 @@ def test_capabilities_units_and_the_shipped_core(fmu_path, unpacked):
 def test_the_command_line_and_build_fmu_py_build_it_too(tmp_path, capsys):
     from tire_fmu.cli import main
 
-    assert main(["build-fmu", str(tmp_path / "cli"), "--json"]) == 0
+    # OUT is the file (as for export), or an existing folder to hold TireModal.fmu
+    target = tmp_path / "my_tire.fmu"
+    assert main(["build-fmu", str(target), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
+    assert Path(data["path"]) == target and target.is_file()
     assert data["validated_with_fmpy"] and validate_fmu(data["path"]) == []
     repo = Path(__file__).resolve().parents[1]
     done = subprocess.run([sys.executable, "build_fmu.py", "-o", str(tmp_path / "script")],

@@ -20,7 +20,7 @@ ORDERS = np.arange(0, 11)
 def fdm_frequencies(tire, n_elements, orders=ORDERS):
     """FDM (in-phase, out-of-phase) frequency per order, read off the assembled model."""
     model = build_model(tire, OperatingPoint(n_elements=n_elements, patch_length_m=0.0))
-    result = real_modes(model, fmax_hz=400.0)
+    result = real_modes(model, f_max_hz=400.0)
     out = {}
     for phase in ("in", "out"):
         out[phase] = np.array([result.frequencies_hz[result.select(order=int(n), phase=phase)[0]]
@@ -70,7 +70,7 @@ def test_fdm_at_400_elements_within_half_a_percent(tire):
 
 def test_undeformed_modes_are_degenerate_pairs_with_clean_symmetry(tire):
     result = real_modes(build_model(tire, OperatingPoint(n_elements=60, patch_length_m=0.0)),
-                        fmax_hz=150)
+                        f_max_hz=150)
     for n in range(1, 6):
         pair = result.select(order=n, phase="in")
         assert len(pair) == 2
@@ -83,7 +83,7 @@ def test_undeformed_modes_are_degenerate_pairs_with_clean_symmetry(tire):
 
 def test_patch_splits_pairs_symmetric_member_rises_most(tire):
     loaded = real_modes(build_model(tire, OperatingPoint(n_elements=100, patch_length_m=0.204)),
-                        fmax_hz=200)
+                        f_max_hz=200)
     free = analytic_modes(tire, [2, 3, 4])
     free_fdm = fdm_frequencies(tire, 100, orders=[2, 3, 4])["in"]
     rises_sym = []
@@ -115,7 +115,7 @@ def test_patch_weights_are_fractional_and_sum_to_the_patch(tire):
 def test_frequencies_vary_continuously_with_patch_length(tire):
     def symmetric_n2(length):
         r = real_modes(build_model(tire, OperatingPoint(n_elements=100, patch_length_m=length)),
-                       fmax_hz=80)
+                       f_max_hz=80)
         return r.frequencies_hz[r.select(order=2, phase="in", symmetry="symmetric")[0]]
 
     node = 2 * np.pi * tire.R / 100  # 4.08 cm
@@ -167,15 +167,15 @@ def test_rim_and_road_moving_together_change_no_force(tire, op):
 
 def test_sparse_shift_invert_matches_dense(tire):
     model = build_model(tire, OperatingPoint(n_elements=200, patch_length_m=0.204))
-    dense = real_modes(model, fmax_hz=250, method="dense")
-    sparse = real_modes(model, fmax_hz=250, method="sparse")
+    dense = real_modes(model, f_max_hz=250, method="dense")
+    sparse = real_modes(model, f_max_hz=250, method="sparse")
     np.testing.assert_allclose(sparse.frequencies_hz, dense.frequencies_hz, rtol=1e-9)
     assert [m.order for m in sparse.modes] == [m.order for m in dense.modes]
 
 
 def test_damping_ratio_is_proportional_damping(tire):
     model = build_model(tire, OperatingPoint(n_elements=80, patch_length_m=0.204))
-    result = real_modes(model, fmax_hz=300)
+    result = real_modes(model, f_max_hz=300)
     omega = 2 * np.pi * result.frequencies_hz
     np.testing.assert_allclose(result.damping_ratios,
                                tire.alpha / (2 * omega) + tire.beta * omega / 2, rtol=1e-9)

@@ -55,7 +55,7 @@ def test_low_orders_match_the_continuum_at_400_elements(tire):
     np.testing.assert_allclose(2 * np.pi * continuum.in_phase_hz, body_low - orders * spin)
     # the FDM model at 400 elements has these modes too
     model = rolling(tire, 400, 8.0)
-    modes = complex_modes(model, fmax_hz=200)
+    modes = complex_modes(model, f_max_hz=200)
     for n in (-3, 2, 5):
         [i] = [k for k, m in enumerate(modes.modes) if m.order == n and m.phase == "in"]
         assert modes.frequencies_hz[i] == pytest.approx(
@@ -64,8 +64,8 @@ def test_low_orders_match_the_continuum_at_400_elements(tire):
 
 def test_rest_reduces_to_the_ring_model(tire):
     model = rolling(tire, 60, 0.0, patch=0.204)
-    real = real_modes(model, fmax_hz=300)
-    cplx = complex_modes(model, fmax_hz=320)
+    real = real_modes(model, f_max_hz=300)
+    cplx = complex_modes(model, f_max_hz=320)
     s = cplx.eigenvalues[np.abs(cplx.eigenvalues) / (2 * np.pi) <= 300]
     np.testing.assert_allclose(np.sort(np.abs(s)) / (2 * np.pi), real.frequencies_hz, rtol=1e-9)
     zeta = -s.real / np.abs(s)
@@ -110,7 +110,7 @@ def test_undeformed_decay_rates_are_those_of_the_co_rotating_ring(tire):
 
 def test_mode_labels_at_speed(tire):
     model = rolling(tire, 100, 20.0)
-    modes = complex_modes(model, fmax_hz=120)
+    modes = complex_modes(model, f_max_hz=120)
     for m in modes.modes:
         if m.order > 0:
             assert m.direction == "backward"

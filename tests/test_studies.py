@@ -116,12 +116,12 @@ def test_out_of_phase_members_and_bad_lengths(tire):
 
 
 def test_speed_sweep_at_rest_is_the_rest_analysis(tire):
-    result = speed_sweep(tire, 60, [0.0, 15.0], patch_length_m=0.204, fmax_hz=200.0, nmax=6)
+    result = speed_sweep(tire, 60, [0.0, 15.0], patch_length_m=0.204, f_max_hz=200.0, nmax=6)
     # undeformed: the FDM frequencies of the mesh at rest, the same for n and -n
     low, _ = body_frequencies(tire, np.abs(result.orders), 0.0, n_elements=60)
     np.testing.assert_allclose(result.undeformed_in_phase_hz[0], low / (2 * np.pi), rtol=1e-12)
     # loaded: the complex modes at V = 0 are the real modes of the loaded tire
-    rest = real_modes(build_model(tire, OperatingPoint(60, patch_length_m=0.204)), fmax_hz=200)
+    rest = real_modes(build_model(tire, OperatingPoint(60, patch_length_m=0.204)), f_max_hz=200)
     rolling = result.loaded[0].frequencies_hz
     below = rest.frequencies_hz < 195.0
     np.testing.assert_allclose(rolling[: below.sum()], rest.frequencies_hz[below], rtol=1e-9)

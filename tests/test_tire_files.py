@@ -133,7 +133,7 @@ def test_every_command_takes_tire_file_and_tire_overrides_it(tmp_path, capsys):
                        "GL073A_shear", "--json")
     assert json.loads(out)["critical_speed_m_s"] == critical_speed(shear, 200).speed_m_s
 
-    code, out, _ = run(capsys, "modes", "--elements", "40", "--fmax", "80",
+    code, out, _ = run(capsys, "modes", "--elements", "40", "--max-frequency", "80",
                        "--tire-file", str(shipped_tire_path("GL073A_shear")), "--json")
     assert code == 0 and json.loads(out)["modes"]
 

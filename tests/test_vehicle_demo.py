@@ -10,6 +10,7 @@ its target PSD; sweeps on dask against the serial run; the demo and its command 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -142,15 +143,16 @@ def test_spring_damper_reference_is_the_classic_quarter_car():
 
 # -- the quarter-car FMU ---------------------------------------------------------------------
 
+@pytest.mark.fmu
 def test_quarter_car_fmu_validates_and_steps_exactly(fmus):
     from fmpy.validation import validate_fmu
 
-    from vehicle_demo.cosim import CAR_FMU_NAMES, FmuInstance
+    from vehicle_demo.cosim import FmuInstance
 
     assert validate_fmu(str(fmus.quarter_car)) == []
     unit = FmuInstance(fmus.quarter_car, "qc")
     try:
-        unit.start({CAR_FMU_NAMES[k]: v for k, v in CAR.as_dict().items()})
+        unit.start(CAR.fmu_values())
         force_step, h = 1000.0, 1e-3
         vrs = [unit.vr("rim_Fz"), unit.vr("rim_Fz_rate")]
         unit.fmu.setReal(vrs, [CAR.static_tire_load_n + force_step, 0.0])
@@ -169,6 +171,7 @@ def test_quarter_car_fmu_validates_and_steps_exactly(fmus):
 
 # -- the co-simulation: the acceptance -------------------------------------------------------
 
+@pytest.mark.fmu
 def test_cosimulated_transfer_functions_agree_with_the_full_model(transfer_run):
     result, estimate, reference = transfer_run
     assert result.contact_lost_fraction == 0.0  # the small-signal excitation keeps contact
@@ -182,6 +185,7 @@ def test_cosimulated_transfer_functions_agree_with_the_full_model(transfer_run):
         assert a.f_max_compared_hz > 200.0, (name, a)
 
 
+@pytest.mark.fmu
 def test_cosimulated_transfer_functions_agree_at_speed_with_a_finer_step(fmus):
     """At 20 m/s the road crosses the patch with delays; the contact force's road feedthrough
     needs the finer step for 1 dB there (its error is second order in h: about 1.4 dB at
@@ -203,6 +207,7 @@ def test_cosimulated_transfer_functions_agree_at_speed_with_a_finer_step(fmus):
         assert a.f_max_compared_hz > (140.0 if name == "body_acc" else 190.0), (name, a)
 
 
+@pytest.mark.fmu
 def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, model):
     _, estimate, reference = transfer_run
     modes = quarter_car_modes(CAR, model)
@@ -224,6 +229,7 @@ def test_body_bounce_and_wheel_hop_match_the_analytic_quarter_car(transfer_run, 
     assert modes.massless.wheel_hop_hz > 1.04 * modes.wheel_hop.frequency_hz
 
 
+@pytest.mark.fmu
 @pytest.mark.parametrize("speed", [0.0, 10.0])
 def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
     from vehicle_demo.cosim import cosimulate
@@ -240,9 +246,31 @@ def test_a_road_at_rest_leaves_the_car_in_equilibrium(fmus, speed):
         assert np.abs(states).max() < 1e-10
     for acc in (result.body_az_m_s2, result.wheel_az_m_s2):
         assert np.abs(acc).max() < 1e-8
-    assert np.abs(result.rim_fz_n - load).max() < 1e-9 * load
-    assert np.abs(result.contact_fz_n - load).max() < 1e-9 * load
+    assert np.abs(result.rim_Fz_n - load).max() < 1e-9 * load
+    assert np.abs(result.contact_Fz_n - load).max() < 1e-9 * load
     assert result.in_contact.all()
+
+
+@pytest.mark.fmu
+def test_a_native_tire_exported_at_a_typed_load_runs_the_cars_computed_load(fmus, tmp_path,
+                                                                           capsys):
+    """`tire-fmu export --load 27654.753` and the car's weight (2500 + 320)·9.80665 =
+    27654.752999999997 are one load within FIXED_PARAMETER_REL_TOLERANCE: the master sends
+    the declared value, the native FMU accepts it, and the car stays in equilibrium."""
+    from tire_fmu.cli import main as tire_fmu
+    from vehicle_demo.cosim import FmuPaths, QuarterCarCoSimulation
+    from vehicle_demo.road import road_at_rest
+
+    native = tmp_path / "native.fmu"
+    assert tire_fmu(["export", str(native), "--load", "27654.753", "--elements",
+                     str(N_ELEMENTS)]) == 0
+    capsys.readouterr()
+    assert CAR.static_tire_load_n != 27654.753
+    road = road_at_rest(0.2, STEP_S)
+    with QuarterCarCoSimulation(FmuPaths(native, fmus.quarter_car), CAR, {}, STEP_S) as sim:
+        result = sim.run(road.height_m, road.velocity_m_s)
+    assert np.abs(result.rim_Fz_n - 27654.753).max() < 1e-9 * 27654.753
+    assert np.abs(result.wheel_z_m).max() < 1e-10 and result.in_contact.all()
 
 
 def test_coupling_is_stable_far_beyond_the_default_step(model):
@@ -312,27 +340,44 @@ def test_cleat_has_its_height_and_length(shape):
 
 # -- sweeps ----------------------------------------------------------------------------------
 
-def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
+@pytest.mark.fmu
+@pytest.mark.slow
+def test_sweep_on_a_cluster_whose_workers_cannot_see_the_fmu_files(fmus, tmp_path):
+    import shutil
+
+    from vehicle_demo.cosim import FmuPaths
     from vehicle_demo.sweep import (
         RESULT_COLUMNS,
+        FmuBundle,
         SweepSettings,
         local_cluster,
         run_sweep,
     )
 
+    client = tmp_path / "client"
+    client.mkdir()
+    copies = FmuPaths(*(Path(shutil.copy2(p, client / p.name)) for p in (fmus.tire,
+                                                                           fmus.quarter_car)))
     settings = SweepSettings(n_elements=40, reference=False)
     points = [{"load": 22_000.0, "speed": 0.0}, {"load": CAR.static_tire_load_n, "speed": 5.0},
               {"load": CAR.static_tire_load_n, "speed": 500.0}]  # above the critical speed
-    serial = run_sweep(points, fmus, settings, scheduler="synchronous", progress=False)
-    cluster = local_cluster(n_workers=2)
+    serial = run_sweep(points, copies, settings, scheduler="synchronous", progress=False)
+    bundle = FmuBundle.from_paths(copies)
+    shutil.rmtree(client)  # from here on only the bytes exist
+    workers = tmp_path / "workers"
+    cluster = local_cluster(n_workers=2, local_directory=workers)
     try:
-        parallel = run_sweep(points, fmus, settings, address=cluster.scheduler_address,
+        parallel = run_sweep(points, bundle, settings, address=cluster.scheduler_address,
                              progress=False)
+        # each worker that ran a point wrote the FMUs once, into its own folder (which the
+        # worker removes when it closes)
+        written = sorted(workers.rglob("tire_fmu_sweep_*/TireModal.fmu"))
+        assert 1 <= len(written) <= 2 and all(p.read_bytes() == bundle.tire for p in written)
     finally:
         cluster.close()
     for result in (serial, parallel):
         table = result.table
-        assert list(table["status"]) == ["ok", "ok", "failed"]
+        assert list(table["status"]) == ["ok", "ok", "failed"], list(table["error"])
         assert "critical" in table["error"][2] and "500" in table["error"][2]
         assert table.loc[:1, "body_bounce_hz"].notna().all()
     numeric = [c for c in RESULT_COLUMNS if c not in ("status", "error", "seconds")]
@@ -343,6 +388,18 @@ def test_sweep_on_dask_gives_the_serial_numbers_and_records_a_failure(fmus):
     assert serial.table["body_bounce_hz"][1] < serial.table["body_bounce_hz"][0]
 
 
+def test_auto_scheduler_runs_in_process_unless_workers_pay_off(monkeypatch):
+    from vehicle_demo.sweep import pick_scheduler
+
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    monkeypatch.setattr("os.getloadavg", lambda: (0.1, 0.1, 0.1))
+    assert pick_scheduler(8, 2) == "processes"
+    assert pick_scheduler(3, 2) == "synchronous"  # fewer than two points per worker
+    monkeypatch.setattr("os.getloadavg", lambda: (1.8, 1.8, 1.8))  # the cores are taken
+    assert pick_scheduler(8, 2) == "synchronous"
+
+
+@pytest.mark.fmu
 def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
     from vehicle_demo.sweep import SweepError, run_sweep
 
@@ -352,23 +409,116 @@ def test_sweep_rejects_unknown_factors_with_the_known_ones(fmus):
 
 # -- the demo and its command line -----------------------------------------------------------
 
-def test_quick_demo_writes_figures_and_tables(tmp_path, fmus):
+@pytest.mark.fmu
+@pytest.mark.slow
+def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
     import shutil
 
+    import vehicle_demo.plots as plots
     from vehicle_demo.demo import DemoSettings, format_summary, run_demo
+
+    figures, save = {}, plots._save
+
+    def keep(fig, path):
+        figures[path.name] = fig
+        return save(fig, path)
+
+    monkeypatch.setattr(plots, "_save", keep)
 
     out = tmp_path / "demo"
     (out / "fmus").mkdir(parents=True)
     for path in (fmus.tire, fmus.quarter_car):  # reuse the built FMUs (they are up to date)
         shutil.copy2(path, out / "fmus" / path.name)
-    summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=1.0,
+    summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=0.5,
                                           progress=False), log=lambda *_: None)
     for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
-                 "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv"):
+                 "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv",
+                 "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
+    # the ride grid: one legend for all panels, readable, in several columns; no coherence
+    # row when every line is coherent (a noise-free multisine)
+    ride = figures["ride_transfer_functions.png"]
+    (legend,) = ride.legends
+    assert legend._ncols >= 4 and min(t.get_fontsize() for t in legend.get_texts()) >= 10
+    assert not any(ax.get_legend() for ax in ride.axes)
+    assert len(ride.axes) == 12 and not any("coherence" in ax.get_ylabel() for ax in ride.axes)
     text = format_summary(summary)
     assert "wheel hop" in text and "body bounce" in text
+    # one number per cell of summary.csv, so a spreadsheet reads it
+    import csv
+
+    with open(out / "summary.csv", newline="") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0] == ["quantity", "value", "unit"]
+    for quantity, value, _ in rows[1:]:
+        assert math.isfinite(float(value)), (quantity, value)
+    # the resonance table's columns line up, whatever is missing ("-") in a row
+    lines = text.split("Resonances")[1].split("\n\n")[0].splitlines()[1:]
+    assert len(lines) == 1 + len(summary.resonances)
+    assert len({len(line.rstrip().rsplit(" ", 1)[0]) for line in lines}) == 1, lines
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--road-speed", "1000"], "--road-speed = 1000.0 m/s: must be >= 0 and below the critical "
+                               "speed 42.67 m/s of the mesh (N = 100)"),
+    (["--n-elements", "3"], "--n-elements = 3: must be an integer in [8, 20000]"),
+    (["--quick", "--n-elements", "400", "--road-speed", "-1"],
+     "--road-speed = -1.0 m/s: must be >= 0 and below the critical speed 10.76"),
+])
+def test_demo_settings_are_refused_before_anything_is_built(tmp_path, capsys, monkeypatch,
+                                                             argv, message):
+    import vehicle_demo.demo as demo
+    from vehicle_demo.__main__ import main
+
+    monkeypatch.setattr(demo, "ensure_fmus", lambda *_, **__: pytest.fail("built the FMUs"))
+    out = tmp_path / "out"
+    assert main(["--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("vehicle_demo: error: ") and message in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_demo_without_its_packages_names_the_extra_and_leaves_no_folder(tmp_path, capsys,
+                                                                        monkeypatch):
+    import sys
+
+    from vehicle_demo.__main__ import main
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # as if it were not installed
+    out = tmp_path / "out"
+    assert main(["--out", str(out), "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "the demo needs matplotlib: pip install 'tire_fmu[demo]'" in err
+    assert not out.exists()
+
+
+def test_the_quarter_car_is_defined_once():
+    from dataclasses import fields
+
+    from tire_fmu.core.parameters import DEFAULT_LOAD_N
+    from tire_fmu.fmu.interface import same_fixed_value
+    from vehicle_demo import quarter_car_fmu
+
+    # the FMU's parameters and the master's names come from QuarterCarParameters' fields
+    assert [p[:3] for p in quarter_car_fmu.PARAMETERS] == [
+        (f.metadata["fmu_name"], f.default, f.metadata["unit"]) for f in fields(CAR)]
+    assert QuarterCarParameters.from_fmu_values(CAR.fmu_values()) == CAR
+    assert quarter_car_fmu.INPUTS[0][:2] == ("rim_Fz", CAR.static_tire_load_n)
+    # the core's default load is its own number, which the demo car happens to carry
+    assert DEFAULT_LOAD_N != CAR.static_tire_load_n
+    assert same_fixed_value(CAR.static_tire_load_n, DEFAULT_LOAD_N)
+
+
+def test_fixed_parameters_match_within_the_stated_tolerance():
+    from tire_fmu.fmu.interface import FIXED_PARAMETER_REL_TOLERANCE, same_fixed_value
+
+    load = 27654.753
+    assert same_fixed_value(27654.752999999997, load)
+    assert same_fixed_value(load * (1 + 0.5 * FIXED_PARAMETER_REL_TOLERANCE), load)
+    assert not same_fixed_value(load * (1 + 2 * FIXED_PARAMETER_REL_TOLERANCE), load)
+    assert same_fixed_value(0.0, 0.0) and not same_fixed_value(1e-300, 0.0)
+    assert not same_fixed_value(math.nan, math.nan)
 
 
 def test_command_line_reports_user_errors_in_one_line(tmp_path, capsys):

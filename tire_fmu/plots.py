@@ -164,7 +164,7 @@ def plot_patch_sweep(result, path: Path) -> Path:
     plt = _pyplot()
     colour = _order_colours(plt, result.orders)
     phases = result.phases
-    fig, axes = plt.subplots(1, len(phases), figsize=(7.5 * len(phases), 5.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(phases), figsize=(7.5 * len(phases), 6.4), squeeze=False)
     length_cm = result.lengths_m * 100.0
     for ax, phase in zip(axes[0], phases):
         sym = result.shift_percent("symmetric", phase)
@@ -174,8 +174,10 @@ def plot_patch_sweep(result, path: Path) -> Path:
             ax.plot(length_cm, sym[:, j], "-", color=colour(n), lw=1.6,
                     label=f"n = {n} ({f0:.1f} Hz)")
             ax.plot(length_cm, anti[:, j], "--", color=colour(n), lw=1.3)
-        ax.plot([], [], "-", color="0.3", label="symmetric (extr)")
-        ax.plot([], [], "--", color="0.3", label="antisymmetric (0)")
+        ax.plot([], [], "-", color="0.3",
+                label="symmetric member: antinode at the patch centre, stiffened")
+        ax.plot([], [], "--", color="0.3",
+                label="antisymmetric member: node at the patch centre, barely moves")
         if length_cm.min() <= 20.4 <= length_cm.max():
             ax.axvline(20.4, color="0.5", lw=0.8, ls=":")
             ax.text(20.9, ax.get_ylim()[1] * 0.97, "20.4 cm (paper)", fontsize=8, va="top",
@@ -185,7 +187,8 @@ def plot_patch_sweep(result, path: Path) -> Path:
         branch = "in-phase" if phase == "in" else "out-of-phase"
         ax.set_title(f"{branch} modes", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+                  frameon=False)  # below the axes, off the curves
     fig.suptitle(
         f"Split of the mode pairs by the contact patch\nN = {result.n_elements}, patch length "
         f"{_span(np.round(length_cm, 2))} cm, speed 0 m/s", fontsize=11,
@@ -272,16 +275,23 @@ def plot_speed_sweep(result, path: Path) -> Path:
                 alpha=0.35)
     n_limit = int(np.max(np.abs(result.orders)))
     if result.loaded is not None:
-        picked, rest = [], []
+        picked, band = [], []
         for speed, modes in zip(v, result.loaded):
+            # the rest is dozens of modes a speed, mostly the lumped sidewall's band (with high
+            # orders that fall towards zero near the critical speed): drawn as their span
+            rest = []
             for m in modes.modes:
                 if abs(m.order) <= n_limit and m.phase == "in":
                     picked.append((speed, m.frequency_hz, colour(m.order)))
                 else:
-                    rest.append((speed, m.frequency_hz))
-        if rest:
-            ax.scatter(*zip(*rest), s=4, color="0.7", zorder=2,
-                       label=f"loaded, out-of-phase or |n| > {n_limit}")
+                    rest.append(m.frequency_hz)
+            if rest:
+                band.append((speed, min(rest), max(rest)))
+        if band:
+            speeds, low, high = (np.array(x) for x in zip(*band))
+            ax.fill_between(speeds, low, high, color="0.9", lw=0, zorder=1,
+                            label=f"loaded, out-of-phase or |n| > {n_limit} (mostly the "
+                            "sidewall band): the span of their frequencies")
         if picked:
             speeds, freqs, cols = zip(*picked)
             ax.scatter(speeds, freqs, s=16, c=list(cols), edgecolors="k", linewidths=0.3,
@@ -292,15 +302,14 @@ def plot_speed_sweep(result, path: Path) -> Path:
     right = v.max()
     if np.isfinite(critical) and critical <= 1.15 * v.max():
         right = max(right, critical) * 1.02
-        ax.axvline(critical, color="C3", lw=1.4, ls="-.")
-        ax.text(critical, 0.985 * result.fmax_hz, f"critical speed {critical:.3g} m/s ",
-                color="C3", fontsize=8, va="top", ha="right",
-                bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.8, "pad": 1})
+        # named in the legend, not written over the data
+        ax.axvline(critical, color="C3", lw=1.4, ls="-.",
+                   label=f"critical (standing-wave) speed {critical:.3g} m/s")
     else:
-        ax.text(0.99, 0.985, f"critical speed {critical:.3g} m/s (off scale)", ha="right",
-                va="top", transform=ax.transAxes, fontsize=8, color="C3")
+        ax.plot([], [], color="C3", lw=1.4, ls="-.",
+                label=f"critical (standing-wave) speed {critical:.3g} m/s (off scale)")
     ax.set_xlim(v.min(), right)
-    ax.set_ylim(0.0, result.fmax_hz)
+    ax.set_ylim(0.0, result.f_max_hz)
     ax.set_xlabel("speed V [m/s]")
     ax.set_ylabel("ground-frame frequency [Hz]")
     radius = result.radius_m
@@ -314,7 +323,9 @@ def plot_speed_sweep(result, path: Path) -> Path:
         f"speed {_span(np.round(v, 2))} m/s", fontsize=10,
     )
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="lower left", framealpha=0.9)
+    # below the axes: inside, any corner hides curves at some speed
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.11), ncol=2,
+              frameon=False)
     _order_colourbar(plt, fig, ax, n_limit)
     fig.tight_layout()
     return _save(fig, plt, path)

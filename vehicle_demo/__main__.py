@@ -39,6 +39,10 @@ def _demo_parser() -> argparse.ArgumentParser:
     return p
 
 
+#: The demo's settings under the names of their options, for error messages.
+OPTION_NAMES = {"n_elements": "--n-elements", "road_speed_m_s": "--road-speed"}
+
+
 def _sweep_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="python -m vehicle_demo sweep",
@@ -51,7 +55,10 @@ def _sweep_parser() -> argparse.ArgumentParser:
     p.add_argument("--table", default="sweep.csv", help="file name: .csv or .parquet")
     p.add_argument("--address", help="dask.distributed scheduler address (default: dask's "
                                      "local process scheduler)")
-    p.add_argument("--serial", action="store_true", help="run in this process, no dask")
+    p.add_argument("--scheduler", choices=("auto", "synchronous", "processes"), default="auto",
+                   help="synchronous: in this process; processes: dask's local processes; "
+                        "auto (default): processes when there are at least two points per "
+                        "worker and a free core for each, else synchronous")
     p.add_argument("--workers", type=int, default=2, help="local worker processes")
     p.add_argument("--n-elements", type=int, default=60, help="tire mesh unless a factor")
     p.add_argument("--rebuild", action="store_true", help="rebuild the FMUs")
@@ -87,7 +94,7 @@ def _demo(argv) -> int:
     if args.n_elements is not None:
         overrides["n_elements"] = args.n_elements
     settings = DemoSettings.quick(**overrides) if args.quick else DemoSettings(**overrides)
-    summary = run_demo(settings)
+    summary = run_demo(settings, names=OPTION_NAMES)
     print(format_summary(summary))
     return 0
 
@@ -101,7 +108,7 @@ def _sweep(argv) -> int:
     factors = _parse_factors(args.factor)
     fmus = ensure_fmus(args.out / "fmus", args.rebuild)
     result = run_sweep(full_factorial(factors), fmus, SweepSettings(n_elements=args.n_elements),
-                       scheduler="synchronous" if args.serial else "processes",
+                       scheduler=args.scheduler,
                        address=args.address, n_workers=args.workers,
                        progress=not args.no_progress)
     table = save_table(result, args.out / args.table)

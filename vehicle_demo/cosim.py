@@ -45,15 +45,6 @@ from .quarter_car import QuarterCarParameters
 SCHEMES = ("gauss-seidel", "jacobi")
 DEFAULT_STEP_S = 1e-4
 
-#: Quarter-car FMU parameter for each field of :class:`QuarterCarParameters`.
-CAR_FMU_NAMES = {
-    "body_mass_kg": "body_mass",
-    "wheel_mass_kg": "wheel_mass",
-    "suspension_stiffness_n_per_m": "suspension_stiffness",
-    "suspension_damping_n_s_per_m": "suspension_damping",
-    "gravity_m_s2": "gravity",
-}
-
 
 class CoSimError(RuntimeError):
     """An FMU refused a call; the message carries what the FMU logged."""
@@ -164,7 +155,12 @@ class FmuInstance:
 
     def start(self, parameters: Mapping[str, float | int | bool], start_time: float = 0.0
               ) -> None:
-        """(Re)initialise with ``parameters`` (FMU names): reset, set, initialise."""
+        """(Re)initialise with ``parameters`` (FMU names): reset, set, initialise.
+
+        A Real parameter that is fixed at export (a native tire FMU's ``load``) gets its
+        declared value when the given one matches it within
+        :data:`tire_fmu.fmu.interface.FIXED_PARAMETER_REL_TOLERANCE`: the car's weight
+        (2500 + 320)·g is 27654.752999999997 N, the export's load 27654.753 N."""
         try:
             if not self._fresh:
                 self.fmu.reset()
@@ -175,7 +171,7 @@ class FmuInstance:
             for name, value in parameters.items():
                 vr, kind = self.vr(name), self.variables[name].type
                 if kind == "Real":
-                    self.fmu.setReal([vr], [float(value)])
+                    self.fmu.setReal([vr], [self._declared_if_same(name, float(value))])
                 elif kind == "Integer":
                     self.fmu.setInteger([vr], [int(value)])
                 elif kind == "Boolean":
@@ -187,6 +183,15 @@ class FmuInstance:
             raise
         except Exception as error:
             raise self.fail("initialisation", error) from error
+
+    def _declared_if_same(self, name: str, value: float) -> float:
+        from tire_fmu.fmu.interface import same_fixed_value
+
+        variable = self.variables[name]
+        if variable.causality == "parameter" and variable.variability == "fixed" \
+                and variable.start is not None and same_fixed_value(value, variable.start):
+            return float(variable.start)
+        return value
 
     def get(self, names) -> list[float]:
         return self.fmu.getReal([self.vr(n) for n in names])
@@ -211,8 +216,8 @@ class CoSimResult:
     wheel_z_m: np.ndarray
     wheel_vz_m_s: np.ndarray
     wheel_az_m_s2: np.ndarray
-    rim_fz_n: np.ndarray  # total
-    contact_fz_n: np.ndarray  # total
+    rim_Fz_n: np.ndarray  # total
+    contact_Fz_n: np.ndarray  # total
     in_contact: np.ndarray  # the tire FMU's flag
     static_load_n: float
     step_s: float
@@ -223,11 +228,11 @@ class CoSimResult:
     @property
     def rim_load_n(self) -> np.ndarray:
         """Dynamic rim load (total minus static)."""
-        return self.rim_fz_n - self.static_load_n
+        return self.rim_Fz_n - self.static_load_n
 
     @property
     def contact_force_n(self) -> np.ndarray:
-        return self.contact_fz_n - self.static_load_n
+        return self.contact_Fz_n - self.static_load_n
 
     @property
     def real_time_factor(self) -> float:
@@ -295,13 +300,14 @@ class QuarterCarCoSimulation:
             raise ValueError("road height and velocity must be 1-D arrays of one length >= 2")
         car = self.car
         static_load = car.static_tire_load_n
-        self.car_fmu.start({CAR_FMU_NAMES[k]: v for k, v in car.as_dict().items()}, start_time)
+        self.car_fmu.start(car.fmu_values(), start_time)
         self.tire.start({"load": static_load, **self.tire_parameters}, start_time)
         return self._loop(road_z, road_vz, static_load, start_time, progress)
 
     def _loop(self, road_z, road_vz, static_load, start_time, progress) -> CoSimResult:
-        from fmpy.fmi2 import fmi2Boolean, fmi2Real, fmi2True, fmi2ValueReference
+        from ctypes import memmove, sizeof
 
+        from fmpy.fmi2 import fmi2Boolean, fmi2Real, fmi2True, fmi2ValueReference
 
         tire, car = self.tire, self.car_fmu
         n = road_z.size - 1
@@ -324,7 +330,14 @@ class QuarterCarCoSimulation:
         c_set, c_step, c_get = (_raw(car.fmu, f) for f in ("SetReal", "DoStep", "GetReal"))
 
         out = np.empty((n + 1, 7))  # wheel z, vz, az, body z, az, rim Fz, contact Fz
-        flags = np.empty(n + 1, dtype=bool)
+        flags = np.empty(n + 1, dtype=np.dtype(f"i{sizeof(fmi2Boolean)}"))
+        # Each step's outputs are copied from the FMUs' buffers into these arrays with memmove
+        # at computed addresses: a numpy slice assignment from a ctypes array goes through
+        # the buffer protocol and costs about a microsecond each, on a ~15 µs step.
+        out_address, row_bytes = out.ctypes.data, out.strides[0]
+        car_bytes, tire_bytes = sizeof(fmi2Real) * 5, sizeof(fmi2Real) * 2
+        flag_address, flag_bytes = flags.ctypes.data, flags.strides[0]
+        road_z_list, road_vz_list = road_z.tolist(), road_vz.tolist()  # floats: cheap to index
         c_get(cc, car_out, 5, y_c)
         z_w, v_w = y_c[0], y_c[1]
         # the tire's inputs at t_0, then its outputs for them (direct feedthrough)
@@ -353,15 +366,16 @@ class QuarterCarCoSimulation:
                 status |= c_get(cc, car_out, 5, y_c)
                 # the inputs of t_{k+1}, then the tire's outputs for them: its feedthrough
                 # (contact damper on the road velocity, sidewall on the rim's) is then current
-                u_t[0], u_t[1], u_t[2], u_t[3] = y_c[0], y_c[1], road_z[k + 1], road_vz[k + 1]
+                u_t[0], u_t[1] = y_c[0], y_c[1]
+                u_t[2], u_t[3] = road_z_list[k + 1], road_vz_list[k + 1]
                 status |= t_set(ct, tire_in, 4, u_t) | t_get(ct, tire_out, 2, y_t)
                 status |= t_get_flag(ct, tire_flag, 1, y_flag)
                 if status > 1:  # an OR of statuses exceeds 1 iff one was discard or worse
                     raise CoSimError(f"an FMI call returned {_STATUS[min(status, 4)]} or worse")
-                row = out[k + 1]
-                row[:5] = y_c
-                row[5:] = y_t
-                flags[k + 1] = y_flag[0]
+                row = out_address + (k + 1) * row_bytes
+                memmove(row, y_c, car_bytes)
+                memmove(row + car_bytes, y_t, tire_bytes)
+                memmove(flag_address + (k + 1) * flag_bytes, y_flag, flag_bytes)
                 force = y_t[0]
                 if progress is not None and (k + 1) % report_every == 0:
                     progress(report_every)
@@ -379,8 +393,8 @@ class QuarterCarCoSimulation:
             time_s=times, road_z_m=road_z, road_vz_m_s=road_vz,
             body_z_m=out[:, 3].copy(), body_az_m_s2=out[:, 4].copy(),
             wheel_z_m=out[:, 0].copy(), wheel_vz_m_s=out[:, 1].copy(),
-            wheel_az_m_s2=out[:, 2].copy(), rim_fz_n=out[:, 5].copy(),
-            contact_fz_n=out[:, 6].copy(), in_contact=flags, static_load_n=static_load,
+            wheel_az_m_s2=out[:, 2].copy(), rim_Fz_n=out[:, 5].copy(),
+            contact_Fz_n=out[:, 6].copy(), in_contact=flags != 0, static_load_n=static_load,
             step_s=h, scheme=self.scheme, wall_s=wall, tire_log=tuple(tire.log),
         )
 

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -28,7 +29,12 @@ from .transfer import Multisine
 
 
 class DemoError(RuntimeError):
-    """Something the user can fix (a missing package, an unwritable folder)."""
+    """Something the user can fix (a missing package, an unwritable folder, a bad setting)."""
+
+
+#: What the demo imports beyond numpy and scipy, and the extra of tire_fmu that brings it.
+DEMO_PACKAGES = ("pythonfmu", "fmpy", "matplotlib", "tqdm")
+DEMO_EXTRA = "demo"
 
 
 @dataclass(frozen=True)
@@ -58,6 +64,55 @@ class DemoSettings:
         values.update(overrides)
         return cls(**values)
 
+    def problems(self, names: dict[str, str] | None = None) -> list[str]:
+        """Every setting the demo cannot run with, found before anything is built: a mesh
+        outside the core's range and speeds at or above the mesh's critical speed (the tire
+        FMU would refuse them only after the runs before them). ``names`` renames settings in
+        the messages (the command line's options)."""
+        from tire_fmu.core import TireParameters, critical_speed
+        from tire_fmu.core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
+
+        names = names or {}
+        found = []
+        n = self.n_elements
+        if not (isinstance(n, int) and MIN_ELEMENTS <= n <= MAX_ELEMENTS):
+            found.append(f"{names.get('n_elements', 'n_elements')} = {n!r}: must be an "
+                         f"integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]")
+            critical = math.inf  # the speeds are checked against a valid mesh only
+        else:
+            critical = critical_speed(TireParameters(), n).speed_m_s
+        for name in ("tf_speed_m_s", "road_speed_m_s", "cleat_speed_m_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value < critical):
+                limit = (f"below the critical speed {critical:.4g} m/s of the mesh "
+                         f"(N = {n})" if math.isfinite(critical) else "finite")
+                found.append(f"{names.get(name, name)} = {value!r} m/s: must be >= 0 and "
+                             f"{limit}")
+        if not (math.isfinite(self.step_s) and self.step_s > 0):
+            found.append(f"{names.get('step_s', 'step_s')} = {self.step_s!r} s: must be > 0")
+        return found
+
+
+def check_settings(settings: DemoSettings, names: dict[str, str] | None = None) -> None:
+    """Raise DemoError naming every bad setting and every missing package, before any
+    folder is made or FMU built."""
+    import importlib.util
+
+    found = settings.problems(names)
+    missing = [name for name in DEMO_PACKAGES if _missing(name, importlib.util)]
+    if missing:
+        found.append(f"the demo needs {', '.join(missing)}: pip install "
+                     f"'tire_fmu[{DEMO_EXTRA}]' (or '.[{DEMO_EXTRA}]' in a clone)")
+    if found:
+        raise DemoError("; ".join(found))
+
+
+def _missing(name: str, util) -> bool:
+    try:
+        return util.find_spec(name) is None
+    except (ImportError, ValueError):  # a module set to None in sys.modules, a broken one
+        return True
+
 
 def _sources() -> list[Path]:
     import tire_fmu
@@ -65,7 +120,7 @@ def _sources() -> list[Path]:
     package = Path(tire_fmu.__file__).parent
     here = Path(__file__).parent
     return [*package.glob("core/*.py"), *package.glob("fmu/*.py"), package / "__init__.py",
-            here / "quarter_car_fmu.py"]
+            here / "quarter_car_fmu.py", here / "vehicle_demo_quarter_car_dynamics.py"]
 
 
 def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
@@ -75,8 +130,8 @@ def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
 
         from .quarter_car_fmu import build_quarter_car_fmu
     except ImportError as error:
-        raise DemoError(f"building the FMUs needs pythonfmu and fmpy ({error}); "
-                        "pip install -e '.[test]'") from error
+        raise DemoError(f"building the FMUs needs pythonfmu and fmpy ({error}): "
+                        f"pip install 'tire_fmu[{DEMO_EXTRA}]'") from error
     folder = Path(folder)
     paths = FmuPaths(folder / "TireModal.fmu", folder / "QuarterCar.fmu")
     newest = max(p.stat().st_mtime for p in _sources() if p.exists())
@@ -107,9 +162,13 @@ class DemoSummary:
     wall_s: float
 
 
-def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
+def run_demo(settings: DemoSettings | None = None, log=print,
+             names: dict[str, str] | None = None) -> DemoSummary:
+    """The whole demo; ``names`` names the settings in error messages (see
+    :meth:`DemoSettings.problems`)."""
     settings = settings or DemoSettings()
     started = time.perf_counter()
+    check_settings(settings, names)
     out = Path(settings.out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -117,12 +176,6 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
         (out / ".write_test").unlink()
     except OSError as error:
         raise DemoError(f"cannot write to {out}: {error.strerror or error}") from error
-    try:
-        import matplotlib  # noqa: F401
-        import tqdm  # noqa: F401
-    except ImportError as error:
-        raise DemoError(f"the demo needs matplotlib and tqdm ({error}); "
-                        "pip install -e '.[test]'") from error
     fmus = ensure_fmus(out / "fmus", settings.rebuild, log)
     rows: list[tuple[str, float | str, str]] = []
     figures, tables = [], []
@@ -225,10 +278,10 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
     for label, run in (("ISO road", road_run_iso), ("cleat", cleat_run)):
         rows += [
             (f"{label}: body acceleration RMS", float(np.std(run.body_az_m_s2)), "m/s2"),
-            (f"{label}: rim load min / max", f"{run.rim_fz_n.min():.0f} / "
-             f"{run.rim_fz_n.max():.0f}", "N"),
-            (f"{label}: contact force min / max", f"{run.contact_fz_n.min():.0f} / "
-             f"{run.contact_fz_n.max():.0f}", "N"),
+            (f"{label}: rim load min", float(run.rim_Fz_n.min()), "N"),
+            (f"{label}: rim load max", float(run.rim_Fz_n.max()), "N"),
+            (f"{label}: contact force min", float(run.contact_Fz_n.min()), "N"),
+            (f"{label}: contact force max", float(run.contact_Fz_n.max()), "N"),
             (f"{label}: contact lost", 100 * run.contact_lost_fraction, "%"),
             (f"{label}: real-time factor", run.real_time_factor, "-"),
         ]
@@ -241,7 +294,30 @@ def run_demo(settings: DemoSettings | None = None, log=print) -> DemoSummary:
         [[*asdict(r).values(), r.cosim_vs_analytic_pct] for r in resonances]))
     tables.append(_write_csv(out / "agreement.csv", list(asdict(next(iter(
         agreements.values()))).keys()), [list(asdict(a).values()) for a in agreements.values()]))
-    return DemoSummary(rows, resonances, agreements, figures, tables, wall)
+    summary = DemoSummary(rows, resonances, agreements, figures, tables, wall)
+    tables.append(_write_json(out / "summary.json", summary, settings))
+    return summary
+
+
+def _write_json(path: Path, summary: DemoSummary, settings: DemoSettings) -> Path:
+    """Everything the summary tables hold, machine-readable (the docs quote it)."""
+    def plain(value):
+        return None if isinstance(value, float) and not math.isfinite(value) else value
+
+    data = {
+        "settings": {"n_elements": settings.n_elements, "step_s": settings.step_s,
+                     "tf_speed_m_s": settings.tf_speed_m_s,
+                     "road_speed_m_s": settings.road_speed_m_s,
+                     "excitation": {k: plain(v) for k, v in asdict(settings.excitation).items()}},
+        "rows": [{"quantity": q, "value": plain(v), "unit": u} for q, v, u in summary.rows],
+        "agreements": {name: {k: plain(v) for k, v in asdict(a).items()}
+                       for name, a in summary.agreements.items()},
+        "resonances": [{k: plain(v) for k, v in asdict(r).items()}
+                       for r in summary.resonances],
+        "wall_s": summary.wall_s,
+    }
+    path.write_text(json.dumps(data, indent=1) + "\n")
+    return path
 
 
 def _road_psd_figure(road, spectrum, path):
@@ -288,24 +364,31 @@ def format_summary(summary: DemoSummary) -> str:
         text = f"{value:.4g}" if isinstance(value, float) else str(value)
         lines.append(f"  {quantity:<{width}}  {text:>14} {unit}")
     lines += ["", "Resonances (f in Hz; analytic = two-mass car, tire spring K_v, with and "
-              "without the tire's rim-side mass)"]
-    header = (f"  {'resonance':<12} {'response':<13} {'analytic':>9} {'massless':>9} "
-              f"{'reference':>10} {'co-sim':>9} {'Δ vs an.':>9} {'ζ ref':>7} {'ζ co-sim':>8} "
-              f"{'peak gain ref':>14} {'co-sim':>11}  unit")
-    lines.append(header)
+              "without the tire's rim-side mass; - = not applicable)"]
+    columns = [  # (header, width, format, value)
+        ("resonance", -12, "", lambda r: r.resonance),
+        ("response", -13, "", lambda r: r.response),
+        ("analytic", 9, ".3f", lambda r: r.f_analytic_hz),
+        ("massless", 9, ".3f", lambda r: r.f_analytic_massless_hz),
+        ("reference", 10, ".3f", lambda r: r.f_reference_hz),
+        ("co-sim", 9, ".3f", lambda r: r.f_cosim_hz),
+        ("vs an. %", 9, "+.2f", lambda r: r.cosim_vs_analytic_pct),
+        ("zeta ref", 9, ".3f", lambda r: r.zeta_reference),
+        ("zeta co-sim", 11, ".3f", lambda r: r.zeta_cosim),
+        ("gain ref", 11, ".4g", lambda r: r.gain_reference),
+        ("gain co-sim", 11, ".4g", lambda r: r.gain_cosim),
+        ("unit", -9, "", lambda r: r.gain_unit),
+    ]
 
-    def f(v, spec):
-        return "-" if isinstance(v, float) and math.isnan(v) else format(v, spec)
+    def cell(value, width, spec):
+        if isinstance(value, float) and math.isnan(value):
+            value, spec = "-", ""
+        text = format(value, spec)
+        return text.ljust(-width) if width < 0 else text.rjust(width)
 
-    def pct(v):
-        return f"{'-':>9}" if math.isnan(v) else f"{v:+8.2f}%"
-
+    lines.append("  " + " ".join(cell(h, w, "") for h, w, _, _ in columns).rstrip())
     for r in summary.resonances:
-        lines.append(
-            f"  {r.resonance:<12} {r.response:<13} {f(r.f_analytic_hz, '9.3f')} "
-            f"{f(r.f_analytic_massless_hz, '9.3f')} {f(r.f_reference_hz, '10.3f')} "
-            f"{f(r.f_cosim_hz, '9.3f')} {pct(r.cosim_vs_analytic_pct)} "
-            f"{f(r.zeta_reference, '7.3f')} {f(r.zeta_cosim, '8.3f')} "
-            f"{f(r.gain_reference, '14.4g')} {f(r.gain_cosim, '11.4g')}  {r.gain_unit}")
+        lines.append("  " + " ".join(cell(get(r), w, spec)
+                                     for _, w, spec, get in columns).rstrip())
     lines += ["", "Files"] + [f"  {p}" for p in [*summary.figures, *summary.tables]]
     return "\n".join(lines)

@@ -24,14 +24,16 @@ frequencies therefore come in both versions (:func:`analytic_frequencies`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse.linalg as spla
 
-from tire_fmu.core.parameters import GRAVITY_M_S2
-
-from .vehicle_demo_quarter_car_dynamics import two_mass_state_space
+from .vehicle_demo_quarter_car_dynamics import (  # noqa: F401 -- the car is defined there
+    QuarterCarError,
+    QuarterCarParameters,
+    two_mass_state_space,
+)
 
 #: Names of the ride responses, all per unit road height at the leading edge of the patch.
 RIDE_OUTPUTS = ("body_acc", "wheel_acc", "rim_load", "contact_force")
@@ -39,51 +41,6 @@ RIDE_UNITS = {"body_acc": "(m/s²)/m", "wheel_acc": "(m/s²)/m", "rim_load": "N/
               "contact_force": "N/m"}
 RIDE_LABELS = {"body_acc": "road → body acceleration", "wheel_acc": "road → wheel acceleration",
                "rim_load": "road → dynamic rim load", "contact_force": "road → contact force"}
-
-
-class QuarterCarError(ValueError):
-    """Invalid quarter-car parameters; ``problems`` lists every one."""
-
-    def __init__(self, problems: list[str]):
-        self.problems = list(problems)
-        super().__init__("; ".join(self.problems))
-
-
-@dataclass(frozen=True)
-class QuarterCarParameters:
-    """One corner of a heavy vehicle (design-brief defaults)."""
-
-    body_mass_kg: float = 2500.0
-    wheel_mass_kg: float = 320.0  # wheel + axle share, without the tire's own mass
-    suspension_stiffness_n_per_m: float = 80e3
-    suspension_damping_n_s_per_m: float = 8.5e3
-    gravity_m_s2: float = GRAVITY_M_S2
-
-    def __post_init__(self) -> None:
-        problems = []
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                problems.append(f"{f.name} = {value!r}: must be a finite number > 0")
-        if problems:
-            raise QuarterCarError(problems)
-
-    @property
-    def static_tire_load_n(self) -> float:
-        """The load the tire carries at rest: the tire FMU's ``load`` must equal it."""
-        return (self.body_mass_kg + self.wheel_mass_kg) * self.gravity_m_s2
-
-    def with_static_load(self, load_n: float) -> QuarterCarParameters:
-        """The same car with the body mass that puts ``load_n`` on the tire (the wheel mass is
-        a property of the axle, the payload is what changes)."""
-        body = load_n / self.gravity_m_s2 - self.wheel_mass_kg
-        if body <= 0:
-            raise QuarterCarError([f"load = {load_n:g} N: must exceed the wheel's weight "
-                                   f"{self.wheel_mass_kg * self.gravity_m_s2:.6g} N"])
-        return replace(self, body_mass_kg=body)
-
-    def as_dict(self) -> dict[str, float]:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
 def state_space(params: QuarterCarParameters) -> tuple[np.ndarray, np.ndarray]:

@@ -22,6 +22,7 @@ force at the end of the ramp. Bad parameters, non-finite inputs or h <= 0 refuse
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 
 import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
@@ -30,24 +31,26 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from scipy.linalg import expm
 
 try:  # inside the FMU the dynamics module sits next to the slave, in resources/
-    from vehicle_demo_quarter_car_dynamics import two_mass_state_space
+    from vehicle_demo_quarter_car_dynamics import (
+        QuarterCarError,
+        QuarterCarParameters,
+        two_mass_state_space,
+    )
 except ImportError:  # in the package
-    from vehicle_demo.vehicle_demo_quarter_car_dynamics import two_mass_state_space
+    from vehicle_demo.vehicle_demo_quarter_car_dynamics import (
+        QuarterCarError,
+        QuarterCarParameters,
+        two_mass_state_space,
+    )
 
 DYNAMICS_MODULE = "vehicle_demo_quarter_car_dynamics"
 
-GRAVITY_M_S2 = 9.80665
-
-#: (name, start, unit, description) of the parameters, inputs and outputs.
-PARAMETERS = (
-    ("body_mass", 2500.0, "kg", "sprung (body) mass of the corner"),
-    ("wheel_mass", 320.0, "kg", "unsprung mass: wheel and axle share, without the tire"),
-    ("suspension_stiffness", 80e3, "N/m", "suspension spring between body and wheel"),
-    ("suspension_damping", 8.5e3, "N.s/m", "suspension damper between body and wheel"),
-    ("gravity", GRAVITY_M_S2, "m/s2", "gravitational acceleration"),
-)
+#: (name, start, unit, description) of the parameters (from QuarterCarParameters), inputs and
+#: outputs.
+PARAMETERS = tuple((f.metadata["fmu_name"], f.default, f.metadata["unit"],
+                    f.metadata["description"]) for f in fields(QuarterCarParameters))
 INPUTS = (
-    ("rim_Fz", (2500.0 + 320.0) * GRAVITY_M_S2, "N",
+    ("rim_Fz", QuarterCarParameters().static_tire_load_n, "N",
      "vertical force of the tire on the rim, TOTAL (static load included), z up"),
     ("rim_Fz_rate", 0.0, "N/s", "slope of rim_Fz over the step (0 = held)"),
 )
@@ -74,41 +77,63 @@ class QuarterCar(Fmi2Slave):
     def __init__(self, **kwargs):
         # Cheap on purpose: pythonfmu instantiates the slave at build time.
         super().__init__(**kwargs)
-        for name, start, _, _ in PARAMETERS + INPUTS:
-            setattr(self, name, start)
-        for name, _, _ in OUTPUTS:
-            setattr(self, name, 0.0)
+        # Every variable's value by value reference (the registration order below): the host's
+        # get/set calls index this list directly, which costs a few hundred ns where
+        # pythonfmu's per-variable getters and type checks cost microseconds a step.
+        self._values: list[float] = ([start for _, start, _, _ in PARAMETERS + INPUTS]
+                                     + [0.0] * len(OUTPUTS))
         self._x = (0.0, 0.0, 0.0, 0.0)  # [z_b, ż_b, z_w, ż_w]
         self._cache: dict[float, tuple] = {}
         self._system = None
         self._problem = "the FMU is not initialised (call fmi2ExitInitializationMode)"
         for name, _, _, text in PARAMETERS:  # units: written at build time
-            self.register_variable(Real(name, causality=Fmi2Causality.parameter,
-                                        variability=Fmi2Variability.fixed,
-                                        initial=Fmi2Initial.exact, description=text))
+            self._register(Real(name, causality=Fmi2Causality.parameter,
+                                variability=Fmi2Variability.fixed,
+                                initial=Fmi2Initial.exact, description=text))
         for name, _, _, text in INPUTS:
-            self.register_variable(Real(name, causality=Fmi2Causality.input,
-                                        variability=Fmi2Variability.continuous,
-                                        description=text))
+            self._register(Real(name, causality=Fmi2Causality.input,
+                                variability=Fmi2Variability.continuous, description=text))
         for name, _, text in OUTPUTS:
             # the experiment starts in static equilibrium: every deviation is exactly 0
-            self.register_variable(Real(name, causality=Fmi2Causality.output,
-                                        variability=Fmi2Variability.continuous,
-                                        initial=Fmi2Initial.exact, description=text))
+            self._register(Real(name, causality=Fmi2Causality.output,
+                                variability=Fmi2Variability.continuous,
+                                initial=Fmi2Initial.exact, description=text))
+
+    def _register(self, variable: Real) -> None:
+        vr = len(self.vars)
+        variable.getter = lambda: self._values[vr]
+        if variable.causality != Fmi2Causality.output:
+            def setter(value):
+                self._values[vr] = value
+            variable.setter = setter
+        self.register_variable(variable)
+
+    def get_real(self, vrs):
+        values = self._values
+        try:
+            return [values[vr] for vr in vrs]
+        except (IndexError, TypeError):
+            return super().get_real(vrs)  # raises with pythonfmu's message
+
+    def set_real(self, vrs, values):
+        if vrs == _INPUT_VRS:  # the master's call: both inputs, in order
+            self._values[_INPUTS] = values
+        else:
+            super().set_real(vrs, values)
 
     def exit_initialization_mode(self):
-        values = {name: getattr(self, name) for name, *_ in PARAMETERS}
-        bad = [f"{name} = {value!r}" for name, value in values.items()
-               if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0)]
-        if bad:
-            self._problem = "parameters must be finite and > 0: " + ", ".join(bad)
-            self.log(f"QuarterCar rejected its parameters: {self._problem}", Fmi2Status.error)
+        try:
+            car = QuarterCarParameters.from_fmu_values(
+                {name: value for (name, *_), value in zip(PARAMETERS, self._values)})
+        except QuarterCarError as error:
+            self._problem = f"parameters rejected: {error}"
+            self.log(f"QuarterCar rejected its parameters: {error}", Fmi2Status.error)
             self._system = None
             return
-        m_b, m_w = values["body_mass"], values["wheel_mass"]
-        a, b = two_mass_state_space(m_b, m_w, values["suspension_stiffness"],
-                                    values["suspension_damping"])
-        self._system = (a, b, (m_b + m_w) * values["gravity"])
+        a, b = two_mass_state_space(car.body_mass_kg, car.wheel_mass_kg,
+                                    car.suspension_stiffness_n_per_m,
+                                    car.suspension_damping_n_s_per_m)
+        self._system = (a, b, car.static_tire_load_n)
         self._cache.clear()
         self._problem = ""
 
@@ -136,7 +161,8 @@ class QuarterCar(Fmi2Slave):
             self.log(f"doStep at t = {current_time!r} s refused: {self._problem}",
                      Fmi2Status.discard)
             return False
-        force, rate = self.rim_Fz, self.rim_Fz_rate
+        values = self._values
+        force, rate = values[_FORCE], values[_RATE]
         if not (step_size > 0 and math.isfinite(step_size)) or not (
                 math.isfinite(force) and math.isfinite(rate)):
             self.log(f"doStep at t = {current_time!r} s refused: h = {step_size!r} s, "
@@ -155,13 +181,23 @@ class QuarterCar(Fmi2Slave):
         )
         self._x = (x0, x1, x2, x3)
         u_end = u + rate * step_size
-        self.body_z, self.body_vz, self.wheel_z, self.wheel_vz = x0, x1, x2, x3
-        r = body_row
-        self.body_az = r[0] * x0 + r[1] * x1 + r[2] * x2 + r[3] * x3 + r[4] * u_end
-        r = wheel_row
-        self.wheel_az = r[0] * x0 + r[1] * x1 + r[2] * x2 + r[3] * x3 + r[4] * u_end
-        self.suspension_travel = x0 - x2
+        r, w = body_row, wheel_row
+        # outputs in OUTPUTS order: wheel z, vz, az, body z, vz, az, suspension travel
+        values[_OUTPUTS] = (
+            x2, x3, w[0] * x0 + w[1] * x1 + w[2] * x2 + w[3] * x3 + w[4] * u_end,
+            x0, x1, r[0] * x0 + r[1] * x1 + r[2] * x2 + r[3] * x3 + r[4] * u_end,
+            x0 - x2,
+        )
         return True
+
+
+#: Value references, fixed by the registration order (parameters, inputs, outputs).
+_INPUTS = slice(len(PARAMETERS), len(PARAMETERS) + len(INPUTS))
+_INPUT_VRS = list(range(_INPUTS.start, _INPUTS.stop))
+_FORCE, _RATE = _INPUT_VRS
+_OUTPUTS = slice(_INPUTS.stop, _INPUTS.stop + len(OUTPUTS))
+assert [name for name, *_ in OUTPUTS] == ["wheel_z", "wheel_vz", "wheel_az", "body_z",
+                                          "body_vz", "body_az", "suspension_travel"]
 
 
 # -- builder (host side only) ----------------------------------------------------------------

@@ -10,20 +10,28 @@ and beside them the reference values of the car on the full tire model.
 
 Execution follows fmpy's ``parameter_variation`` example (one task per point, the FMUs
 extracted once per worker process): ``scheduler="synchronous"`` runs in this process,
-``"processes"`` (default) on dask's local multiprocessing scheduler, and an ``address`` sends
-the points to a ``dask.distributed`` scheduler. A point that fails is a row with
-``status = "failed"`` and its error, never dropped.
+``"processes"`` on dask's local multiprocessing scheduler, ``"auto"`` (default) picks between
+the two (:func:`pick_scheduler`), and an ``address`` sends the points to a
+``dask.distributed`` scheduler. Workers of a cluster need not see the client's files: the
+FMUs travel as bytes (:class:`FmuBundle`), sent once to every worker and written once into
+each worker's own folder. A point that fails is a row with ``status = "failed"`` and its
+error, never dropped.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
 import itertools
 import math
 import os
+import tempfile
 import time
+import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+from xml.etree import ElementTree
 
 from .cosim import CoSimError, FmuPaths, QuarterCarCoSimulation
 from .quarter_car import QuarterCarParameters
@@ -40,6 +48,9 @@ _OPERATING = ("speed", "n_elements", "allow_supercritical")
 _REDUCTION = ("f_max", "n_modes", "static_correction")
 
 
+SCHEDULERS = ("auto", "synchronous", "processes")
+
+
 class SweepError(ValueError):
     """A sweep that cannot run as given (the message says what to change)."""
 
@@ -54,6 +65,74 @@ class SweepSettings:
     n_elements: int = 60  # unless a factor sets it
     car: QuarterCarParameters = field(default_factory=QuarterCarParameters)
     reference: bool = True  # also the car on the full tire model
+
+
+@dataclass(frozen=True, eq=False)
+class FmuBundle:
+    """The two FMUs as bytes, to run where the files are not (a cluster's workers).
+
+    ``digest`` names the content: a worker writes a bundle to disk once, into its own folder,
+    and reuses the files for every later point (:meth:`paths`)."""
+
+    tire_name: str
+    tire: bytes
+    quarter_car_name: str
+    quarter_car: bytes
+    digest: str
+
+    @classmethod
+    def from_paths(cls, fmus: FmuPaths) -> FmuBundle:
+        tire, car = Path(fmus.tire).read_bytes(), Path(fmus.quarter_car).read_bytes()
+        digest = hashlib.sha256(tire + b"\0" + car).hexdigest()[:16]
+        return cls(Path(fmus.tire).name, tire, Path(fmus.quarter_car).name, car, digest)
+
+    def parameter_names(self) -> list[str]:
+        """The tire FMU's parameters, read from its model description in the bytes."""
+        with zipfile.ZipFile(io.BytesIO(self.tire)) as archive:
+            root = ElementTree.fromstring(archive.read("modelDescription.xml"))
+        return [v.get("name") for v in root.iter("ScalarVariable")
+                if v.get("causality") == "parameter"]
+
+    def paths(self, folder: str | Path | None = None) -> FmuPaths:
+        """The FMUs as files under ``folder`` (default: this process's worker folder, or the
+        temporary folder), written the first time this process asks for this bundle."""
+        known = _MATERIALISED.get(self.digest)
+        if known is not None and known.tire.is_file() and known.quarter_car.is_file():
+            return known
+        target = Path(folder or _worker_folder()) / f"tire_fmu_sweep_{self.digest}"
+        target.mkdir(parents=True, exist_ok=True)
+        paths = FmuPaths(target / self.tire_name, target / self.quarter_car_name)
+        for path, data in ((paths.tire, self.tire), (paths.quarter_car, self.quarter_car)):
+            if not path.is_file() or path.stat().st_size != len(data):
+                staging = path.with_suffix(f".{os.getpid()}.part")
+                staging.write_bytes(data)
+                staging.replace(path)  # atomic: a concurrent reader never sees half a file
+        _MATERIALISED[self.digest] = paths
+        return paths
+
+
+_MATERIALISED: dict[str, FmuPaths] = {}  # per process: bundle digest -> its files
+
+
+def _worker_folder() -> str:
+    try:
+        from distributed import get_worker
+
+        return get_worker().local_directory
+    except (ImportError, ValueError):  # not inside a dask.distributed worker
+        return tempfile.gettempdir()
+
+
+def run_bundled_point(point: Mapping, bundle: FmuBundle, settings: SweepSettings) -> dict:
+    """:func:`run_point` on a worker that has the FMUs as bytes (never raises)."""
+    try:
+        fmus = bundle.paths()
+    except Exception as error:  # noqa: BLE001 -- a worker that cannot write is a failed row
+        row = {**dict(point), **{name: math.nan for name in RESULT_COLUMNS}}
+        row.update(status="failed", error=f"writing the FMUs on the worker failed: {error}",
+                   seconds=0.0)
+        return row
+    return run_point(point, fmus, settings)
 
 
 def full_factorial(factors: Mapping[str, Sequence]) -> list[dict]:
@@ -187,14 +266,17 @@ class _SingleThreadBlas:
                 os.environ[n] = value
 
 
-def run_sweep(points: Sequence[Mapping], fmus: FmuPaths, settings: SweepSettings | None = None,
-              scheduler: str = "processes", address: str | None = None, n_workers: int = 2,
+def run_sweep(points: Sequence[Mapping], fmus: FmuPaths | FmuBundle,
+              settings: SweepSettings | None = None, scheduler: str = "auto",
+              address: str | None = None, n_workers: int = 2,
               progress: bool = True) -> SweepResult:
     """Run every point; rows come back in point order whatever order they finished in.
 
-    ``scheduler``: ``"synchronous"`` (this process, one point after another), ``"processes"``
-    (dask's local scheduler with ``n_workers`` processes); ``address`` (``"tcp://host:port"``
-    or a ``LocalCluster``'s ``scheduler_address``) overrides it with a distributed cluster.
+    ``fmus``: the FMU files, or their bytes (:class:`FmuBundle`). ``scheduler``:
+    ``"synchronous"`` (this process, one point after another), ``"processes"`` (dask's local
+    scheduler with ``n_workers`` processes) or ``"auto"`` (:func:`pick_scheduler`);
+    ``address`` (``"tcp://host:port"`` or a ``LocalCluster``'s ``scheduler_address``)
+    overrides it with a distributed cluster, whose workers get the FMUs as bytes.
     """
     import pandas as pd
 
@@ -202,23 +284,33 @@ def run_sweep(points: Sequence[Mapping], fmus: FmuPaths, settings: SweepSettings
     points = [dict(p) for p in points]
     if not points:
         raise SweepError("the sweep has no points")
-    from fmpy import read_model_description
+    if scheduler not in SCHEDULERS:
+        raise SweepError(f"scheduler = {scheduler!r}: must be one of {SCHEDULERS} (or give an "
+                         "address)")
+    bundle = fmus if isinstance(fmus, FmuBundle) else None
+    if address is not None and bundle is None:
+        bundle = FmuBundle.from_paths(fmus)  # read before anything runs
+    if bundle is not None:
+        tire_names = bundle.parameter_names()
+    else:
+        from fmpy import read_model_description
 
-    tire_names = [v.name for v in read_model_description(str(fmus.tire)).modelVariables
-                  if v.causality == "parameter"]
+        tire_names = [v.name for v in read_model_description(str(fmus.tire)).modelVariables
+                      if v.causality == "parameter"]
     check_factors(points, tire_names)
     started = time.perf_counter()
+    if address is None and bundle is not None:
+        fmus = bundle.paths()  # local runs read files
+    if scheduler == "auto":
+        scheduler = pick_scheduler(len(points), n_workers)
     if address is not None:
-        rows = _distributed(points, fmus, settings, address, progress)
+        rows = _distributed(points, bundle, settings, address, progress)
         used = f"dask.distributed at {address}"
     elif scheduler == "synchronous":
         rows, used = _serial(points, fmus, settings, progress), "synchronous"
     elif scheduler == "processes":
         rows, used = _local(points, fmus, settings, n_workers, progress), \
             f"dask local processes ({n_workers} workers)"
-    else:
-        raise SweepError(f"scheduler = {scheduler!r}: must be 'synchronous' or 'processes' "
-                         "(or give an address)")
     wall = time.perf_counter() - started
     factors = tuple(dict.fromkeys(name for p in points for name in p))
     table = pd.DataFrame(rows, columns=list(factors) + list(RESULT_COLUMNS))
@@ -261,25 +353,46 @@ def _local(points, fmus, settings, n_workers, progress) -> list:
         return list(dask.compute(*tasks, scheduler="processes", num_workers=n_workers))
 
 
-def _distributed(points, fmus, settings, address, progress) -> list:
+def _distributed(points, bundle: FmuBundle, settings, address, progress) -> list:
     from distributed import Client, as_completed
 
     with Client(address) as client:
-        futures = [client.submit(run_point, p, fmus, settings, pure=False) for p in points]
+        # the bytes go to every worker once; each task then refers to the worker's copy
+        [shipped] = client.scatter([bundle], broadcast=True, hash=False)
+        futures = [client.submit(run_bundled_point, p, shipped, settings, pure=False)
+                   for p in points]
         with _bar(len(points), progress, "sweep (distributed)") as bar:
             for _ in as_completed(futures):
                 bar.update(1)
         return client.gather(futures)
 
 
-def local_cluster(n_workers: int = 2):
+def pick_scheduler(n_points: int, n_workers: int) -> str:
+    """``"processes"`` when worker processes can pay for their start-up, else
+    ``"synchronous"``: each worker imports numpy, scipy and fmpy and extracts the FMUs (a few
+    seconds) before its first point, so parallel runs win only with at least two points per
+    worker and a core free for each worker (the load average says how many are busy)."""
+    cores = os.cpu_count() or 1
+    try:
+        busy = os.getloadavg()[0]
+    except OSError:  # not available on this platform
+        busy = 0.0
+    free = cores - busy
+    if n_workers < 2 or n_points < 2 * n_workers or free < n_workers - 0.5:
+        return "synchronous"
+    return "processes"
+
+
+def local_cluster(n_workers: int = 2, local_directory: str | Path | None = None):
     """A ``dask.distributed.LocalCluster`` of single-threaded worker processes, each with one
-    BLAS thread (close it when done)."""
+    BLAS thread (close it when done); ``local_directory`` is where the workers keep their
+    files (the FMUs of a sweep among them)."""
     from distributed import LocalCluster
 
+    extra = {} if local_directory is None else {"local_directory": str(local_directory)}
     with _SingleThreadBlas():
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                            dashboard_address=None)
+                            dashboard_address=None, **extra)
 
 
 def save_table(result: SweepResult, path: str | Path) -> Path:
@@ -299,5 +412,6 @@ def save_table(result: SweepResult, path: str | Path) -> Path:
     return path
 
 
-__all__ = ["CoSimError", "SweepError", "SweepResult", "SweepSettings", "check_factors",
-           "full_factorial", "local_cluster", "run_point", "run_sweep", "save_table"]
+__all__ = ["CoSimError", "FmuBundle", "SweepError", "SweepResult", "SweepSettings",
+           "check_factors", "full_factorial", "local_cluster", "pick_scheduler", "run_point",
+           "run_sweep", "save_table"]

@@ -9,14 +9,16 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import warnings
 from collections.abc import Sequence
 
 from ..core import ParameterError
-from .common import CliError, Output, to_jsonable
+from .common import CliError, Output, check_plot_option, to_jsonable
 
 COMMAND_MODULES = ("ring", "rolling", "reduce", "fmu", "fit")
+DEBUG_HELP = "show tracebacks on errors"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -31,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="tire-fmu",
         description="Modal ring tire model (in-plane, 0-300 Hz): analysis, reduction, FMU.",
     )
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                        parser_class=_Parser)
     import importlib
@@ -44,6 +46,10 @@ def build_parser() -> argparse.ArgumentParser:
                 raise
             continue
         module.register(subparsers)
+    for command in subparsers.choices.values():
+        # also after the command; SUPPRESS keeps a --debug given before it
+        command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                             help=DEBUG_HELP)
     return parser
 
 
@@ -51,6 +57,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        check_plot_option(args)  # before computing: a bad --plot must not cost a whole run
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             output: Output = args.handler(args)
@@ -74,11 +81,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
-    if getattr(args, "json", False):
-        json.dump(to_jsonable(output.data), sys.stdout, indent=2, allow_nan=False)
-        sys.stdout.write("\n")
-    elif output.text:
-        print(output.text)
+    try:
+        if getattr(args, "json", False):
+            json.dump(to_jsonable(output.data), sys.stdout, indent=2, allow_nan=False)
+            sys.stdout.write("\n")
+        elif output.text:
+            print(output.text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # the reader stopped early (`tire-fmu modes --json | head`): not an error of ours.
+        # Point stdout at /dev/null so the interpreter's final flush does not fail again.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
     for path in output.written:
         print(f"wrote {path}", file=sys.stderr)
     return 0

@@ -151,17 +151,62 @@ def model_from_args(args: argparse.Namespace, undeformed_default: bool = True):
 
 
 def write_plot(args: argparse.Namespace, output: Output, draw: Callable[[Path], Path]) -> None:
-    """Call ``draw(path)`` when --plot was given and record the file."""
+    """Call ``draw(path)`` when --plot was given and record the file (the path was checked
+    before the computation by :func:`check_plot_option`)."""
     path = getattr(args, "plot", None)
     if path is None:
         return
+    output.written.append(draw(path))
+
+
+def figure_formats() -> dict[str, str]:
+    """File extensions matplotlib can write (without the dot), with their descriptions."""
     try:
-        import matplotlib  # noqa: F401
+        from matplotlib.backend_bases import FigureCanvasBase
     except ImportError as error:
         raise CliError("--plot needs matplotlib: pip install 'tire_fmu[plot]'") from error
-    if path.parent and not path.parent.exists():
-        raise CliError(f"--plot {path}: folder {path.parent} does not exist")
-    output.written.append(draw(path))
+    return FigureCanvasBase.get_supported_filetypes()
+
+
+def check_plot_option(args: argparse.Namespace) -> None:
+    """A --plot path with a figure format matplotlib writes, in an existing folder."""
+    path = getattr(args, "plot", None)
+    if path is None:
+        return
+    formats = figure_formats()
+    suffix = path.suffix.lower().lstrip(".")
+    if suffix not in formats:
+        known = ", ".join(f".{name}" for name in sorted(formats))
+        what = f"unknown figure format .{suffix}" if suffix else "no file extension"
+        raise CliError(f"--plot = {str(path)!r}: {what}; the extension picks the format, one "
+                       f"of {known}")
+    check_parent_folder("--plot", path)
+
+
+def check_parent_folder(option: str, path: Path) -> None:
+    """Refuse a file whose folder is missing or is a file, naming the option."""
+    parent = path.parent
+    if parent.is_dir():
+        return
+    why = "is a file, not a folder" if parent.exists() else "does not exist"
+    raise CliError(f"{option} = {str(path)!r}: folder {str(parent)!r} {why}")
+
+
+def output_file(option: str, path: Path, suffix: str, default_name: str | None = None) -> Path:
+    """The file an output option names: a path ending in ``suffix`` (case-insensitive) in an
+    existing folder, or an existing folder to hold ``default_name``."""
+    path = Path(path)
+    if path.is_dir():
+        if default_name is None:
+            raise CliError(f"{option} = {str(path)!r} is a folder: give a file name ending "
+                           f"in {suffix}")
+        return path / default_name
+    if path.suffix.lower() != suffix:
+        folder = " (or an existing folder)" if default_name else ""
+        raise CliError(f"{option} = {str(path)!r}: must be a file name ending in "
+                       f"{suffix}{folder}")
+    check_parent_folder(option, path)
+    return path
 
 
 def table(rows: list[list[Any]], header: list[str]) -> str:

@@ -5,31 +5,41 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .common import CliError, Output, add_output_options, add_tire_options, checked_tire
+from .common import (
+    CliError,
+    Output,
+    add_output_options,
+    add_tire_options,
+    checked_tire,
+    output_file,
+)
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "build-fmu",
         help="build TireModal.fmu, the FMI 2.0 co-simulation FMU",
-        description="Build TireModal.fmu (pythonfmu) into OUT: the tire_fmu core ships inside, "
+        description="Build TireModal.fmu (pythonfmu) as OUT (a .fmu file, or an existing "
+        "folder to hold TireModal.fmu): the tire_fmu core ships inside, "
         "the model description is completed (units, initial unknowns, capability flags) and "
         "checked with fmpy's validator when fmpy is installed. The tire parameters start from "
         "--tire-file / --tire (default GL073A). A host needs Python with numpy and scipy "
         "(pythonfmu embeds the host's Python).",
     )
-    p.add_argument("out", metavar="OUT", type=Path, help="folder to write TireModal.fmu into")
+    p.add_argument("out", metavar="OUT", type=Path,
+                   help="file to write (ending in .fmu), or an existing folder for TireModal.fmu")
     add_tire_options(p)  # the tire the FMU's parameters start from
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_build_fmu)
 
 
 def run_build_fmu(args: argparse.Namespace) -> Output:
-    from ..fmu.builder import FmuBuildError, build_fmu
+    from ..fmu.builder import MODEL_IDENTIFIER, FmuBuildError, build_fmu
 
+    out = output_file("OUT", args.out, ".fmu", f"{MODEL_IDENTIFIER}.fmu")
     tire = checked_tire(args)
     try:
-        path = build_fmu(args.out, tire=tire)
+        path = build_fmu(out, tire=tire)
     except FmuBuildError as error:
         raise CliError(str(error)) from error
     validated = _fmpy_installed()  # build_fmu validated, and raised on any problem

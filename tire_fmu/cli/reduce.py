@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.reduction import ReductionSettings, reduce
+from ..core.simulation import OUTPUT_NAMES
 from .common import (
     CliError,
     Output,
@@ -19,6 +20,7 @@ from .common import (
     add_tire_options,
     model_from_args,
     operating_point_values,
+    output_file,
     plot_with,
     raise_problems,
     range_problem,
@@ -26,9 +28,12 @@ from .common import (
     write_plot,
 )
 
-#: CLI spelling -> output name of the core
-OUTPUT_CHOICES = {"rim_fz": "rim_Fz", "rim_fx": "rim_Fx", "contact_fz": "contact_Fz",
-                  "deflection": "deflection"}
+
+def output_name(text: str) -> str:
+    """An output by its FMU name (rim_Fz, ...), whatever the letter case."""
+    by_lower = {name.lower(): name for name in OUTPUT_NAMES}
+    return by_lower.get(text.lower(), text)  # argparse's choices then reject the rest
+
 _DEFAULTS = ReductionSettings()
 #: npz and mat: the reduced model as data; fmu: compiled into a native FMU (tire_fmu.native)
 EXPORT_FORMATS = ("npz", "mat", "fmu")
@@ -97,13 +102,15 @@ def register(subparsers) -> None:
     )
     p.add_argument("--input", choices=("road", "rim"), default="road",
                    help="excitation: road height or rim displacement (default road)")
-    p.add_argument("--output", choices=tuple(OUTPUT_CHOICES), default="rim_fz",
-                   help="response (default rim_fz, the force on the rim)")
+    p.add_argument("--output", type=output_name, choices=OUTPUT_NAMES, default="rim_Fz",
+                   help="response, named as the FMU's outputs (any letter case; default rim_Fz, "
+                   "the force on the rim)")
     p.add_argument("--reduced", action="store_true", help="overlay the reduced model")
-    p.add_argument("--fmin", metavar="HZ", type=float, default=0.5,
-                   help="lowest frequency in Hz (default 0.5)")
-    p.add_argument("--fmax", metavar="HZ", type=float, default=300.0,
-                   help="highest frequency in Hz (default 300)")
+    p.add_argument("--min-frequency", metavar="HZ", type=float, default=0.5,
+                   help="lowest frequency of the response in Hz (default 0.5)")
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=300.0,
+                   help="highest frequency of the response in Hz (default 300; the reduction's "
+                   "mode cut is --f-max)")
     p.add_argument("--points", metavar="K", type=int, default=600,
                    help="frequencies, log-spaced (default 600)")
     _add_model_options(p)
@@ -131,7 +138,9 @@ def register(subparsers) -> None:
         "ss(A, B, C, D), inputs [r; dr/dt]. fmu: an FMI 2.0 co-simulation FMU in C, compiled "
         "for linux64 with its sources, that needs no Python on the host (docs/native.md).",
     )
-    p.add_argument("out", metavar="OUT", type=Path, help="file to write")
+    p.add_argument("out", metavar="OUT", type=Path,
+                   help="file to write (.npz, .mat or .fmu; for .fmu also an existing folder "
+                   "to hold TireModalNative.fmu)")
     p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
                    help="file format (default: from the extension of OUT)")
     _add_model_options(p)
@@ -141,17 +150,18 @@ def register(subparsers) -> None:
 
 
 def run_frf(args: argparse.Namespace) -> Output:
+    low, high = args.min_frequency, args.max_frequency
     raise_problems([
-        range_problem("--fmin", args.fmin, 1e-3, 1e5, "Hz"),
-        range_problem("--fmax", args.fmax, 1e-3, 1e5, "Hz"),
+        range_problem("--min-frequency", low, 1e-3, 1e5, "Hz"),
+        range_problem("--max-frequency", high, 1e-3, 1e5, "Hz"),
         range_problem("--points", args.points, 2, 100_000, integer=True),
-        None if args.fmax > args.fmin else
-        f"--fmax = {args.fmax:g} Hz: must be above --fmin = {args.fmin:g} Hz",
+        None if high > low else
+        f"--max-frequency = {high:g} Hz: must be above --min-frequency = {low:g} Hz",
     ])
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
-    freqs = np.geomspace(args.fmin, args.fmax, args.points)
-    output_name = OUTPUT_CHOICES[args.output]
+    freqs = np.geomspace(low, high, args.points)
+    output_name = args.output
     responses = [full_frequency_response(model, args.input, output_name, freqs)]
     reduced = None
     if args.reduced:
@@ -160,7 +170,7 @@ def run_frf(args: argparse.Namespace) -> Output:
     data = {**model.summary(), "responses": [r.to_dict() for r in responses]}
     rows = []
     for f in (1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 300.0):
-        if args.fmin <= f <= args.fmax:
+        if low <= f <= high:
             i = int(np.argmin(np.abs(freqs - f)))
             rows.append([freqs[i]] + [r.magnitude[i] for r in responses])
     text = table(rows, ["f [Hz]"] + [f"|H| {r.label} [{r.unit}]" for r in responses])
@@ -168,7 +178,7 @@ def run_frf(args: argparse.Namespace) -> Output:
         error = float(responses[1].relative_error_to(responses[0]).max())
         data["max_relative_error"] = error
         data["reduction"] = reduced.summary()
-        text += f"\nmax relative error {error:.3g} over {args.fmin:g}-{args.fmax:g} Hz"
+        text += f"\nmax relative error {error:.3g} over {low:g}-{high:g} Hz"
     output = Output(text=text, data=data)
     title = (f"{args.input} -> {output_name}: N = {model.n_elements}, patch "
              f"{model.patch.length_m * 100:.3g} cm, load {model.patch.load_n / 1e3:.3g} kN, "
@@ -205,22 +215,37 @@ def run_export(args: argparse.Namespace) -> Output:
     if fmt not in EXPORT_FORMATS:
         raise CliError(f"--format = {fmt!r}: must be npz, mat or fmu (or give OUT a .npz, .mat "
                        "or .fmu extension)")
-    if not args.out.parent.exists():
-        raise CliError(f"OUT = {str(args.out)!r}: folder {args.out.parent} does not exist")
+    if fmt == "fmu":
+        from ..native.codegen import DEFAULT_MODEL_IDENTIFIER
+
+        out = output_file("OUT", args.out, ".fmu", f"{DEFAULT_MODEL_IDENTIFIER}.fmu")
+        _check_native_tools()
+    else:
+        out = output_file("OUT", args.out, f".{fmt}")
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
     reduced = reduce(model, settings)
     if fmt == "fmu":
-        path = _export_native_fmu(args, reduced)
+        path = _export_native_fmu(args, reduced, out)
     else:
-        path = (save_npz if fmt == "npz" else save_mat)(reduced, args.out)
+        path = (save_npz if fmt == "npz" else save_mat)(reduced, out)
     output = Output(text=_report_text(reduced, model), data={**reduced.summary(),
                                                              "file": str(path)})
     output.written.append(path)
     return output
 
 
-def _export_native_fmu(args: argparse.Namespace, reduced) -> Path:
+def _check_native_tools() -> None:
+    """The native export takes the FMI headers and the validator from fmpy: say so before the
+    model is reduced, naming the extra that brings it."""
+    try:
+        import fmpy  # noqa: F401
+    except ImportError as error:
+        raise CliError("exporting a native FMU needs fmpy (the FMI 2.0 headers and the "
+                       "validator): pip install 'tire_fmu[fmu]'") from error
+
+
+def _export_native_fmu(args: argparse.Namespace, reduced, out: Path) -> Path:
     """The reduced model compiled into a native FMU; its fixed ``load`` parameter is the load
     asked for, which the operating point keeps (the model only has its bisected patch load)."""
     from ..core.parameters import OperatingPoint
@@ -228,6 +253,6 @@ def _export_native_fmu(args: argparse.Namespace, reduced) -> Path:
 
     operating_point = OperatingPoint(**operating_point_values(args, undeformed_default=False))
     try:
-        return build_native_fmu(reduced, args.out, operating_point)
+        return build_native_fmu(reduced, out, operating_point)
     except NativeBuildError as error:
-        raise CliError(f"OUT = {str(args.out)!r}: {error}") from error
+        raise CliError(f"OUT = {str(out)!r}: {error}") from error

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core import analytic_modes, modal_analysis
 from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
-from ..core.studies import convergence_study, patch_sweep
+from ..core.studies import ROUNDING_LEVEL, convergence_study, patch_sweep
 from .common import (
     Output,
     add_contact_options,
@@ -42,7 +42,7 @@ def register(subparsers) -> None:
     add_mesh_option(p)
     add_contact_options(p, "default 0: the undeformed tire")
     add_speed_options(p)
-    p.add_argument("--fmax", metavar="HZ", type=float, default=300.0,
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=300.0,
                    help="highest frequency listed in Hz (default 300)")
     add_tire_options(p)
     add_output_options(p)
@@ -116,9 +116,9 @@ DEFAULT_ELEMENT_LIST = "20,40,60,80,100,150,200,300,400"
 
 
 def run_modes(args: argparse.Namespace) -> Output:
-    raise_problems([positive_problem("--fmax", args.fmax, "Hz")])
+    raise_problems([positive_problem("--max-frequency", args.max_frequency, "Hz")])
     model = model_from_args(args, undeformed_default=True)
-    result = modal_analysis(model, fmax_hz=args.fmax)
+    result = modal_analysis(model, f_max_hz=args.max_frequency)
     rolling = model.speed_m_s > 0
     header = ["#", "f [Hz]", "order", "phase", "symmetry" if not rolling else "direction",
               "zeta"]
@@ -128,7 +128,7 @@ def run_modes(args: argparse.Namespace) -> Output:
         rows.append([i + 1, m.frequency_hz, m.order, m.phase, label, m.damping_ratio])
     summary = model.summary()
     head = (
-        f"{len(result.modes)} modes up to {args.fmax:g} Hz; N = {model.n_elements}, "
+        f"{len(result.modes)} modes up to {args.max_frequency:g} Hz; N = {model.n_elements}, "
         f"patch {summary['patch_length_m'] * 100:.3g} cm, load {summary['load_n']:.4g} N, "
         f"speed {model.speed_m_s:g} m/s"
     )
@@ -186,13 +186,26 @@ def run_convergence(args: argparse.Namespace) -> Output:
     for phase, name in (("in", "in-phase"), ("out", "out-of-phase")):
         error = 100.0 * result.relative_error(phase)
         slopes = result.convergence_order(phase)
-        rows = [[n, result.exact_hz(phase)[j], *error[:, j], slopes[j]]
+        rows = [[n, result.exact_hz(phase)[j], *error[:, j],
+                 _order_cell(slopes[j], error[:, j] / 100.0)]
                 for j, n in enumerate(result.orders)]
         header = ["n", "exact [Hz]", *(f"N={c}" for c in counts), "p"]
         lines += ["", f"{name} error [%]", table(rows, header)]
+    lines += ["", "p = exact: the FDM reproduces that order to rounding on every mesh (n = 0: "
+              "uniform breathing, no stencil error); p = -: fewer than two meshes with "
+              "N >= 8n."]
     output = Output(text="\n".join(lines), data=result.to_dict())
     write_plot(args, output, plot_with("plot_convergence", result))
     return output
+
+
+def _order_cell(slope: float, relative_error: np.ndarray) -> float | str:
+    """The observed order, or why there is none (instead of nan)."""
+    if np.isfinite(slope):
+        return float(slope)
+    if np.all(np.abs(relative_error) <= ROUNDING_LEVEL):
+        return "exact"
+    return "-"
 
 
 def run_patch_sweep(args: argparse.Namespace) -> Output:

@@ -35,7 +35,7 @@ def _add_rolling_options(p: argparse.ArgumentParser, patch_default: float | None
     default_text = "0: undeformed only" if not patch_default else f"{patch_default:g}"
     p.add_argument("--patch-length", metavar="M", type=float, default=patch_default or 0.0,
                    help=f"contact patch length in m for the loaded tire (default {default_text})")
-    p.add_argument("--fmax", metavar="HZ", type=float, default=None,
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=None,
                    help="highest loaded-mode frequency in Hz")
     p.add_argument("--damped", action="store_true",
                    help="keep the tire's damping (default: undamped, so that loaded modes and "
@@ -61,7 +61,7 @@ def register(subparsers) -> None:
     p.add_argument("--nmax", metavar="N", type=int, default=12,
                    help="highest |n| of the dispersion curve (default 12)")
     _add_rolling_options(p, patch_default=None)
-    p.set_defaults(handler=run_dispersion, fmax_default=300.0)
+    p.set_defaults(handler=run_dispersion, max_frequency_default=300.0)
 
     p = subparsers.add_parser(
         "speed-sweep",
@@ -78,7 +78,7 @@ def register(subparsers) -> None:
     p.add_argument("--nmax", metavar="N", type=int, default=6,
                    help="highest |n| of the undeformed curves (default 6)")
     _add_rolling_options(p, patch_default=0.204)
-    p.set_defaults(handler=run_speed_sweep, fmax_default=200.0)
+    p.set_defaults(handler=run_speed_sweep, max_frequency_default=200.0)
 
     p = subparsers.add_parser(
         "critical-speed",
@@ -92,12 +92,18 @@ def register(subparsers) -> None:
     p.set_defaults(handler=run_critical_speed)
 
 
+def _max_frequency(args: argparse.Namespace) -> float:
+    if args.max_frequency is not None:
+        return args.max_frequency
+    return args.max_frequency_default
+
+
 def _common_problems(args: argparse.Namespace, nmax_high: int) -> list[str | None]:
-    fmax = args.fmax if args.fmax is not None else args.fmax_default
+    f_max_hz = _max_frequency(args)
     return [
         elements_problem(args.elements),
         range_problem("--nmax", args.nmax, 1, nmax_high, integer=True),
-        positive_problem("--fmax", fmax, "Hz"),
+        positive_problem("--max-frequency", f_max_hz, "Hz"),
     ]
 
 
@@ -135,9 +141,9 @@ def run_dispersion(args: argparse.Namespace) -> Output:
         return args.speed if problems[-1] is None else None
 
     tire = checked_tire(args, problems, lambda t: _rolling_checks(args, t, speed(t)))
-    fmax = args.fmax if args.fmax is not None else args.fmax_default
+    f_max_hz = _max_frequency(args)
     result = dispersion_at_speed(
-        tire, args.elements, args.speed, args.patch_length, args.nmax, fmax,
+        tire, args.elements, args.speed, args.patch_length, args.nmax, f_max_hz,
         damped=args.damped, allow_supercritical=args.allow_supercritical,
     )
     curve, rest = result.undeformed, result.at_rest
@@ -157,7 +163,7 @@ def run_dispersion(args: argparse.Namespace) -> Output:
         lines += [
             "",
             f"loaded, patch {args.patch_length * 100:.3g} cm: {len(result.loaded.modes)} modes "
-            f"up to {fmax:g} Hz, {len(shown)} with |n| <= {args.nmax} (dominant harmonic)",
+            f"up to {f_max_hz:g} Hz, {len(shown)} with |n| <= {args.nmax} (dominant harmonic)",
             table([[m.order, m.order / tire.R, m.frequency_hz, m.phase] for m in shown],
                   ["n", "k [1/m]", "f [Hz]", "phase"]),
         ]
@@ -186,11 +192,11 @@ def run_speed_sweep(args: argparse.Namespace) -> Output:
             max_speed = 0.95 * critical
             note = (f" (the paper's {paper_speed_m_s(tire):.4g} m/s is beyond this mesh's "
                     f"critical speed; stopping at 95 % of it)")
-    fmax = args.fmax if args.fmax is not None else args.fmax_default
+    f_max_hz = _max_frequency(args)
     speeds = np.linspace(0.0, max_speed, args.steps)
     with progress_bar("speeds") as progress:
         result = speed_sweep(
-            tire, args.elements, speeds, args.patch_length, fmax, args.nmax,
+            tire, args.elements, speeds, args.patch_length, f_max_hz, args.nmax,
             damped=args.damped, allow_supercritical=args.allow_supercritical, progress=progress,
         )
     column = {int(n): j for j, n in enumerate(result.orders)}
@@ -206,8 +212,8 @@ def run_speed_sweep(args: argparse.Namespace) -> Output:
     ]
     if result.loaded is not None:
         counts = ", ".join(f"{len(r.modes)}" for r in result.loaded)
-        lines += ["", f"loaded, patch {args.patch_length * 100:.3g} cm: modes up to {fmax:g} Hz "
-                  f"per speed: {counts} (all in --json)"]
+        lines += ["", f"loaded, patch {args.patch_length * 100:.3g} cm: modes up to "
+                  f"{f_max_hz:g} Hz per speed: {counts} (all in --json)"]
     output = Output(text="\n".join(lines), data=result.to_dict())
     write_plot(args, output, plot_with("plot_speed_sweep", result))
     return output

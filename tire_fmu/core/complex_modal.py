@@ -58,9 +58,9 @@ def _normalise(model: TireModel, shape: np.ndarray) -> np.ndarray:
     return shape * (abs(peak) / peak) if peak != 0 else shape
 
 
-def complex_modes(model: TireModel, fmax_hz: float | None = None) -> ModalResult:
+def complex_modes(model: TireModel, f_max_hz: float | None = None) -> ModalResult:
     """Oscillating modes of the rolling (or resting) tire with natural frequency |s|/2π up to
-    ``fmax_hz``, ascending in ground-frame frequency Im(s)/2π."""
+    ``f_max_hz``, ascending in ground-frame frequency Im(s)/2π."""
     n = model.n_dof
     values, vectors = sla.eig(state_matrix(model))
     # One member per conjugate pair; real eigenvalues (overdamped, non-oscillating) are no
@@ -68,8 +68,8 @@ def complex_modes(model: TireModel, fmax_hz: float | None = None) -> ModalResult
     # real_modes, so modes overdamped in the body frame do not enter at their Doppler shift.
     keep = values.imag > 1e-9 * np.abs(values)
     values, vectors = values[keep], vectors[:n, keep]
-    if fmax_hz is not None:
-        inside = np.abs(values) <= 2 * np.pi * fmax_hz
+    if f_max_hz is not None:
+        inside = np.abs(values) <= 2 * np.pi * f_max_hz
         values, vectors = values[inside], vectors[:, inside]
     order = np.argsort(values.imag)
     values, vectors = values[order], vectors[:, order]
@@ -101,11 +101,11 @@ def complex_modes(model: TireModel, fmax_hz: float | None = None) -> ModalResult
 
 
 def modal_analysis(
-    model: TireModel, fmax_hz: float | None = None, method: str = "auto"
+    model: TireModel, f_max_hz: float | None = None, method: str = "auto"
 ) -> ModalResult:
     """Real modes at rest (with symmetry labels), complex modes when rolling."""
     from .modal import real_modes
 
     if model.speed_m_s == 0.0:
-        return real_modes(model, fmax_hz, method)
-    return complex_modes(model, fmax_hz)
+        return real_modes(model, f_max_hz, method)
+    return complex_modes(model, f_max_hz)

@@ -169,8 +169,9 @@ def _class_eigen(stiffness, mass_diag, count, method):
     return values[order], vectors[:, order]
 
 
-def real_modes(model: TireModel, fmax_hz: float | None = None, method: str = "auto") -> ModalResult:
-    """Modes of the tire at rest, up to ``fmax_hz`` (all modes when None), ascending.
+def real_modes(model: TireModel, f_max_hz: float | None = None,
+               method: str = "auto") -> ModalResult:
+    """Modes of the tire at rest, up to ``f_max_hz`` (all modes when None), ascending.
 
     ``method``: "dense" (LAPACK), "sparse" (ARPACK shift-invert around 0) or "auto".
     """
@@ -186,11 +187,11 @@ def real_modes(model: TireModel, fmax_hz: float | None = None, method: str = "au
     found = []
     for name, basis in symmetry_bases(model.grid).items():
         reference = labels[name]
-        if fmax_hz is None:
+        if f_max_hz is None:
             count = len(reference)
         else:
-            # Contact only raises eigenvalues: the undeformed count below fmax bounds ours.
-            count = sum(1 for w, _, _ in reference if w <= 2 * np.pi * fmax_hz * (1 + 1e-9))
+            # Contact only raises eigenvalues: the undeformed count below f_max bounds ours.
+            count = sum(1 for w, _, _ in reference if w <= 2 * np.pi * f_max_hz * (1 + 1e-9))
         if count == 0:
             continue
         k_class = (basis.T @ stiffness @ basis).tocsr()
@@ -204,8 +205,8 @@ def real_modes(model: TireModel, fmax_hz: float | None = None, method: str = "au
             mode = Mode(omega / (2 * np.pi), order, branch, name if loaded else None, zeta)
             found.append((mode, shape))
     found.sort(key=lambda item: item[0].frequency_hz)
-    if fmax_hz is not None:
-        found = [item for item in found if item[0].frequency_hz <= fmax_hz]
+    if f_max_hz is not None:
+        found = [item for item in found if item[0].frequency_hz <= f_max_hz]
     modes = tuple(m for m, _ in found)
     shapes = np.column_stack([s for _, s in found]) if found else np.zeros((model.n_dof, 0))
     return ModalResult(modes, shapes, model.grid, model.summary())

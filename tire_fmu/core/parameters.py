@@ -19,9 +19,10 @@ from typing import Any
 
 import numpy as np
 
-GRAVITY_M_S2 = 9.80665
-QUARTER_CAR_MASS_KG = 2500.0 + 320.0
-DEFAULT_LOAD_N = QUARTER_CAR_MASS_KG * GRAVITY_M_S2  # the quarter car's weight, ~27.7 kN
+#: Default static load (N): one wheel of a heavy vehicle, 2820 kg under standard gravity, a
+#: service load of the GL073A (16.00R20) truck tire. A plain number: whoever runs the tire
+#: (a vehicle model, the FMU's host) sets the load its own wheel carries.
+DEFAULT_LOAD_N = 27_654.753
 
 #: Longest contact patch the linear ring model is trusted with, as a fraction of the
 #: circumference. Beyond ~45° of wrap the small-deflection ring and the flat-road chord

@@ -262,7 +262,7 @@ def patch_sweep(
     }
     # Contact only raises frequencies, and by far less than this for credible patches; the
     # bound keeps large meshes on the cheap partial solve.
-    fmax_hz = 2.0 * max(float(np.nanmax(f)) for f in undeformed_hz.values())
+    f_max_hz = 2.0 * max(float(np.nanmax(f)) for f in undeformed_hz.values())
     members = {name: {p: np.full((lengths.size, n.size), np.nan) for p in phases}
                for name in (SYMMETRIC, ANTISYMMETRIC)}
     loads = np.zeros(lengths.size)
@@ -274,7 +274,7 @@ def patch_sweep(
                 for phase in phases:
                     members[name][phase][i] = undeformed_hz[phase]
         else:
-            result = real_modes(model, fmax_hz=fmax_hz)
+            result = real_modes(model, f_max_hz=f_max_hz)
             for name in members:
                 for phase in phases:
                     for j, k in enumerate(n):
@@ -322,7 +322,7 @@ class SpeedSweep:
     undeformed_out_of_phase_hz: np.ndarray
     critical_speed_m_s: float
     damped: bool
-    fmax_hz: float
+    f_max_hz: float
     loaded: tuple[ModalResult, ...] | None
 
     @property
@@ -337,7 +337,7 @@ class SpeedSweep:
             "speeds_m_s": self.speeds_m_s.tolist(),
             "critical_speed_m_s": self.critical_speed_m_s,
             "damped": self.damped,
-            "fmax_hz": self.fmax_hz,
+            "f_max_hz": self.f_max_hz,
             "orders": self.orders.tolist(),
             "undeformed_in_phase_hz": self.undeformed_in_phase_hz.tolist(),
             "undeformed_out_of_phase_hz": self.undeformed_out_of_phase_hz.tolist(),
@@ -356,7 +356,7 @@ def speed_sweep(
     n_elements: int = 100,
     speeds_m_s: Iterable[float] | None = None,
     patch_length_m: float = 0.0,
-    fmax_hz: float = 250.0,
+    f_max_hz: float = 250.0,
     nmax: int = 10,
     damped: bool = False,
     allow_supercritical: bool = False,
@@ -386,8 +386,8 @@ def speed_sweep(
         problems.append(
             f"patch_length_m = {patch_length_m!r}: must be in [0, {tire.max_patch_length_m:.4g}] m"
         )
-    if not fmax_hz > 0.0:
-        problems.append(f"fmax_hz = {fmax_hz!r}: must be > 0 Hz")
+    if not f_max_hz > 0.0:
+        problems.append(f"f_max_hz = {f_max_hz!r}: must be > 0 Hz")
     swept_tire, orders = _rolling_setup(tire, damped, nmax, problems)
     curves = [dispersion_relation(swept_tire, orders, v / tire.R, n_elements) for v in speeds]
     loaded = None
@@ -399,7 +399,7 @@ def speed_sweep(
             for i, v in enumerate(speeds):
                 op = OperatingPoint(n_elements, patch_length_m=patch_length_m, speed_m_s=float(v),
                                     allow_supercritical=allow_supercritical)
-                results.append(complex_modes(build_model(swept_tire, op), fmax_hz=fmax_hz))
+                results.append(complex_modes(build_model(swept_tire, op), f_max_hz=f_max_hz))
                 _report(progress, i + 1, speeds.size)
         loaded = tuple(results)
     return SpeedSweep(
@@ -412,7 +412,7 @@ def speed_sweep(
         undeformed_out_of_phase_hz=np.array([c.out_of_phase_hz for c in curves]),
         critical_speed_m_s=critical,
         damped=damped,
-        fmax_hz=float(fmax_hz),
+        f_max_hz=float(f_max_hz),
         loaded=loaded,
     )
 
@@ -447,12 +447,12 @@ def dispersion_at_speed(
     speed_m_s: float | None = None,
     patch_length_m: float = 0.0,
     nmax: int = 12,
-    fmax_hz: float = 300.0,
+    f_max_hz: float = 300.0,
     damped: bool = False,
     allow_supercritical: bool = False,
 ) -> DispersionAtSpeed:
     """Undeformed dispersion for |n| <= nmax at ``speed_m_s`` (default: the paper's
-    Ω = 20π rad/s) and, with a patch, the loaded model's complex modes up to ``fmax_hz``.
+    Ω = 20π rad/s) and, with a patch, the loaded model's complex modes up to ``f_max_hz``.
 
     Undamped by default for the same reason as :func:`speed_sweep`.
     """
@@ -466,7 +466,7 @@ def dispersion_at_speed(
     if patch_length_m > 0.0:
         op = OperatingPoint(n_elements, patch_length_m=patch_length_m, speed_m_s=speed,
                             allow_supercritical=allow_supercritical)
-        loaded = complex_modes(build_model(swept_tire, op), fmax_hz=fmax_hz)
+        loaded = complex_modes(build_model(swept_tire, op), f_max_hz=f_max_hz)
     return DispersionAtSpeed(
         speed_m_s=speed,
         patch_length_m=float(patch_length_m),

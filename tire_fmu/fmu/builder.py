@@ -42,8 +42,9 @@ class FmuBuildError(RuntimeError):
     """The FMU could not be built, or what was built does not validate."""
 
 
-def build_fmu(out_dir: str | Path = ".", validate: bool = True, tire=None) -> Path:
-    """Write ``TireModal.fmu`` into ``out_dir`` (created if missing) and return its path.
+def build_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
+    """Write the FMU to ``out`` and return its path: a path ending in ``.fmu``, or a folder
+    (created if missing) to hold ``TireModal.fmu``.
 
     ``tire`` (a :class:`~tire_fmu.core.parameters.TireParameters`) becomes the start values
     of the tire parameters (default: GL073A); the slave reads them from
@@ -58,10 +59,18 @@ def build_fmu(out_dir: str | Path = ".", validate: bool = True, tire=None) -> Pa
             baked.write_text(json.dumps(tire.as_dict(), indent=1) + "\n")
             project.append(baked)
         return build_pythonfmu(
-            _SLAVE_SOURCE, Path(out_dir) / f"{MODEL_IDENTIFIER}.fmu", SLAVE_MODULE,
+            _SLAVE_SOURCE, fmu_destination(out, MODEL_IDENTIFIER), SLAVE_MODULE,
             project_files=project, capabilities=CAPABILITIES,
             units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate,
             real_starts=None if tire is None else tire.as_dict())
+
+
+def fmu_destination(out: str | Path, model_identifier: str) -> Path:
+    """``out`` itself when it names a ``.fmu`` file, else ``out/<model_identifier>.fmu``."""
+    out = Path(out)
+    if out.suffix.lower() == ".fmu" and not out.is_dir():
+        return out
+    return out / f"{model_identifier}.fmu"
 
 
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,

@@ -24,6 +24,19 @@ BAKED_PARAMETERS_FILE = "tire_parameters.json"
 TIME_ABS_TOLERANCE_S = 1e-12
 TIME_REL_TOLERANCE = 1e-9
 
+#: A value given to a fixed parameter is its fixed value when the two differ by at most this,
+#: relative to the larger: a load computed as (2500 + 320)·9.80665 = 27654.752999999997 is
+#: the 27654.753 an FMU was exported with. 1e-9 is far below any physical meaning of the
+#: parameters (1e-9 of the load is 28 µN) and far above decimal round trips (~1e-16).
+FIXED_PARAMETER_REL_TOLERANCE = 1e-9
+
+
+def same_fixed_value(given: float, fixed: float) -> bool:
+    """Whether ``given`` is the fixed parameter value ``fixed`` within
+    :data:`FIXED_PARAMETER_REL_TOLERANCE` (exact for 0; never for nan)."""
+    given, fixed = float(given), float(fixed)
+    return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
+
 CAPABILITIES = {
     "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
     "canGetAndSetFMUstate": True,  # the full modal state, not pythonfmu's scalars only

@@ -1,0 +1,54 @@
+"""Recorded benchmark results: the figures the docs quote, with the command that measured them.
+
+``python benchmarks/bench_x.py --record docs/measured/bench_x.json`` writes one JSON file:
+``command`` (what to run to measure again), ``recorded`` (UTC date), ``machine`` (cores, load
+average at the start and the end, Python, BLAS threads) and ``results``. ``docs/generate.py``
+turns the files into the marked sections of README.md and docs/*.md.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import platform
+import shlex
+import sys
+from pathlib import Path
+
+
+def load_average() -> float | None:
+    try:
+        return round(os.getloadavg()[0], 2)
+    except OSError:
+        return None
+
+
+def command_line() -> str:
+    """This run's command, from the repository root."""
+    script = Path(sys.argv[0])
+    try:
+        script = script.resolve().relative_to(Path(__file__).resolve().parents[1])
+    except ValueError:
+        pass
+    return shlex.join(["python3", script.as_posix(), *sys.argv[1:]])
+
+
+def write_record(path: str | Path, results: dict, load_at_start: float | None) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    record = {
+        "command": command_line(),
+        "recorded": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d"),
+        "machine": {
+            "cores": os.cpu_count(),
+            "load_average_start": load_at_start,
+            "load_average_end": load_average(),
+            "python": platform.python_version(),
+            "openblas_threads": os.environ.get("OPENBLAS_NUM_THREADS"),
+        },
+        "results": results,
+    }
+    path.write_text(json.dumps(record, indent=1, sort_keys=False) + "\n")
+    print(f"recorded {path}", file=sys.stderr)
+    return path
