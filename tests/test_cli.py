@@ -77,11 +77,18 @@ def test_analytic_json_equals_analytic_modes(capsys, tire):
     same(run_json(capsys, "analytic"), analytic_modes(tire, np.arange(13)))
 
 
-def test_patch_json_equals_the_models_patch(capsys, tire):
+def test_patch_json_equals_the_models_footprint(capsys, tire):
     data = run_json(capsys, "patch", "--load", "27700")
-    model = build_model(tire, OperatingPoint(load_n=27700))
-    assert data == pytest.approx(model.summary(), rel=1e-12)
-    assert data["patch_length_m"] == pytest.approx(model.patch.length_m, rel=1e-12)
+    fp = build_model(tire, OperatingPoint(load_n=27700)).patch.footprint
+    assert data["footprint"]["load_n"] == pytest.approx(27700, rel=1e-12)
+    assert data["footprint"] == pytest.approx(to_jsonable(fp.to_dict()), rel=1e-12)
+    assert data["patch_length_m"] == pytest.approx(fp.length_m, rel=1e-12)
+    # the inverse: the deflection that footprint needs gives the load back
+    again = run_json(capsys, "patch", "--deflection", repr(fp.deflection_m))
+    assert again["load_n"] == pytest.approx(27700, rel=1e-9)
+    # the paper's prescribed patch stays an explicit mode
+    paper = run_json(capsys, "patch", "--patch-length", "0.204")
+    assert paper["contact"] == "prescribed patch" and paper["patch_length_m"] == 0.204
 
 
 def test_convergence_json_equals_the_study(capsys, tire):
@@ -143,6 +150,7 @@ PLOTS = [
     ["patch-sweep", "--elements", "40", "--steps", "4", "--out-of-phase"],
     ["dispersion", "--elements", "40", "--patch-length", "0.204", "--nmax", "6"],
     ["speed-sweep", "--elements", "40", "--steps", "3", "--nmax", "3"],
+    ["patch", "--load", "27700"],
 ]
 
 

@@ -173,8 +173,8 @@ def test_bad_steps_are_discarded_with_a_message_and_change_nothing(case):
     t, h = 1e-3, 1e-3
     expected = {"early time": "last communication point", "late time": "last communication",
                 "zero h": "step size h = 0.0 s", "negative h": "step size h = -0.001 s",
-                "nan h": "step size h = nan s", "nan input": "non-finite input: rim_vz = nan",
-                "inf input": "non-finite input: road_z = inf"}[case]
+                "nan h": "step size h = nan s", "nan input": "rim_vz = nan m/s: must be in",
+                "inf input": "road_z = inf m: must be in"}[case]
     if case == "early time":
         t = 0.0
     elif case == "late time":

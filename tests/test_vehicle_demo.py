@@ -436,13 +436,20 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
                  "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
-    # the ride grid: one legend for all panels, readable, in several columns; no coherence
-    # row when every line is coherent (a noise-free multisine)
+    # the ride grid: one legend for all panels, readable, in several columns; a coherence
+    # row only when some line is less than fully coherent (the unilateral contact makes the
+    # tire slightly nonlinear; a noise-free multisine on a linear tire gives coherence 1)
     ride = figures["ride_transfer_functions.png"]
     (legend,) = ride.legends
     assert legend._ncols >= 4 and min(t.get_fontsize() for t in legend.get_texts()) >= 10
     assert not any(ax.get_legend() for ax in ride.axes)
-    assert len(ride.axes) == 12 and not any("coherence" in ax.get_ylabel() for ax in ride.axes)
+    from vehicle_demo.plots import COHERENCE_SHOWN_BELOW
+
+    coherence = [ax for ax in ride.axes if "coherence" in ax.get_ylabel()]
+    assert len(ride.axes) == 12 + len(coherence) and len(coherence) in (0, 4)
+    if coherence:  # drawn because some line is below the threshold
+        lowest = min(np.min(line.get_ydata()) for ax in coherence for line in ax.get_lines())
+        assert lowest < COHERENCE_SHOWN_BELOW
     text = format_summary(summary)
     assert "wheel hop" in text and "body bounce" in text
     # one number per cell of summary.csv, so a spreadsheet reads it

@@ -399,3 +399,43 @@ def plot_fit(result, path: Path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_footprint(model, patch, path: Path) -> Path:
+    """The static contact: line pressure per zone node against road position, and the
+    tread near the contact (rim frame, radial scale in mm) on the flat road."""
+    plt = _pyplot()
+    zone = patch.zone
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True,
+                                      gridspec_kw={"height_ratios": [1, 1.3]})
+    x = zone.road_positions_m(patch.deflection_m) * 1e3
+    pressure = patch.forces_n / zone.grid.node_arc_m / 1e3
+    pushing = pressure > 0
+    top.vlines(x[pushing], 0, pressure[pushing], color="tab:blue", lw=3)
+    top.plot(x, pressure, "o", color="tab:blue", ms=4)
+    if patch.footprint is not None:
+        for edge in (patch.footprint.front_edge_m, patch.footprint.rear_edge_m):
+            top.axvline(edge * 1e3, color="0.5", ls=":", lw=1)
+    top.set_ylabel("line pressure [kN/m]")
+    kind = "prescribed patch" if patch.prescribed else "computed footprint"
+    top.set_title(f"{kind}: {patch.load_n / 1e3:.3g} kN, deflection "
+                  f"{patch.deflection_m * 1e3:.3g} mm, length {patch.length_m * 100:.3g} cm "
+                  f"(N = {model.n_elements}, V = {model.speed_m_s:g} m/s)", fontsize=9)
+    # tread on its ray at R + w from the rim centre, R - δ above the road
+    radius, height = zone.grid.radius_m, zone.grid.radius_m - patch.deflection_m
+    theta = np.linspace(zone.theta[0], zone.theta[-1], 200)
+    bottom.plot(-radius * np.sin(theta) * 1e3, (height - radius * np.cos(theta)) * 1e3,
+                "--", color="0.6", label="undeformed tread")
+    w = (patch.footprint.tread_displacement_m if patch.footprint is not None
+         else np.zeros(zone.size))
+    r = radius + w
+    bottom.plot(-r * np.sin(zone.theta) * 1e3, (height - r * np.cos(zone.theta)) * 1e3,
+                "o-", color="tab:blue", ms=4, label="tread nodes (static)")
+    bottom.axhline(0.0, color="k", lw=1.5, label="road")
+    bottom.set_xlabel("x along the road [mm] (forward)")
+    bottom.set_ylabel("height above road [mm]")
+    bottom.set_ylim(-0.5 * patch.deflection_m * 1e3 - 1, 3 * patch.deflection_m * 1e3 + 5)
+    bottom.legend(loc="upper center", fontsize=8, ncol=3)
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    return _save(fig, plt, path)

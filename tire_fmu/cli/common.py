@@ -139,6 +139,8 @@ def operating_point_values(args: argparse.Namespace, undeformed_default: bool) -
         values["speed_m_s"] = args.speed
     if getattr(args, "allow_supercritical", False):
         values["allow_supercritical"] = True
+    if getattr(args, "zone_length", None) is not None:
+        values["contact_zone_length_m"] = args.zone_length
     return values
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.reduction import ReductionSettings, reduce
-from ..core.simulation import OUTPUT_NAMES
+from ..core.io_model import OUTPUTS as OUTPUT_NAMES
 from .common import (
     CliError,
     Output,

@@ -61,17 +61,26 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "patch",
-        help="patch length, deflection and vertical stiffness for a load",
-        description="Static contact: the patch length whose secant load K_v(L)·δ(L) equals the "
-        "given load, with δ(L) the flat-road chord deflection and K_v the model's own static "
-        "vertical stiffness.",
+        help="static footprint for a load (or a deflection): length, pressure, stiffness",
+        description="Static contact of the tire pressed on a flat road, computed by the model "
+        "itself (unilateral road springs on the contact zone, active-set continuation in the "
+        "rim deflection): deflection, footprint length (road length between the edges where "
+        "the interpolated penetration crosses zero), line pressure per node, secant and "
+        "tangent vertical stiffness. --deflection gives the load for a rim deflection instead; "
+        "--patch-length shows the paper's prescribed patch (Figs. 17-19).",
     )
-    p.add_argument("--load", metavar="N", type=float, required=True,
-                   help="static vertical load in N")
+    group = p.add_mutually_exclusive_group(required=True)
+    group.add_argument("--load", metavar="N", type=float, help="static vertical load in N")
+    group.add_argument("--deflection", metavar="M", type=float,
+                       help="rim deflection in m: the load that makes it")
+    group.add_argument("--patch-length", metavar="M", type=float,
+                       help="the paper's prescribed patch of this length in m")
+    p.add_argument("--zone-length", metavar="M", type=float,
+                   help="length of road under the contact zone in m (default 0.6)")
     add_mesh_option(p)
     add_speed_options(p)
     add_tire_options(p)
-    add_output_options(p, plot=False)
+    add_output_options(p)
     p.set_defaults(handler=run_patch)
 
     p = subparsers.add_parser(
@@ -148,16 +157,44 @@ def run_analytic(args: argparse.Namespace) -> Output:
 
 
 def run_patch(args: argparse.Namespace) -> Output:
+    from ..core.model import footprint_for_deflection
+
+    problems = []
+    if args.deflection is not None:
+        problems.append(range_problem("--deflection", args.deflection, 0.0, 0.5, unit="m"))
+    raise_problems(problems)
+    if args.deflection is not None:
+        args.load = 0.0  # the zone and its compliance, then the path at that deflection
     model = model_from_args(args, undeformed_default=False)
-    data = model.summary()
-    text = "\n".join([
-        f"load                {data['load_n']:.6g} N",
-        f"patch length        {data['patch_length_m'] * 100:.4g} cm "
-        f"({data['patch_nodes']} nodes at N = {model.n_elements})",
-        f"deflection          {data['deflection_m'] * 1000:.4g} mm",
-        f"vertical stiffness  {data['vertical_stiffness_n_per_m'] / 1e6:.4g} MN/m",
-    ])
-    return Output(text=text, data=data)
+    patch = model.patch
+    if args.deflection is not None:
+        patch = footprint_for_deflection(model, args.deflection)
+    data = patch.to_dict()
+    data.update(n_elements=model.n_elements, speed_m_s=model.speed_m_s)
+    lines = [f"load                {patch.load_n:.6g} N",
+             f"deflection          {patch.deflection_m * 1000:.4g} mm (rim lowered from "
+             "touching)"]
+    if patch.prescribed:
+        lines += [f"patch length        {patch.length_m * 100:.4g} cm (prescribed: the "
+                  "paper's patch, load K_v·δ)",
+                  f"vertical stiffness  {patch.vertical_stiffness_n_per_m / 1e6:.4g} MN/m"]
+    else:
+        fp = patch.footprint
+        data["footprint"] = fp.to_dict()
+        lines += [f"footprint length    {fp.length_m * 100:.4g} cm on the road "
+                  f"({fp.n_active} of {fp.zone.size} zone nodes push, N = {model.n_elements})",
+                  f"stiffness           secant {fp.secant_stiffness_n_per_m / 1e6:.4g} MN/m, "
+                  f"tangent {fp.tangent_stiffness_n_per_m / 1e6:.4g} MN/m",
+                  f"longitudinal force  {fp.longitudinal_force_n:.4g} N (road on tire, x "
+                  "forward)"]
+        rows = [[np.degrees(t), 1e3 * x, q / 1e3, 1e3 * pen] for t, x, q, pen in zip(
+            fp.zone.theta, fp.zone.road_positions_m(fp.deflection_m),
+            fp.line_pressure_n_per_m, fp.penetration_m) if q > 0]
+        lines += ["", table(rows, ["theta [deg]", "x [mm]", "line pressure [kN/m]",
+                                   "penetration [mm]"])]
+    output = Output(text="\n".join(lines), data=data)
+    write_plot(args, output, plot_with("plot_footprint", model, patch))
+    return output
 
 
 def _element_list(text: str) -> tuple[list[int], str | None]:

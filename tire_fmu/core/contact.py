@@ -192,6 +192,11 @@ class Footprint:
     def n_active(self) -> int:
         return int(self.active.sum())
 
+    @property
+    def tread_displacement_m(self) -> np.ndarray:
+        """Rim-relative radial displacement of each zone node (p = w - g, g the gap)."""
+        return self.penetration_m + self.zone.unloaded_gap_m(self.deflection_m)
+
     def touches_zone_edge(self) -> bool:
         """True when a zone end node pushes: the footprint may extend beyond the zone."""
         return bool(self.active[0] or self.active[-1])
@@ -505,7 +510,18 @@ def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
             f"load_n = {load_n:g} N: must be in [0, {limit.load_n:.6g}] N for this tire and "
             f"mesh; at {limit.load_n:.6g} N (deflection {limit.deflection_m * 1e3:.3g} mm) "
             + reason)
-    footprint = path.at_load(load_n)
+    return _footprint_patch(zone, compliance, path.at_load(load_n), speed_m_s)
+
+
+def computed_patch_at_deflection(zone: ContactZone, compliance: np.ndarray,
+                                 deflection_m: float, speed_m_s: float) -> ContactPatch:
+    """The inverse: the footprint (and its load) for a rim deflection."""
+    path = FootprintPath(zone, compliance, max_deflection_m=max(0.5 * zone.grid.radius_m,
+                                                                2 * deflection_m))
+    return _footprint_patch(zone, compliance, path.at_deflection(deflection_m), speed_m_s)
+
+
+def _footprint_patch(zone, compliance, footprint: Footprint, speed_m_s) -> ContactPatch:
     return ContactPatch(
         zone=zone, weights=footprint.active.astype(float), deflection_m=footprint.deflection_m,
         load_n=footprint.load_n, length_m=footprint.length_m,

@@ -39,6 +39,7 @@ from .contact import (
     ContactPatch,
     FootprintError,
     computed_patch,
+    computed_patch_at_deflection,
     contact_zone,
     prescribed_patch,
     zone_problems,
@@ -217,6 +218,15 @@ def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> Conta
                               tire.max_patch_length_m)
     except FootprintError as error:
         raise ParameterError([str(error)]) from error
+
+
+def footprint_for_deflection(model: TireModel, deflection_m: float) -> ContactPatch:
+    """The static footprint, and the load that makes it, for a rim deflection (m)."""
+    zone = model.patch.zone
+    compliance = zone_compliance(ring_static_gain(model.tire, model.grid, model.spin_rad_s,
+                                                  zone.nodes))
+    return computed_patch_at_deflection(zone, compliance, float(deflection_m),
+                                        model.speed_m_s)
 
 
 def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = None) -> TireModel:

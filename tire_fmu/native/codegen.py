@@ -29,7 +29,8 @@ import tire_fmu
 
 from ..core.parameters import OperatingPoint, TireParameters
 from ..core.reduction import ReducedModel
-from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES, SAME_STEP_EPS
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
+from ..core.road import SAME_POINT_EPS as SAME_STEP_EPS
 from ..core.stepping import SERIES_LIMIT
 from ..fmu.interface import (
     TIME_ABS_TOLERANCE_S,
