@@ -432,10 +432,18 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
     summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=0.5,
                                           progress=False), log=lambda *_: None)
     for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
+                 "contact_events.png",
                  "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv",
                  "summary.json"):
         assert (out / name).stat().st_size > 0, name
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
+    # the contact events: the 40 mm cleat throws the tire off the road, the unilateral
+    # contact never pulls, the linear one does over the pothole
+    values = {quantity: value for quantity, value, _ in summary.rows}
+    assert values["cleat 40 x 20 mm, unilateral: airborne"] > 0
+    assert values["cleat 40 x 20 mm, unilateral: contact force min"] == 0.0
+    assert values["pothole 50 mm deep, 0.3 m, unilateral: contact force min"] >= 0.0
+    assert values["pothole 50 mm deep, 0.3 m, linear: contact force min"] < 0.0
     # the ride grid: one legend for all panels, readable, in several columns; a coherence
     # row only when some line is less than fully coherent (the unilateral contact makes the
     # tire slightly nonlinear; a noise-free multisine on a linear tire gives coherence 1)

@@ -218,6 +218,7 @@ class CoSimResult:
     wheel_az_m_s2: np.ndarray
     rim_Fz_n: np.ndarray  # total
     contact_Fz_n: np.ndarray  # total
+    contact_length_m: np.ndarray  # footprint length on the road
     in_contact: np.ndarray  # the tire FMU's flag
     static_load_n: float
     step_s: float
@@ -318,24 +319,24 @@ class QuarterCarCoSimulation:
             return (fmi2ValueReference * len(names))(*[fmu.vr(x) for x in names])
 
         tire_in = refs(tire, ("rim_z", "rim_vz", "road_z", "road_vz"))
-        tire_out = refs(tire, ("rim_Fz", "contact_Fz"))
+        tire_out = refs(tire, ("rim_Fz", "contact_Fz", "contact_length"))
         tire_flag = refs(tire, ("in_contact",))
         car_in = refs(car, ("rim_Fz", "rim_Fz_rate"))
         car_out = refs(car, ("wheel_z", "wheel_vz", "wheel_az", "body_z", "body_az"))
-        u_t, y_t, y_flag = (fmi2Real * 4)(), (fmi2Real * 2)(), (fmi2Boolean * 1)()
+        u_t, y_t, y_flag = (fmi2Real * 4)(), (fmi2Real * 3)(), (fmi2Boolean * 1)()
         u_c, y_c = (fmi2Real * 2)(), (fmi2Real * 5)()
         ct, cc = tire.fmu.component, car.fmu.component
         t_set, t_step, t_get = (_raw(tire.fmu, f) for f in ("SetReal", "DoStep", "GetReal"))
         t_get_flag = _raw(tire.fmu, "GetBoolean")
         c_set, c_step, c_get = (_raw(car.fmu, f) for f in ("SetReal", "DoStep", "GetReal"))
 
-        out = np.empty((n + 1, 7))  # wheel z, vz, az, body z, az, rim Fz, contact Fz
+        out = np.empty((n + 1, 8))  # wheel z, vz, az, body z, az, rim Fz, contact Fz, length
         flags = np.empty(n + 1, dtype=np.dtype(f"i{sizeof(fmi2Boolean)}"))
         # Each step's outputs are copied from the FMUs' buffers into these arrays with memmove
         # at computed addresses: a numpy slice assignment from a ctypes array goes through
         # the buffer protocol and costs about a microsecond each, on a ~15 µs step.
         out_address, row_bytes = out.ctypes.data, out.strides[0]
-        car_bytes, tire_bytes = sizeof(fmi2Real) * 5, sizeof(fmi2Real) * 2
+        car_bytes, tire_bytes = sizeof(fmi2Real) * 5, sizeof(fmi2Real) * 3
         flag_address, flag_bytes = flags.ctypes.data, flags.strides[0]
         road_z_list, road_vz_list = road_z.tolist(), road_vz.tolist()  # floats: cheap to index
         c_get(cc, car_out, 5, y_c)
@@ -343,7 +344,7 @@ class QuarterCarCoSimulation:
         # the tire's inputs at t_0, then its outputs for them (direct feedthrough)
         u_t[0], u_t[1], u_t[2], u_t[3] = z_w, v_w, road_z[0], road_vz[0]
         t_set(ct, tire_in, 4, u_t)
-        t_get(ct, tire_out, 2, y_t)
+        t_get(ct, tire_out, 3, y_t)
         t_get_flag(ct, tire_flag, 1, y_flag)
         out[0, :5] = y_c[:]
         out[0, 5:] = y_t[:]
@@ -356,7 +357,7 @@ class QuarterCarCoSimulation:
             for k in range(n):
                 t = start_time + k * h  # multiples of h: no drift of the communication points
                 if gauss_seidel:  # the tire's force at the step's end, ramped from t_k
-                    status = t_step(ct, t, h, fmi2True) | t_get(ct, tire_out, 2, y_t)
+                    status = t_step(ct, t, h, fmi2True) | t_get(ct, tire_out, 3, y_t)
                     u_c[0], u_c[1] = force, (y_t[0] - force) / h
                     status |= c_set(cc, car_in, 2, u_c) | c_step(cc, t, h, fmi2True)
                 else:  # both from t_k values, the force held
@@ -368,7 +369,7 @@ class QuarterCarCoSimulation:
                 # (contact damper on the road velocity, sidewall on the rim's) is then current
                 u_t[0], u_t[1] = y_c[0], y_c[1]
                 u_t[2], u_t[3] = road_z_list[k + 1], road_vz_list[k + 1]
-                status |= t_set(ct, tire_in, 4, u_t) | t_get(ct, tire_out, 2, y_t)
+                status |= t_set(ct, tire_in, 4, u_t) | t_get(ct, tire_out, 3, y_t)
                 status |= t_get_flag(ct, tire_flag, 1, y_flag)
                 if status > 1:  # an OR of statuses exceeds 1 iff one was discard or worse
                     raise CoSimError(f"an FMI call returned {_STATUS[min(status, 4)]} or worse")
@@ -394,7 +395,8 @@ class QuarterCarCoSimulation:
             body_z_m=out[:, 3].copy(), body_az_m_s2=out[:, 4].copy(),
             wheel_z_m=out[:, 0].copy(), wheel_vz_m_s=out[:, 1].copy(),
             wheel_az_m_s2=out[:, 2].copy(), rim_Fz_n=out[:, 5].copy(),
-            contact_Fz_n=out[:, 6].copy(), in_contact=flags != 0, static_load_n=static_load,
+            contact_Fz_n=out[:, 6].copy(), contact_length_m=out[:, 7].copy(),
+            in_contact=flags != 0, static_load_n=static_load,
             step_s=h, scheme=self.scheme, wall_s=wall, tire_log=tuple(tire.log),
         )
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from .cosim import FmuPaths, QuarterCarCoSimulation
 from .quarter_car import QuarterCarParameters
-from .road import cleat, iso8608_road
+from .road import cleat, iso8608_road, pothole
 from .transfer import Multisine
 
 
@@ -52,6 +52,9 @@ class DemoSettings:
     cleat_length_m: float = 0.10
     cleat_shape: str = "rounded"
     cleat_speed_m_s: float = 10.0
+    #: the contact events (two cleats and a pothole), unilateral against linear contact
+    events_speed_m_s: float = 10.0
+    events_duration_s: float = 0.35
     car: QuarterCarParameters = field(default_factory=QuarterCarParameters)
     rebuild: bool = False
     progress: bool = True
@@ -81,7 +84,7 @@ class DemoSettings:
             critical = math.inf  # the speeds are checked against a valid mesh only
         else:
             critical = critical_speed(TireParameters(), n).speed_m_s
-        for name in ("tf_speed_m_s", "road_speed_m_s", "cleat_speed_m_s"):
+        for name in ("tf_speed_m_s", "road_speed_m_s", "cleat_speed_m_s", "events_speed_m_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value < critical):
                 limit = (f"below the critical speed {critical:.4g} m/s of the mesh "
@@ -218,7 +221,9 @@ def run_demo(settings: DemoSettings | None = None, log=print,
             QuarterCarCoSimulation(fmus, car, tire_parameters, h) as sim:
         tf_run = sim.run(height, velocity, progress=bar.update)
     estimate = estimate_frf(height, ride_outputs(tf_run), ex, h)
-    delay = 0.5 * model.patch.length_m / settings.tf_speed_m_s if settings.tf_speed_m_s else 0.0
+    # the spring-damper reference feels the road where the footprint's centre does
+    centre = model.patch.zone.centre
+    delay = 0.5 * float(model.patch.road.early_s[centre] + model.patch.road.late_s[centre])
 
     def references(freqs):
         full = ride_response(car, full_tire_two_port(model, freqs))
@@ -260,6 +265,30 @@ def run_demo(settings: DemoSettings | None = None, log=print,
                  1.0, h, settings.cleat_shape, distance_m=1.0)
     cleat_run = road_run(bump, settings.cleat_speed_m_s, "cleat", "road_run_cleat.png")
 
+    # -- contact events: the unilateral contact against the linear one ------------------
+    v, duration = settings.events_speed_m_s, settings.events_duration_s
+    distance = 0.5  # the obstacle reaches the zone front after 0.5 m
+    events = {
+        "cleat 20 x 20 mm": cleat(0.02, 0.02, v, duration, h, "rectangular", distance),
+        "cleat 40 x 20 mm": cleat(0.04, 0.02, v, duration, h, "rectangular", distance),
+        "pothole 50 mm deep, 0.3 m": pothole(0.05, 0.3, v, duration, h, "rectangular",
+                                              distance),
+    }
+    event_runs = {}
+    for name, profile in events.items():
+        for law, linear in (("unilateral", False), ("linear", True)):
+            parameters = {"n_elements": settings.n_elements, "speed": v,
+                          "linear_contact": linear}
+            with _step_bar(profile.time_s.size - 1, settings.progress,
+                           f"{name}, {law}") as bar, \
+                    QuarterCarCoSimulation(fmus, car, parameters, h) as sim:
+                event_runs[(name, law)] = sim.run(profile.height_m, profile.velocity_m_s,
+                                                  progress=bar.update)
+    figures.append(plots.plot_contact_events(
+        events, event_runs, out / "contact_events.png",
+        title=f"Contact events at {v:g} m/s, quarter car on TireModal.fmu (N = "
+              f"{settings.n_elements}): the unilateral contact lets go, the linear one pulls"))
+
     # -- summary ----------------------------------------------------------------------------
     rows += [
         ("tire static stiffness K_v", low.stiffness_n_per_m, "N/m"),
@@ -284,6 +313,13 @@ def run_demo(settings: DemoSettings | None = None, log=print,
             (f"{label}: contact force max", float(run.contact_Fz_n.max()), "N"),
             (f"{label}: contact lost", 100 * run.contact_lost_fraction, "%"),
             (f"{label}: real-time factor", run.real_time_factor, "-"),
+        ]
+    for (name, law), run in event_runs.items():
+        rows += [
+            (f"{name}, {law}: contact force min", float(run.contact_Fz_n.min()), "N"),
+            (f"{name}, {law}: contact force max", float(run.contact_Fz_n.max()), "N"),
+            (f"{name}, {law}: rim load max", float(run.rim_Fz_n.max()), "N"),
+            (f"{name}, {law}: airborne", 100 * run.contact_lost_fraction, "%"),
         ]
     wall = time.perf_counter() - started
     rows.append(("demo wall time", wall, "s"))

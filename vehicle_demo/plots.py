@@ -239,3 +239,42 @@ def plot_sweep(table, factor: str, path, title: str = "") -> Path:
         fig.suptitle(title, fontsize=12)
     fig.tight_layout()
     return _save(fig, path)
+
+
+def plot_contact_events(events, runs, path, title: str = "") -> Path:
+    """One column per event (road profile at the zone front): rim load, contact force and
+    footprint length against time, unilateral contact solid, linear contact dashed."""
+    plt = _pyplot()
+    names = list(events)
+    fig, axes = plt.subplots(4, len(names), figsize=(5 * len(names), 10), sharex="col",
+                             gridspec_kw={"height_ratios": [0.7, 1.2, 1.2, 0.8]},
+                             squeeze=False)
+    styles = {"unilateral": dict(color=COLOURS["cosim"], lw=1.2, ls="-"),
+              "linear": dict(color="#d62728", lw=1.0, ls="--")}
+    for col, name in enumerate(names):
+        profile = events[name]
+        road, rim, contact, length = axes[:, col]
+        road.plot(profile.time_s, 1e3 * profile.height_m, color="0.4", lw=1)
+        road.set_title(name, fontsize=10)
+        for law, style in styles.items():
+            run = runs[(name, law)]
+            rim.plot(run.time_s, 1e-3 * run.rim_Fz_n, label=f"{law} contact", **style)
+            contact.plot(run.time_s, 1e-3 * run.contact_Fz_n, **style)
+            length.plot(run.time_s, 100 * run.contact_length_m, **style)
+            if law == "unilateral":
+                _shade_lost_contact(contact, run.time_s, run.in_contact)
+        contact.axhline(0.0, color="k", lw=0.8)
+        for ax in axes[:, col]:
+            ax.grid(True, alpha=0.3)
+        length.set_xlabel("time [s]")
+    axes[0, 0].set_ylabel("road at zone front [mm]")
+    axes[1, 0].set_ylabel("rim load [kN]")
+    axes[2, 0].set_ylabel("contact force [kN]")
+    axes[3, 0].set_ylabel("footprint length [cm]")
+    handles, labels = axes[1, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=10,
+               bbox_to_anchor=(0.5, -0.01))
+    if title:
+        fig.suptitle(title, fontsize=12)
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    return _save(fig, path)

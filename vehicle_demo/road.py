@@ -1,5 +1,5 @@
-"""Road inputs for the tire FMU: height and velocity at the leading edge of the contact patch,
-sampled at the communication points.
+"""Road inputs for the tire FMU: height and velocity at the front of its contact zone (the
+``road_z`` it takes), sampled at the communication points.
 
 ISO 8608 random road: one-sided displacement PSD over spatial frequency n (cycles/m),
 
@@ -10,12 +10,14 @@ synthesised as a sum of cosines on the grid n_k = k / (V·T) with deterministic 
 sqrt(2 G_d(n_k) Δn) and uniformly random phases (ISO 8608 annex, Cebon's method), through one
 inverse FFT; the velocity is the exact derivative of the same sum. At speed V the time-
 frequency PSD is G(f) = G_d(f/V)/V. The default band is ISO's, 0.011-2.83 cycles/m (up to
-57 Hz at 20 m/s); a higher n_max extrapolates the slope, but the model's patch nodes follow
-the road point by point (no enveloping), so wavelengths much shorter than the 27 cm patch
-reach the contact force through its 1e8 N/m feedthrough unfiltered.
+57 Hz at 20 m/s); a higher n_max extrapolates the slope. Each tread node of the tire sees the
+road averaged over its own arc, so wavelengths shorter than a node's arc (4 cm at N = 100)
+are averaged out node by node, and the unilateral footprint lets go of a dip it cannot
+follow.
 
-Cleat: a short obstacle of height H and length L across the road, rectangular (edges smeared
-over one communication step by the tire's interpolation) or rounded, a (1 - cos) bump.
+Cleat: a short obstacle of height H and length L across the road, rectangular (its edges are
+steps of the road history; each tread node averages them over its arc) or rounded, a
+(1 - cos) bump. Pothole: the same shapes downwards.
 """
 
 from __future__ import annotations
@@ -134,14 +136,29 @@ CLEAT_SHAPES = ("rectangular", "rounded")
 
 def cleat(height_m: float, length_m: float, speed_m_s: float, duration_s: float,
           step_s: float, shape: str = "rounded", distance_m: float = 1.0) -> RoadSignal:
-    """A cleat whose front reaches the leading edge of the patch after ``distance_m``."""
+    """A cleat whose front reaches the front of the contact zone after ``distance_m``."""
+    return _obstacle(height_m, length_m, speed_m_s, duration_s, step_s, shape, distance_m,
+                     "cleat")
+
+
+def pothole(depth_m: float, length_m: float, speed_m_s: float, duration_s: float,
+            step_s: float, shape: str = "rectangular", distance_m: float = 1.0) -> RoadSignal:
+    """A pothole ``depth_m`` deep whose front edge reaches the zone front after
+    ``distance_m``."""
+    return _obstacle(-depth_m, length_m, speed_m_s, duration_s, step_s, shape, distance_m,
+                     "pothole")
+
+
+def _obstacle(height_m, length_m, speed_m_s, duration_s, step_s, shape, distance_m, kind):
     if shape not in CLEAT_SHAPES:
-        raise RoadError(f"cleat shape {shape!r}: must be one of {CLEAT_SHAPES}")
-    if not (speed_m_s > 0 and length_m > 0 and height_m > 0 and distance_m >= 0):
-        raise RoadError("a cleat needs speed > 0, length > 0, height > 0 and distance >= 0")
+        raise RoadError(f"{kind} shape {shape!r}: must be one of {CLEAT_SHAPES}")
+    size = abs(height_m)
+    if not (speed_m_s > 0 and length_m > 0 and size > 0 and distance_m >= 0):
+        raise RoadError(f"a {kind} needs speed > 0, length > 0, "
+                        f"{'height' if kind == 'cleat' else 'depth'} > 0 and distance >= 0")
     samples = int(round(duration_s / step_s))
     time = step_s * np.arange(samples + 1)
-    x = speed_m_s * time - distance_m  # position of the leading edge on the cleat
+    x = speed_m_s * time - distance_m  # position of the zone front on the obstacle
     on = (x >= 0) & (x < length_m)
     if shape == "rectangular":
         height = np.where(on, height_m, 0.0)
@@ -152,7 +169,7 @@ def cleat(height_m: float, length_m: float, speed_m_s: float, duration_s: float,
         velocity = np.where(on, 0.5 * height_m * np.sin(wave) * 2 * np.pi / length_m
                             * speed_m_s, 0.0)
     return RoadSignal(time, height, velocity, float(speed_m_s),
-                      f"{shape} cleat {height_m * 1e3:g} mm x {length_m * 1e3:g} mm at "
+                      f"{shape} {kind} {size * 1e3:g} mm x {length_m * 1e3:g} mm at "
                       f"{speed_m_s:g} m/s")
 
 

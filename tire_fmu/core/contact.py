@@ -345,7 +345,9 @@ def _edges(x: np.ndarray, penetration: np.ndarray, active: np.ndarray) -> tuple[
         if outer < 0 or outer >= x.size:
             return float(x[inner])
         p_in, p_out = penetration[inner], penetration[outer]
-        share = p_in / (p_in - p_out) if p_in > p_out else 0.0
+        # between the two nodes; a neighbour that penetrates without pushing (separating
+        # faster than its spring pushes) puts the edge at the neighbour
+        share = min(p_in / (p_in - p_out), 1.0) if p_in > p_out else 0.0
         return float(x[inner] + share * (x[outer] - x[inner]))
 
     front = crossing(idx[0], idx[0] - 1)  # x decreases along the zone (front first)
