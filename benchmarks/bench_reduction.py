@@ -97,7 +97,7 @@ def step_costs(repeats: int) -> None:
             stepper.output(stepper.step(state, inputs, 1e-4), inputs)
 
         reduced = ReducedModel(lam, b, c, d, e, np.zeros(inputs),
-                               dict.fromkeys(OUTPUT_NAMES, 0.0), ReductionSettings(), {})
+                               dict.fromkeys(OUTPUT_NAMES, 0.0), ReductionSettings())
         simulator = TireSimulator(reduced)
         simulator.step_values(1e-4, 0.0, 0.0, 0.0, 0.0)
         t_fused = per_call(partial(simulator.step_values, 1e-4, 1e-3, 0.0, 2e-3, 0.0), 2000,

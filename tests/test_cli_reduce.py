@@ -7,9 +7,9 @@ import pytest
 
 from tire_fmu.cli import main
 from tire_fmu.core import OperatingPoint, build_model
-from tire_fmu.core.export import load_mat, load_npz
 from tire_fmu.core.frequency_response import full_frequency_response
 from tire_fmu.core.reduction import ReductionSettings, reduce
+from tire_fmu.model_files import load_mat, load_npz
 
 MODEL = ["--elements", "40", "--patch-length", "0.204"]
 

@@ -127,7 +127,7 @@ def register(subparsers) -> None:
         help="write a reduced model: .npz (with metadata), MATLAB .mat (A, B, C, D) or a "
         "native C FMU (.fmu)",
         description="Export the reduced model. npz: diagonal modal form, JSON metadata, "
-        "checksums (load with tire_fmu.core.export.load_npz). mat: real A, B, C, D for "
+        "checksums (load with tire_fmu.model_files.load_npz). mat: real A, B, C, D for "
         "ss(A, B, C, D), inputs [r; dr/dt]. fmu: an FMI 2.0 co-simulation FMU in C, compiled "
         "for linux64 with its sources, that needs no Python on the host (docs/native.md).",
     )
@@ -183,7 +183,7 @@ def _report_text(reduced, model) -> str:
         f"method {reduced.settings.method}: {reduced.n_states} states "
         f"({reduced.n_modes} modes) of {4 * model.n_elements}, "
         f"{reduced.n_inputs} inputs (rim + {reduced.n_inputs - 1} road delay groups)",
-        f"built in {reduced.metadata['build_seconds']:.2f} s",
+        f"built in {reduced.metadata.build_seconds:.2f} s",
         f"max relative FRF error over {report.band_hz[0]:g}-{report.band_hz[1]:g} Hz: "
         f"{report.max_relative_error:.3g}",
     ]
@@ -199,7 +199,7 @@ def run_reduce(args: argparse.Namespace) -> Output:
 
 
 def run_export(args: argparse.Namespace) -> Output:
-    from ..core.export import save_mat, save_npz
+    from ..model_files import save_mat, save_npz
 
     fmt = args.format or args.out.suffix.lstrip(".").lower()
     if fmt not in EXPORT_FORMATS:
