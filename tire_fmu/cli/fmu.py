@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .commands import command_help
 from .common import CliError, Output, add_output_options
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "build-fmu",
-        help="build TireModal.fmu, the FMI 2.0 co-simulation FMU",
+        help=command_help("build-fmu"),
         description="Build TireModal.fmu (pythonfmu) into OUT: the tire_fmu core ships inside, "
         "the model description is completed (units, initial unknowns, capability flags) and "
         "checked with fmpy's validator when fmpy is installed. A host needs Python with numpy "

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.reduction import ReductionSettings, reduce
+from .commands import command_help
 from .common import (
     CliError,
     Output,
@@ -90,7 +91,7 @@ def _add_model_options(p: argparse.ArgumentParser) -> None:
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "frf",
-        help="frequency response of the full model, and of a reduced one (Bode plot)",
+        help=command_help("frf"),
         description="Frequency response from rim displacement or road height (at the leading "
         "edge of the patch) to a force or the deflection. With --reduced the reduced model "
         "built with the reduction settings is overlaid, with its relative error.",
@@ -113,7 +114,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "reduce",
-        help="build a reduced model and report its size and accuracy",
+        help=command_help("reduce"),
         description="Reduce the tire at its operating point and report the states kept, the "
         "settings and the maximum relative FRF error against the full model over the band.",
     )
@@ -124,8 +125,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "export",
-        help="write a reduced model: .npz (with metadata), MATLAB .mat (A, B, C, D) or a "
-        "native C FMU (.fmu)",
+        help=command_help("export"),
         description="Export the reduced model. npz: diagonal modal form, JSON metadata, "
         "checksums (load with tire_fmu.model_files.load_npz). mat: real A, B, C, D for "
         "ss(A, B, C, D), inputs [r; dr/dt]. fmu: an FMI 2.0 co-simulation FMU in C, compiled "
