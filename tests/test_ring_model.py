@@ -204,3 +204,14 @@ def test_undeformed_helper_drops_the_patch(tire):
     bare = undeformed(model)
     assert bare.patch.length_m == 0 and bare.contact_stiffness.nnz == 0 or \
         not bare.contact_stiffness.diagonal().any()
+
+
+def test_auto_solver_choice_gives_the_dense_modes(tire):
+    """auto takes ARPACK only for a few modes of a large class; both agree with LAPACK."""
+    model = build_model(tire, OperatingPoint(n_elements=1280, patch_length_m=0.204))
+    dense = real_modes(model, fmax_hz=110, method="dense")
+    auto = real_modes(model, fmax_hz=110)  # a few modes per class of 1282 DOFs: ARPACK
+    assert 5 <= len(dense.modes) < 30
+    np.testing.assert_allclose(auto.frequencies_hz, dense.frequencies_hz, rtol=1e-9)
+    assert [(m.order, m.phase, m.symmetry) for m in auto.modes] == \
+        [(m.order, m.phase, m.symmetry) for m in dense.modes]
