@@ -56,19 +56,23 @@ def diagonalise(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> ModalForm:
 
 
 def diagonalise_proportional(stiffness, mass_diag, alpha, beta, b_disp, b_vel, out_disp,
-                             out_vel) -> ModalForm:
+                             out_vel, eigenpairs=None) -> ModalForm:
     """Modal form of M ü + (αM + βK) u̇ + K u = B_z r + B_v ṙ from the real modes of (K, M).
 
     Proportional damping decouples the real modes, so the state-space modes follow from one
     symmetric eigenproblem of half the size: per mode (unit modal mass) η̈ + c η̇ + ω² η = ...
     with c = α + βω², written in the same momentum-like state as the full model,
     p = η̇ - φᵀB_v r:  [η̇, ṗ] = [[0, 1], [-ω², -c]] [η, p] + [φᵀB_v, φᵀB_z - c φᵀB_v] r,
-    whose 2×2 eigenproblem is solved in closed form.
+    whose 2×2 eigenproblem is solved in closed form. ``eigenpairs`` (ω², mass-normalised
+    shapes) of (K, M), when the caller has them, spare the symmetric eigenproblem.
     """
     import scipy.sparse as sp
 
-    dense = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness)
-    omega2, phi = sla.eigh(dense, np.diag(mass_diag))
+    if eigenpairs is None:
+        dense = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness)
+        omega2, phi = sla.eigh(dense, np.diag(mass_diag))
+    else:
+        omega2, phi = eigenpairs
     omega2 = np.clip(omega2, 0.0, None)
     c = alpha + beta * omega2
     beta_v = phi.T @ b_vel

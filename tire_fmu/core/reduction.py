@@ -37,7 +37,7 @@ import numpy as np
 
 from .balanced import BalancedRealization
 from .io_model import OUTPUTS, PHYSICAL_INPUTS, InputOutputModel, build_io_model, physical_input
-from .modal import symmetry_bases
+from .modal import symmetry_bases, two_level_eigenpairs
 from .modal_form import (
     ModalForm,
     diagonalise,
@@ -258,7 +258,9 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     the modes; the model is also mirror-symmetric about the patch centre, so that problem
     splits into a symmetric and an antisymmetric class, and a class the inputs do not reach
     (the antisymmetric one: rim and a resting road push symmetrically) is left out, which
-    changes no transfer function. Rolling needs the general (dense LAPACK) eigenproblem.
+    changes no transfer function; within a class the lumped sidewall is eliminated exactly
+    (:func:`~tire_fmu.core.modal.two_level_eigenpairs`), halving the problem again. Rolling
+    needs the general (dense LAPACK) eigenproblem.
     """
     model = io.model
     if model.speed_m_s != 0.0:
@@ -282,8 +284,9 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
             k = (basis.T @ stiffness @ basis).tocsr()
             m = basis.multiply(basis).T @ mass  # BᵀMB is diagonal: mirror nodes share a mass
             out_disp, out_vel = io.out_disp @ basis, io.out_vel @ basis
+        pairs = two_level_eigenpairs(k, m, k.shape[0]) if basis is not None else None
         forms.append(diagonalise_proportional(k, m, model.tire.alpha, model.tire.beta,
-                                              b_disp, b_vel, out_disp, out_vel))
+                                              b_disp, b_vel, out_disp, out_vel, pairs))
     values = np.concatenate([f.eigenvalues for f in forms])
     order = np.argsort(np.abs(values), kind="stable")
     return ModalForm(eigenvalues=values[order],
