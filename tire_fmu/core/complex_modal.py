@@ -62,6 +62,9 @@ def _normalise(model: TireModel, shape: np.ndarray) -> np.ndarray:
 _CLUSTER_GAP = 1e-7
 #: Relative residual an inverse-iteration eigenvector must reach, or the dense solve is used.
 _RESIDUAL = 1e-9
+#: "auto" uses inverse iteration from this many states on; below, the dense eigenvectors
+#: cost less than one factorisation per mode.
+SPARSE_MIN_STATES = 1000
 
 
 def circulant_symbols(model: TireModel) -> tuple[np.ndarray, ...] | None:
@@ -111,25 +114,40 @@ def _per_order_modes(model: TireModel, symbols) -> tuple[np.ndarray, np.ndarray]
 
 def _inverse_iteration(model: TireModel, values: np.ndarray) -> np.ndarray | None:
     """Displacement shapes for the given eigenvalues by inverse iteration on the sparse
-    quadratic pencil s²M + sD + K (one factorisation each), or None where one does not
-    converge to a clean eigenvector."""
+    quadratic pencil s²M + sD + K, or None where one does not converge to a clean
+    eigenvector.
+
+    Tread and sidewall DOFs are interleaved node by node, so the pencil is a narrow band
+    with periodic corners and factorises without reordering in O(N) per eigenvalue.
+    """
     import scipy.sparse.linalg as spla
 
-    m, d, k = (x.tocsc().astype(complex) for x in (model.mass, model.damping, model.stiffness))
-    scale = abs(k).max() + abs(d).max() * np.abs(values).max() + \
-        abs(m).max() * np.abs(values).max() ** 2
-    start = np.exp(0.37j * np.arange(model.n_dof)) * (1.0 + np.arange(model.n_dof) % 7)
-    shapes = np.empty((model.n_dof, values.size), dtype=complex)
+    n = model.n_elements
+    interleave = np.arange(2 * n).reshape(2, n).T.ravel()
+    parts = [x.tocsr()[interleave][:, interleave].tocsc() for x in
+             (model.mass, model.damping, model.stiffness)]
+    pattern = sp.csc_matrix(abs(parts[0]) + abs(parts[1]) + abs(parts[2]))
+    pattern.sort_indices()
+    rows, cols = pattern.nonzero()
+    csc_order = np.lexsort((rows, cols))  # the pattern's own (column-major) order
+    rows, cols = rows[csc_order], cols[csc_order]
+    m, d, k = (np.asarray(x[rows, cols]).ravel() for x in parts)
+    scale = np.abs(k).max() + np.abs(d).max() * np.abs(values).max() + \
+        np.abs(m).max() * np.abs(values).max() ** 2
+    mass = sp.diags(parts[0].diagonal())
+    start = np.exp(0.37j * np.arange(2 * n)) * (1.0 + np.arange(2 * n) % 7)
+    shapes = np.empty((2 * n, values.size), dtype=complex)
     for i, s in enumerate(values):
-        pencil = (s * s) * m + s * d + k
-        solve = spla.splu(pencil).solve
-        v = solve(m @ start)
+        pencil = sp.csc_matrix(((s * s) * m + s * d + k, pattern.indices, pattern.indptr),
+                               shape=pattern.shape)
+        solve = spla.splu(pencil, permc_spec="NATURAL").solve
+        v = solve(mass @ start)
         v /= np.linalg.norm(v)
-        v = solve(m @ v)
+        v = solve(mass @ v)
         v /= np.linalg.norm(v)
         if np.linalg.norm(pencil @ v) > _RESIDUAL * scale:
             return None
-        shapes[:, i] = v
+        shapes[interleave, i] = v
     return shapes
 
 
@@ -156,7 +174,8 @@ def _eigenpairs(model: TireModel, fmax_hz: float | None, method: str):
         if method == "per-order":
             raise ValueError("method = 'per-order' needs an undeformed tire (no contact patch)")
     a = state_matrix(model)
-    if method in ("auto", "sparse") and fmax_hz is not None:
+    if fmax_hz is not None and (method == "sparse" or (method == "auto"
+                                                      and a.shape[0] >= SPARSE_MIN_STATES)):
         from scipy.spatial import cKDTree
 
         values = sla.eigvals(a, overwrite_a=True, check_finite=False)
@@ -186,7 +205,8 @@ def complex_modes(model: TireModel, fmax_hz: float | None = None,
     ``method``: "dense" (every eigenvector of the 4N state matrix, LAPACK), "per-order" (the
     undeformed tire's exact split into one 2-DOF problem per circumferential order),
     "sparse" (dense eigenvalues, eigenvectors by inverse iteration only for the modes up to
-    ``fmax_hz``) or "auto" (per order when undeformed, else sparse with a cut, else dense).
+    ``fmax_hz``) or "auto" (per order when undeformed, else sparse with a cut on a large
+    mesh, else dense).
     """
     if method not in COMPLEX_METHODS:
         raise ValueError(f"method = {method!r}: must be one of {COMPLEX_METHODS}")
