@@ -29,6 +29,15 @@ def test_reduce_json_is_the_report_of_the_python_api(capsys, tire):
     assert data["settings"]["contribution_threshold"] == 0.01
 
 
+def test_reduce_exact_report_checks_against_the_assembled_model(capsys, tire):
+    modal = run_json(capsys, "reduce", *MODEL)
+    exact = run_json(capsys, "reduce", *MODEL, "--exact-report")
+    assert (modal["report"]["reference"], exact["report"]["reference"]) == ("modal", "exact")
+    assert exact["n_states"] == modal["n_states"]  # the same reduction, checked two ways
+    assert exact["report"]["max_relative_error"] == pytest.approx(
+        modal["report"]["max_relative_error"], rel=1e-6)
+
+
 def test_frf_json_matches_the_full_model_and_reports_the_reduced_error(capsys, tire):
     data = run_json(capsys, "frf", *MODEL, "--input", "rim", "--output", "rim_fz", "--reduced",
                     "--points", "50", "--fmin", "1", "--fmax", "300")
