@@ -541,3 +541,25 @@ def test_reduction_record_is_typed_frozen_and_survives_a_file(small_models, tmp_
     with pytest.raises(FrozenInstanceError):
         record.build_seconds = 0.0
     assert load_npz(save_npz(reduced, tmp_path / "m.npz")).metadata == record
+
+
+def test_rest_decomposition_without_mirror_symmetry_solves_every_dof(small_models):
+    """A contact stiffer on one side of the centre breaks the mirror symmetry: the fast path
+    must then take every DOF (one problem), and still equal the general eigensolver."""
+    from dataclasses import replace
+
+    import scipy.sparse as sp
+
+    model = small_models[0.0]
+    diagonal = model.contact_stiffness.diagonal().copy()
+    nodes = np.flatnonzero(diagonal)
+    diagonal[nodes[nodes < model.n_elements // 2]] *= 1.5  # the θ > 0 side only
+    lopsided = replace(model, contact_stiffness=sp.diags(diagonal, format="csr"))
+    io = build_io_model(lopsided)
+    fast, general = modal_decomposition(io), diagonalise(io.a.toarray(), io.b, io.c)
+    assert fast.eigenvalues.size == general.eigenvalues.size == 2 * model.n_elements
+    omega = 2 * np.pi * np.array([5.0, 90.0, 250.0])
+    r = io.physical_input("road", omega)
+    h_fast, h_gen = (modal_frequency_response(f.eigenvalues, f.b, f.c, io.d, io.e, r, omega)
+                     for f in (fast, general))
+    np.testing.assert_allclose(h_fast, h_gen, rtol=1e-9, atol=1e-9 * np.abs(h_gen).max())
