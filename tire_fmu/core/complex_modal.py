@@ -94,9 +94,11 @@ def circulant_symbols(model: TireModel) -> tuple[np.ndarray, ...] | None:
     return tuple(out)
 
 
-def _per_order_modes(model: TireModel, symbols) -> tuple[np.ndarray, np.ndarray]:
-    """Every state-space eigenvalue (4 per order) and its displacement shape, pure harmonics
-    e^{inθ}·(a_t, a_s), from the per-order quadratic problems (s²M_n + sD_n + K_n) a = 0."""
+def _per_order_modes(model: TireModel, symbols,
+                     fmax_hz: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The wanted state-space eigenvalues (of 4 per order) and their displacement shapes,
+    pure harmonics e^{inθ}·(a_t, a_s), from the per-order quadratic problems
+    (s²M_n + sD_n + K_n) a = 0."""
     mass, damping, stiffness = symbols
     n = model.n_elements
     m_inv = np.linalg.inv(mass)
@@ -105,11 +107,12 @@ def _per_order_modes(model: TireModel, symbols) -> tuple[np.ndarray, np.ndarray]
     companion[:, 2:, :2] = -m_inv @ stiffness
     companion[:, 2:, 2:] = -m_inv @ damping
     values, vectors = np.linalg.eig(companion)  # (orders, 4), (orders, 4, 4)
-    harmonic = np.exp(1j * np.outer(np.arange(n), model.grid.theta))  # (orders, nodes)
-    amplitude = vectors[:, :2, :]  # (orders, 2, 4): tread and sidewall per eigenvalue
-    shapes = np.concatenate([harmonic[:, :, None] * amplitude[:, None, 0, :],
-                             harmonic[:, :, None] * amplitude[:, None, 1, :]], axis=1)
-    return values.ravel(), shapes.transpose(1, 0, 2).reshape(2 * n, 4 * n)
+    wanted = _wanted(values.ravel(), fmax_hz)
+    order, member = np.divmod(wanted, 4)
+    harmonic = np.exp(1j * np.outer(model.grid.theta, order))  # (nodes, wanted)
+    amplitude = vectors[order, :2, member]  # (wanted, 2): tread and sidewall
+    shapes = np.vstack([harmonic * amplitude[None, :, 0], harmonic * amplitude[None, :, 1]])
+    return values.ravel()[wanted], shapes
 
 
 def _inverse_iteration(model: TireModel, values: np.ndarray) -> np.ndarray | None:
@@ -168,9 +171,7 @@ def _eigenpairs(model: TireModel, fmax_hz: float | None, method: str):
     if method in ("auto", "per-order"):
         symbols = circulant_symbols(model)
         if symbols is not None:
-            values, shapes = _per_order_modes(model, symbols)
-            wanted = _wanted(values, fmax_hz)
-            return values[wanted], shapes[:, wanted]
+            return _per_order_modes(model, symbols, fmax_hz)
         if method == "per-order":
             raise ValueError("method = 'per-order' needs an undeformed tire (no contact patch)")
     a = state_matrix(model)
