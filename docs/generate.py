@@ -96,7 +96,77 @@ def fmu_variables_table() -> str:
     return "\n".join(lines)
 
 
+@generator("contact-footprint")
+def contact_footprint_table() -> str:
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+
+    lines = ["| N | load | deflection | footprint | pushing nodes | secant K_v | tangent K_v |",
+             "|---|---|---|---|---|---|---|"]
+    for n in (100, 200, 400):
+        for load in (10e3, 27.7e3, 60e3):
+            fp = build_model(TireParameters(), OperatingPoint(n_elements=n,
+                                                              load_n=load)).patch.footprint
+            lines.append(f"| {n} | {load / 1e3:.3g} kN | {fp.deflection_m * 1e3:.2f} mm | "
+                         f"{fp.length_m * 100:.2f} cm | {fp.n_active} | "
+                         f"{fp.secant_stiffness_n_per_m / 1e6:.3f} MN/m | "
+                         f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m |")
+    lines += ["", "Computed by `docs/generate.py` from `build_model(...).patch.footprint` "
+              "(the same numbers as `tire-fmu patch --load L --elements N`)."]
+    return "\n".join(lines)
+
+
+@generator("pressure-law")
+def pressure_law_table() -> str:
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+
+    lines = ["| sidewall_pressure_exponent | secant K_v at 7.9 bar | at 3.95 bar | ratio |",
+             "|---|---|---|---|"]
+    for exponent in (0.0, 0.8):
+        k = [build_model(TireParameters(sidewall_pressure_exponent=exponent,
+                                        inflation_pressure=p),
+                         OperatingPoint(load_n=27.7e3)).patch.footprint.secant_stiffness_n_per_m
+             for p in (7.9e5, 3.95e5)]
+        lines.append(f"| {exponent:g} | {k[0] / 1e6:.3f} MN/m | {k[1] / 1e6:.3f} MN/m | "
+                     f"{k[1] / k[0]:.3f} |")
+    lines += ["", "At 27.7 kN, N = 100; computed by `docs/generate.py` (the same as `tire-fmu "
+              "patch --load 27700 --inflation-pressure 3.95e5 --tire "
+              "sidewall_pressure_exponent=0.8`)."]
+    return "\n".join(lines)
+
+
 # -- measured sections ------------------------------------------------------------------------
+
+
+@generator("contact-accuracy")
+def contact_accuracy() -> str:
+    data = record("bench_contact")
+    r = data["results"]
+    small = r["small_amplitude"]
+    lines = ["| 0.1 mm sines, 2-300 Hz, h = 0.1 ms | " + " | ".join(small) + " |",
+             "|---|" + "---|" * len(small)]
+    for pair in next(iter(small.values())):
+        lines.append(f"| largest \\|H\\| error, {pair} | "
+                     + " | ".join(f"{100 * v[pair]:.2f} %" for v in small.values()) + " |")
+    drop = r.get("drop")
+    if drop:
+        lines += ["", "| 5 cm drop and return, N = 40 | lift-off | touch-down | landing peak |",
+                  "|---|---|---|---|"]
+        for key, d in drop.items():
+            label = "unreduced ring (DOP853)" if key == "unreduced" else f"contact FMU core, {key}"
+            lines.append(f"| {label} | {d['lift_off_s'] * 1e3:.2f} ms | "
+                         f"{d['touch_down_s'] * 1e3:.2f} ms | {d['landing_peak_kn']:.1f} kN |")
+    step = r["road_step"]
+    cost = r["cost"]
+    lines += ["", f"A 1 mm road step at rest (the road rises by 1 mm between two points): the "
+              f"contact force peaks at {step['peak_kn']:.1f} kN, never falls below "
+              f"{step['min_kn']:.1f} kN, rings at about {step['ringing_hz']:.0f} Hz (x"
+              f"{step['decay_per_4ms']:.2g} in 4 ms) and settles at {step['final_kn']:.1f} kN. "
+              f"Building the contact model (the FMU's initialisation) takes "
+              f"{cost['init_s_N100'] * 1e3:.0f} ms at N = 100 and "
+              f"{cost['init_s_N400'] * 1e3:.0f} ms at N = 400; a step of the core simulator "
+              f"{cost['step_us_unilateral_in contact']:.0f} µs in contact, "
+              f"{cost['step_us_unilateral_airborne']:.0f} µs airborne.", "", provenance(data)]
+    return "\n".join(lines)
 
 def _demo_summary() -> tuple[dict, dict]:
     data = record("bench_vehicle")

@@ -7,9 +7,9 @@ import pytest
 
 from tire_fmu.cli import main
 from tire_fmu.core import OperatingPoint, build_model
-from tire_fmu.core.export import load_mat, load_npz
 from tire_fmu.core.frequency_response import full_frequency_response
 from tire_fmu.core.reduction import ReductionSettings, reduce
+from tire_fmu.model_files import load_mat, load_npz
 
 MODEL = ["--elements", "40", "--patch-length", "0.204"]
 
@@ -27,6 +27,15 @@ def test_reduce_json_is_the_report_of_the_python_api(capsys, tire):
     assert data["report"]["max_relative_error"] == pytest.approx(
         reduced.report.max_relative_error, rel=1e-9)
     assert data["settings"]["contribution_threshold"] == 0.01
+
+
+def test_reduce_exact_report_checks_against_the_assembled_model(capsys, tire):
+    modal = run_json(capsys, "reduce", *MODEL)
+    exact = run_json(capsys, "reduce", *MODEL, "--exact-report")
+    assert (modal["report"]["reference"], exact["report"]["reference"]) == ("modal", "exact")
+    assert exact["n_states"] == modal["n_states"]  # the same reduction, checked two ways
+    assert exact["report"]["max_relative_error"] == pytest.approx(
+        modal["report"]["max_relative_error"], rel=1e-6)
 
 
 def test_frf_json_matches_the_full_model_and_reports_the_reduced_error(capsys, tire):

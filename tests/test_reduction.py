@@ -9,7 +9,19 @@ import pytest
 import scipy.signal as ss
 
 from tire_fmu.core import OperatingPoint, ParameterError, build_model
-from tire_fmu.core.export import (
+from tire_fmu.core.io_model import build_io_model
+from tire_fmu.core.modal_form import diagonalise, modal_frequency_response
+from tire_fmu.core.reduction import (
+    ReductionSettings,
+    ReductionWarning,
+    error_report,
+    modal_decomposition,
+    reduce,
+    static_outputs,
+)
+from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
+from tire_fmu.core.stepping import DenseStepper, DiagonalStepper, phi_functions
+from tire_fmu.model_files import (
     ModelFileError,
     load_mat,
     load_npz,
@@ -17,17 +29,6 @@ from tire_fmu.core.export import (
     save_npz,
     state_space_matrices,
 )
-from tire_fmu.core.io_model import build_io_model
-from tire_fmu.core.modal_form import diagonalise, modal_frequency_response
-from tire_fmu.core.reduction import (
-    ReductionSettings,
-    ReductionWarning,
-    modal_decomposition,
-    reduce,
-    static_outputs,
-)
-from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
-from tire_fmu.core.stepping import DenseStepper, DiagonalStepper, phi_functions
 
 PAPER_SPEED = 20 * np.pi * 0.65
 
@@ -61,9 +62,15 @@ def test_default_settings_reach_one_percent_with_fewer_states(which, request):
 
 
 def test_keeping_every_mode_reproduces_the_full_model(small_models):
-    for model in small_models.values():
-        reduced = reduce(model, ReductionSettings(contribution_threshold=0.0, f_max_hz=1e6))
-        assert reduced.n_states == 4 * model.n_elements
+    for speed, model in small_models.items():
+        reduced = reduce(model, ReductionSettings(contribution_threshold=0.0, f_max_hz=1e6),
+                         report="exact")
+        # at rest the antisymmetric class (one DOF per mirror pair of nodes, tread and
+        # sidewall) is unreachable from the symmetric inputs and left out
+        mirror_pairs = (model.n_elements - 2) // 2
+        expected = 4 * model.n_elements - (4 * mirror_pairs if speed == 0.0 else 0)
+        assert reduced.n_states == expected
+        assert reduced.report.reference == "exact"
         assert reduced.report.max_relative_error < 1e-8
 
 
@@ -76,8 +83,10 @@ def test_rest_fast_path_equals_the_general_eigensolver(small_models):
     h_fast = modal_frequency_response(fast.eigenvalues, fast.b, fast.c, io.d, io.e, r, omega)
     h_gen = modal_frequency_response(general.eigenvalues, general.b, general.c, io.d, io.e,
                                      r, omega)
-    np.testing.assert_allclose(np.sort_complex(fast.eigenvalues),
-                               np.sort_complex(general.eigenvalues), rtol=1e-10)
+    # the fast path keeps the symmetric class only: its modes are among the general ones
+    gap = np.abs(fast.eigenvalues[:, None] - general.eigenvalues[None, :]).min(axis=1)
+    assert np.all(gap <= 1e-10 * np.abs(fast.eigenvalues))
+    assert fast.eigenvalues.size == general.eigenvalues.size - (48 - 2)  # one per mirror pair
     np.testing.assert_allclose(h_fast, h_gen, rtol=1e-9, atol=1e-9 * np.abs(h_gen).max())
 
 
@@ -234,7 +243,7 @@ def test_mat_round_trip_is_bit_exact(small_models, tmp_path):
 
 def test_python_control_state_space(small_models):
     control = pytest.importorskip("control")
-    from tire_fmu.core.export import to_control
+    from tire_fmu.model_files import to_control
 
     reduced = reduce(small_models[0.0])
     system = to_control(reduced)
@@ -244,3 +253,139 @@ def test_python_control_state_space(small_models):
     dc = control.dcgain(system)
     assert dc[0, 0] == pytest.approx(-small_models[0.0].static_vertical_stiffness_n_per_m,
                                      rel=1e-9)
+
+
+def _random_modal_model(rng, complex_modes=12, real_modes=3, inputs=3, outputs=4):
+    lam = np.r_[-rng.uniform(0.5, 20, complex_modes) + 1j * rng.uniform(10, 400, complex_modes),
+                -rng.uniform(50, 500, real_modes)]
+    b = rng.normal(size=(lam.size, inputs)) + 1j * rng.normal(size=(lam.size, inputs))
+    c = rng.normal(size=(outputs, lam.size)) + 1j * rng.normal(size=(outputs, lam.size))
+    b[complex_modes:] = b[complex_modes:].real
+    c[:, complex_modes:] = c[:, complex_modes:].real
+    return lam, b, c
+
+
+def test_cauchy_gramians_equal_bartels_stewart():
+    from tire_fmu.core.balanced import (
+        dense_gramians,
+        real_gramian,
+        real_observability_gramian,
+    )
+    from tire_fmu.core.modal_form import real_block_form
+
+    lam, b, c = _random_modal_model(np.random.default_rng(3))
+    a_r, b_r, c_r, _, _ = real_block_form(lam, b, c, np.zeros((4, 3)), np.zeros((4, 3)))
+    p_ref, q_ref = dense_gramians(a_r, b_r, c_r)
+    np.testing.assert_allclose(real_gramian(lam, b), p_ref, rtol=0,
+                               atol=1e-12 * np.abs(p_ref).max())
+    np.testing.assert_allclose(real_observability_gramian(lam, c), q_ref, rtol=0,
+                               atol=1e-12 * np.abs(q_ref).max())
+
+
+@pytest.mark.parametrize("speed", [0.0, 15.0])
+def test_balanced_low_rank_path_equals_the_dense_lyapunov_path(small_models, speed):
+    from tire_fmu.core.balanced import BalancedRealization
+
+    io = build_io_model(small_models[speed])
+    decomp = modal_decomposition(io)
+    d = io.d + (io.static_gain() - io.d
+                - np.real(-(decomp.c / decomp.eigenvalues) @ decomp.b))
+    weight = np.array([1e-6, 1e-6, 1e-6, 1e3])
+    fast, dense = (BalancedRealization(decomp.eigenvalues, decomp.b, decomp.c, d, weight, True,
+                                       gramians=g) for g in ("cauchy", "dense"))
+    top = 30
+    np.testing.assert_allclose(fast.hankel_singular_values[:top],
+                               dense.hankel_singular_values[:top], rtol=1e-7)
+    omega = 2 * np.pi * np.geomspace(1, 300, 40)
+    r = io.physical_input("road", omega)
+    for states in (12, 30):
+        h_fast, h_dense = (modal_frequency_response(*real.truncate(states)[:3],
+                                                    real.truncate(states)[3], io.e, r, omega)
+                           for real in (fast, dense))
+        np.testing.assert_allclose(h_fast, h_dense, rtol=0, atol=1e-6 * np.abs(h_dense).max())
+
+
+@pytest.mark.parametrize("speed,tolerance", [(0.0, 1e-11), (15.0, 1e-7)])
+def test_modal_full_responses_equal_the_exact_ones(small_models, speed, tolerance):
+    from tire_fmu.core.reduction import full_responses
+
+    io = build_io_model(small_models[speed])
+    freqs = np.geomspace(1.0, 300.0, 60)
+    exact = full_responses(io, freqs)
+    modal = full_responses(io, freqs, modal_decomposition(io))
+    assert modal.keys() == exact.keys()
+    for key, h in exact.items():
+        np.testing.assert_allclose(modal[key], h, rtol=tolerance, atol=0, err_msg=str(key))
+
+
+def test_exact_responses_equal_the_one_input_solver(small_models):
+    from tire_fmu.core.reduction import exact_frequency_responses
+
+    io = build_io_model(small_models[15.0])
+    freqs = np.array([2.0, 80.0, 250.0])
+    both = exact_frequency_responses(io, freqs)
+    for name in ("rim", "road"):
+        np.testing.assert_allclose(both[name], io.frequency_response(name, freqs), rtol=1e-12)
+
+
+def test_report_false_solves_no_full_model_frequency_response(small_models, monkeypatch):
+    import tire_fmu.core.reduction as reduction
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the exact full-model responses were computed")
+
+    monkeypatch.setattr(reduction, "exact_frequency_responses", refuse)
+    for method in ("modal", "balanced"):
+        reduced = reduce(small_models[15.0], ReductionSettings(method=method), report=False)
+        assert reduced.report is None
+    assert reduce(small_models[0.0]).report.reference == "modal"
+    with pytest.raises(AssertionError, match="exact full-model"):
+        reduce(small_models[0.0], report="exact")
+
+
+def test_modal_and_exact_reports_agree(small_models):
+    for model in small_models.values():
+        modal = reduce(model)
+        exact = error_report(modal, build_io_model(model))
+        assert exact.reference == "exact"
+        assert exact.max_relative_error == pytest.approx(modal.report.max_relative_error,
+                                                         rel=1e-4)
+        assert exact.per_pair.keys() == modal.report.per_pair.keys()
+
+
+def test_reduction_record_is_typed_frozen_and_survives_a_file(small_models, tmp_path):
+    from dataclasses import FrozenInstanceError
+
+    model = small_models[15.0]
+    reduced = reduce(model, report=False)
+    record = reduced.metadata
+    assert record.tire == model.tire
+    assert record.operating_point.speed_m_s == 15.0
+    assert record.operating_point.patch_nodes == model.patch.node_indices.size
+    assert record.full_states == 4 * model.n_elements
+    assert record.build_seconds > 0
+    with pytest.raises(FrozenInstanceError):
+        record.build_seconds = 0.0
+    assert load_npz(save_npz(reduced, tmp_path / "m.npz")).metadata == record
+
+
+def test_rest_decomposition_without_mirror_symmetry_solves_every_dof(small_models):
+    """A contact stiffer on one side of the centre breaks the mirror symmetry: the fast path
+    must then take every DOF (one problem), and still equal the general eigensolver."""
+    from dataclasses import replace
+
+    import scipy.sparse as sp
+
+    model = small_models[0.0]
+    diagonal = model.contact_stiffness.diagonal().copy()
+    nodes = np.flatnonzero(diagonal)
+    diagonal[nodes[nodes < model.n_elements // 2]] *= 1.5  # the θ > 0 side only
+    lopsided = replace(model, contact_stiffness=sp.diags(diagonal, format="csr"))
+    io = build_io_model(lopsided)
+    fast, general = modal_decomposition(io), diagonalise(io.a.toarray(), io.b, io.c)
+    assert fast.eigenvalues.size == general.eigenvalues.size == 2 * model.n_elements
+    omega = 2 * np.pi * np.array([5.0, 90.0, 250.0])
+    r = io.physical_input("road", omega)
+    h_fast, h_gen = (modal_frequency_response(f.eigenvalues, f.b, f.c, io.d, io.e, r, omega)
+                     for f in (fast, general))
+    np.testing.assert_allclose(h_fast, h_gen, rtol=1e-9, atol=1e-9 * np.abs(h_gen).max())

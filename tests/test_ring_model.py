@@ -5,6 +5,7 @@ import pytest
 
 from tire_fmu.core import (
     OperatingPoint,
+    TireParameters,
     analytic_modes,
     build_model,
     real_modes,
@@ -186,3 +187,42 @@ def test_undeformed_helper_drops_the_patch(tire):
     bare = undeformed(model)
     assert bare.patch.length_m == 0 and bare.contact_stiffness.nnz == 0 or \
         not bare.contact_stiffness.diagonal().any()
+
+
+def test_auto_solver_choice_gives_the_dense_modes(tire):
+    """auto takes ARPACK only for a few modes of a large class; both agree with LAPACK."""
+    model = build_model(tire, OperatingPoint(n_elements=1280, patch_length_m=0.204))
+    dense = real_modes(model, f_max_hz=110, method="dense")
+    auto = real_modes(model, f_max_hz=110)  # a few modes per class of 1282 DOFs: ARPACK
+    assert 5 <= len(dense.modes) < 30
+    np.testing.assert_allclose(auto.frequencies_hz, dense.frequencies_hz, rtol=1e-9)
+    assert [(m.order, m.phase, m.symmetry) for m in auto.modes] == \
+        [(m.order, m.phase, m.symmetry) for m in dense.modes]
+
+
+@pytest.mark.parametrize("shear", [0.0, 1e5])
+def test_sidewall_elimination_gives_the_full_class_problem(shear):
+    """Without sidewall shear the sidewall is eliminated exactly (half-size eigenproblem);
+    with it the structure is absent and the full problem is solved: same modes either way."""
+    from tire_fmu.core.modal import symmetry_bases, two_level_eigenpairs
+
+    tire = TireParameters(sidewall_shear=shear)
+    model = build_model(tire, OperatingPoint(n_elements=80, patch_length_m=0.204))
+    basis = symmetry_bases(model.grid)["symmetric"]
+    k = (basis.T @ model.stiffness @ basis).tocsr()
+    m = basis.multiply(basis).T @ model.mass.diagonal()
+    pairs = two_level_eigenpairs(k, m, 30)
+    assert (pairs is None) == (shear > 0)
+    auto = real_modes(model, f_max_hz=300)
+    dense = real_modes(model, f_max_hz=300, method="dense")
+    np.testing.assert_allclose(auto.frequencies_hz, dense.frequencies_hz, rtol=1e-11)
+    np.testing.assert_allclose(auto.damping_ratios, dense.damping_ratios, rtol=1e-9)
+    assert [(x.order, x.phase, x.symmetry) for x in auto.modes] == \
+        [(x.order, x.phase, x.symmetry) for x in dense.modes]
+    overlap = np.abs(np.einsum("ij,ij->j", auto.shapes, model.mass @ dense.shapes))
+    np.testing.assert_allclose(overlap, 1.0, atol=1e-8)
+    if pairs is not None:  # the half-size pairs solve the full class problem
+        omega2, shapes = pairs
+        residual = k @ shapes - (m[:, None] * shapes) * omega2[None, :]
+        assert np.abs(residual).max() < 1e-9 * np.abs(k).max()
+        np.testing.assert_allclose(shapes.T @ (m[:, None] * shapes), np.eye(30), atol=1e-10)

@@ -173,3 +173,32 @@ def test_rolling_static_contact_gives_rolling_resistance(tire):
     at_rest = rolling(tire, 100, 0.0, patch=0.25)
     u0 = np.linalg.solve(at_rest.stiffness.toarray(), at_rest.structure.stiffness @ (t * z_rim))
     assert abs(s @ (at_rest.structure.stiffness @ (u0 - t * z_rim))) < 1e-6 * fz
+
+
+@pytest.mark.parametrize("patch,speed", [(0.0, 20.0), (0.0, 0.0), (0.204, 20.0)])
+def test_fast_complex_modes_equal_the_dense_eigensolver(tire, patch, speed):
+    """Per order (undeformed) or inverse iteration (with a patch): the same modes, labels and
+    shapes as every eigenvector of the dense state matrix."""
+    model = rolling(tire, 60, speed, patch=patch)
+    dense = complex_modes(model, f_max_hz=300, method="dense")
+    fast = complex_modes(model, f_max_hz=300, method="per-order" if patch == 0.0 else "sparse")
+    assert len(fast.modes) == len(dense.modes) > 50
+    np.testing.assert_allclose(fast.eigenvalues, dense.eigenvalues, rtol=1e-11)
+    if speed == 0.0:
+        return  # cos/sin pairs are degenerate: any basis of each pair is as good
+    assert [(m.order, m.phase, m.direction) for m in fast.modes] == \
+        [(m.order, m.phase, m.direction) for m in dense.modes]
+    np.testing.assert_allclose(fast.frequencies_hz, dense.frequencies_hz, rtol=1e-11)
+    np.testing.assert_allclose(fast.damping_ratios, dense.damping_ratios, rtol=1e-9)
+    # unit modal mass both: the shapes agree up to a phase factor
+    overlap = np.abs(np.einsum("ij,ij->j", dense.shapes.conj(), model.mass @ fast.shapes))
+    np.testing.assert_allclose(overlap, 1.0, atol=1e-9)
+
+
+def test_per_order_is_refused_with_a_patch_and_auto_falls_back(tire):
+    model = rolling(tire, 40, 10.0, patch=0.204)
+    with pytest.raises(ValueError, match="per-order"):
+        complex_modes(model, f_max_hz=200, method="per-order")
+    auto = complex_modes(model, f_max_hz=200)
+    dense = complex_modes(model, f_max_hz=200, method="dense")
+    np.testing.assert_allclose(auto.eigenvalues, dense.eigenvalues, rtol=1e-11)

@@ -3,21 +3,27 @@
 Each command group lives in its own module with a ``register(subparsers)`` function; handlers
 take the parsed arguments and return a :class:`Output` (text for people, a dict for ``--json``).
 Errors the user can fix end the program with a one-line message and exit status 2.
+
+Only the module of the command given is imported (:mod:`.commands` lists the others with
+their help lines), so ``tire-fmu --help`` answers without loading numpy or scipy. Commands run
+with one BLAS thread unless ``--blas-threads`` or ``TIRE_FMU_BLAS_THREADS`` says otherwise: the
+dense eigenproblems here are small enough that threads on a shared machine mostly fight.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
+import importlib
 import os
 import sys
 import warnings
 from collections.abc import Sequence
 
-from ..core import ParameterError
-from .common import CliError, Output, check_plot_option, to_jsonable
+from .commands import COMMANDS
 
-COMMAND_MODULES = ("ring", "rolling", "reduce", "fmu", "fit")
+COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
+#: Environment variable with the BLAS thread count (0: the library's default).
+BLAS_THREADS_ENV = "TIRE_FMU_BLAS_THREADS"
 DEBUG_HELP = "show tracebacks on errors"
 
 
@@ -28,24 +34,49 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _blas_threads(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 0 (0: the BLAS "
+                                         "library's default)")
+    return value
+
+
+def _default_blas_threads() -> int:
+    text = os.environ.get(BLAS_THREADS_ENV, "1")
+    try:
+        return _blas_threads(text)
+    except argparse.ArgumentTypeError as error:
+        sys.exit(f"tire-fmu: error: {BLAS_THREADS_ENV} = {error}")
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser; with ``argv``, only the module of the command named there is imported
+    (the other commands are listed with their help line), without it every module is."""
     parser = _Parser(
         prog="tire-fmu",
         description="Modal ring tire model (in-plane, 0-300 Hz): analysis, reduction, FMU.",
     )
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
+    parser.add_argument("--blas-threads", metavar="T", type=_blas_threads, default=None,
+                        help="BLAS/LAPACK threads for the computation (default 1, or "
+                        f"${BLAS_THREADS_ENV}; 0: the library's default)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
                                        parser_class=_Parser)
-    import importlib
-
-    for name in COMMAND_MODULES:
-        try:
-            module = importlib.import_module(f"{__name__}.{name}")
-        except ModuleNotFoundError as error:  # a command group not written yet
-            if error.name != f"{__name__}.{name}":
-                raise
-            continue
-        module.register(subparsers)
+    if argv is None:
+        wanted = set(COMMAND_MODULES)
+    else:
+        named = next((arg for arg in argv if arg in COMMANDS), None)
+        wanted = {COMMANDS[named][0]} if named else set()
+    for name, (module_name, help_line) in COMMANDS.items():
+        if module_name in wanted:
+            wanted.discard(module_name)
+            importlib.import_module(f"{__name__}.{module_name}").register(subparsers)
+        elif name not in subparsers.choices:  # listed only; never parsed in this run
+            subparsers.add_parser(name, help=help_line)
     for command in subparsers.choices.values():
         # also after the command; SUPPRESS keeps a --debug given before it
         command.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
@@ -54,11 +85,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
+    import json
+
+    import scipy.linalg  # noqa: F401  (numpy's and scipy's BLAS loaded, so both are limited)
+    from threadpoolctl import threadpool_limits
+
+    from ..core.parameters import ParameterError
+    from .common import CliError, Output, check_plot_option, to_jsonable
+
+    threads = _default_blas_threads() if args.blas_threads is None else args.blas_threads
     try:
         check_plot_option(args)  # before computing: a bad --plot must not cost a whole run
-        with warnings.catch_warnings(record=True) as caught:
+        with warnings.catch_warnings(record=True) as caught, \
+                threadpool_limits(limits=threads or None, user_api="blas"):
             warnings.simplefilter("always")
             output: Output = args.handler(args)
         for warning in caught:

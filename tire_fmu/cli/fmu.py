@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .commands import command_help
 from .common import (
     CliError,
     Output,
@@ -18,7 +19,7 @@ from .common import (
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "build-fmu",
-        help="build TireModal.fmu, the FMI 2.0 co-simulation FMU",
+        help=command_help("build-fmu"),
         description="Build TireModal.fmu (pythonfmu) as OUT (a .fmu file, or an existing "
         "folder to hold TireModal.fmu): the tire_fmu core ships inside, "
         "the model description is completed (units, initial unknowns, capability flags) and "

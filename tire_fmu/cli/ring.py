@@ -10,6 +10,7 @@ import numpy as np
 from ..core import analytic_modes, modal_analysis
 from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
 from ..core.studies import ROUNDING_LEVEL, convergence_study, patch_sweep
+from .commands import command_help
 from .common import (
     Output,
     add_contact_options,
@@ -34,7 +35,7 @@ from .common import (
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "modes",
-        help="natural frequencies, damping and labelled mode shapes",
+        help=command_help("modes"),
         description="Modal analysis of the ring tire. At rest: real modes labelled by order, "
         "in/out-of-phase and (with a patch) symmetric/antisymmetric about the patch centre. "
         "Rolling (--speed > 0): complex ground-frame modes with signed order and direction.",
@@ -50,7 +51,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "analytic",
-        help="closed-form frequencies of the undeformed ring (eq. 12)",
+        help=command_help("analytic"),
         description="Exact roots of eq. 12 per order n: in-phase and out-of-phase frequencies.",
     )
     p.add_argument("--nmax", metavar="N", type=int, default=12,
@@ -61,7 +62,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "patch",
-        help="static footprint for a load (or a deflection): length, pressure, stiffness",
+        help=command_help("patch"),
         description="Static contact of the tire pressed on a flat road, computed by the model "
         "itself (unilateral road springs on the contact zone, active-set continuation in the "
         "rim deflection): deflection, footprint length (road length between the edges where "
@@ -85,7 +86,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "convergence",
-        help="FDM frequencies vs number of elements against the exact ones (Fig. 14)",
+        help=command_help("convergence"),
         description="Undeformed tire at rest: in-phase and out-of-phase frequency of each order "
         "from the assembled FDM model on each mesh, against the exact roots of eq. 12, with "
         "the observed convergence order (log-log slope of the error against δθ = 2π/N, "
@@ -101,7 +102,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "patch-sweep",
-        help="split of the mode pairs vs contact-patch length (Fig. 17)",
+        help=command_help("patch-sweep"),
         description="Tire at rest: frequency of the symmetric member (antinode at the patch "
         "centre, Kindt's 'extr', the one the patch stiffens) and the antisymmetric member "
         "(node there, '0', barely moves) of each order, against patch length, as a shift over "

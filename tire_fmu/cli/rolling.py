@@ -9,6 +9,7 @@ import numpy as np
 from ..core import critical_speed
 from ..core.standing_waves import MAX_SCANNED_SPEED_M_S
 from ..core.studies import dispersion_at_speed, paper_speed_m_s, speed_sweep
+from .commands import command_help
 from .common import (
     Output,
     add_mesh_option,
@@ -49,7 +50,7 @@ def _add_rolling_options(p: argparse.ArgumentParser, patch_default: float | None
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "dispersion",
-        help="ground-frame frequency vs signed wavenumber at one speed (Fig. 18)",
+        help=command_help("dispersion"),
         description="Dispersion of the rolling tire in the ground frame: frequency of each "
         "signed order n (wavenumber k = n/R; n > 0 travels against the rotation and falls "
         "with speed, n < 0 with it and rises) for the undeformed tire, and with "
@@ -65,7 +66,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "speed-sweep",
-        help="ground-frame frequencies vs speed, undeformed and loaded (Fig. 19)",
+        help=command_help("speed-sweep"),
         description="Frequencies of the rolling tire in the ground frame against speed: each "
         "undeformed pair splits into a backward (n > 0, falling) and a forward (n < 0, "
         "rising) wave; the loaded tire's complex modes are listed at each speed.",
@@ -82,7 +83,7 @@ def register(subparsers) -> None:
 
     p = subparsers.add_parser(
         "critical-speed",
-        help="standing-wave speed of the mesh and why it depends on N",
+        help=command_help("critical-speed"),
         description="Lowest speed at which a ground-frame frequency of the undeformed rolling "
         "tire reaches zero (a standing wave under the patch).",
     )

@@ -82,3 +82,28 @@ def reduced_frequency_response(reduced: ReducedModel, input_name: str, output_na
     response = reduced.physical_frequency_response(input_name, freqs)[row]
     label = f"reduced ({reduced.settings.method}, {reduced.n_states} states)"
     return FrequencyResponse(freqs, response, input_name, output_name, label)
+
+
+def sine_response(times_s, values, omega_rad_s: float, decaying=()) -> np.ndarray:
+    """Complex amplitude H of the steady response y = Im(H e^{iωt}) (+ a constant) in sampled
+    ``values`` (samples x signals), fitted by least squares together with free decaying
+    modes e^{λt} for each ``decaying`` eigenvalue λ (one of each conjugate pair): the fit
+    needs no wait for a lightly damped transient to die out."""
+    t = np.asarray(times_s, dtype=float)
+    columns = [np.sin(omega_rad_s * t), np.cos(omega_rad_s * t), np.ones(t.size)]
+    for lam in decaying:
+        envelope = np.exp(lam.real * (t - t[0]))
+        columns += [envelope * np.cos(lam.imag * t), envelope * np.sin(lam.imag * t)]
+    coef = np.linalg.lstsq(np.column_stack(columns), np.asarray(values), rcond=None)[0]
+    return coef[0] + 1j * coef[1]
+
+
+def ringing_modes(a: np.ndarray, f_max_hz: float = 500.0, slowest_decay_s: float = 0.02):
+    """Eigenvalues of a state matrix that ring long enough to matter in a fit window (decay
+    time above ``slowest_decay_s``, below ``f_max_hz``), one of each conjugate pair. Faster
+    modes are better left out and waited for: near the forcing frequency they would make the
+    fit ill-conditioned."""
+    lam = np.linalg.eigvals(np.asarray(a))
+    keep = (lam.imag >= 0) & (-lam.real < 1.0 / slowest_decay_s) \
+        & (np.abs(lam) < 2 * np.pi * f_max_hz)
+    return lam[keep]

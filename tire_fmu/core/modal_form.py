@@ -21,37 +21,58 @@ class ModalForm:
 
 
 def diagonalise(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> ModalForm:
-    """Modal form of a real (A, B, C): eigenvectors V, B_q = V⁻¹B (one solve), C_q = C V."""
-    values, vectors = sla.eig(a)
-    b_modal = sla.solve(vectors, b)
-    c_modal = c @ vectors
+    """Modal form of a real (A, B, C): eigenvectors V, B_q = V⁻¹B, C_q = C V.
+
+    B_q comes from one real solve: LAPACK returns each conjugate pair's vectors as v and v̄,
+    and x = Σ 2 Re(v q) = Σ (2 Re v) Re q - (2 Im v) Im q over the kept members, so the real
+    matrix [2 Re v, -2 Im v] maps (Re q, Im q) to x (a quarter of the complex solve's work).
+    """
+    values, vectors = sla.eig(a, overwrite_a=False, check_finite=False)
     real = values.imag == 0
     keep = (values.imag > 0) | real
-    b_modal[real] = b_modal[real].real  # real eigenvalue, real eigenvector: drop rounding dust
-    c_modal[:, real] = c_modal[:, real].real
-    factor = np.where(real, 1.0, 2.0)[keep]
-    order = np.argsort(np.abs(values[keep]), kind="stable")
+    kept = np.flatnonzero(keep)
+    cplx = values[kept].imag != 0
+    width = np.where(cplx, 2, 1)
+    first = np.concatenate([[0], np.cumsum(width)[:-1]]).astype(int)
+    if width.sum() != a.shape[0]:  # pairs LAPACK did not return as v, v̄: solve in complex
+        b_modal = sla.solve(vectors, b)[kept]
+    else:
+        basis = np.empty(a.shape)
+        basis[:, first] = np.where(cplx, 2.0, 1.0)[None, :] * vectors[:, kept].real
+        basis[:, first[cplx] + 1] = -2.0 * vectors[:, kept[cplx]].imag
+        coordinates = sla.solve(basis, b, check_finite=False)
+        b_modal = coordinates[first].astype(complex)
+        b_modal[cplx] += 1j * coordinates[first[cplx] + 1]
+    c_modal = c @ vectors[:, kept]
+    b_modal[~cplx] = b_modal[~cplx].real  # real eigenvalue, real eigenvector: drop rounding dust
+    c_modal[:, ~cplx] = c_modal[:, ~cplx].real
+    factor = np.where(cplx, 2.0, 1.0)
+    order = np.argsort(np.abs(values[kept]), kind="stable")
     return ModalForm(
-        eigenvalues=values[keep][order],
-        b=b_modal[keep][order],
-        c=(c_modal[:, keep] * factor[None, :])[:, order],
+        eigenvalues=values[kept][order],
+        b=b_modal[order],
+        c=(c_modal * factor[None, :])[:, order],
     )
 
 
 def diagonalise_proportional(stiffness, mass_diag, alpha, beta, b_disp, b_vel, out_disp,
-                             out_vel) -> ModalForm:
+                             out_vel, eigenpairs=None) -> ModalForm:
     """Modal form of M ü + (αM + βK) u̇ + K u = B_z r + B_v ṙ from the real modes of (K, M).
 
     Proportional damping decouples the real modes, so the state-space modes follow from one
     symmetric eigenproblem of half the size: per mode (unit modal mass) η̈ + c η̇ + ω² η = ...
     with c = α + βω², written in the same momentum-like state as the full model,
     p = η̇ - φᵀB_v r:  [η̇, ṗ] = [[0, 1], [-ω², -c]] [η, p] + [φᵀB_v, φᵀB_z - c φᵀB_v] r,
-    whose 2×2 eigenproblem is solved in closed form.
+    whose 2×2 eigenproblem is solved in closed form. ``eigenpairs`` (ω², mass-normalised
+    shapes) of (K, M), when the caller has them, spare the symmetric eigenproblem.
     """
     import scipy.sparse as sp
 
-    dense = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness)
-    omega2, phi = sla.eigh(dense, np.diag(mass_diag))
+    if eigenpairs is None:
+        dense = stiffness.toarray() if sp.issparse(stiffness) else np.asarray(stiffness)
+        omega2, phi = sla.eigh(dense, np.diag(mass_diag))
+    else:
+        omega2, phi = eigenpairs
     omega2 = np.clip(omega2, 0.0, None)
     c = alpha + beta * omega2
     beta_v = phi.T @ b_vel

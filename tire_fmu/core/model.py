@@ -154,8 +154,7 @@ class TireModel:
     def contact_damping(self) -> sp.csr_matrix:
         # The contact spring stands for tread rubber in the patch: same β, but it deforms
         # against the road, so it is damped on the ground-frame rate, not the material rate.
-        return _on_tread(self.grid, self.patch.node_indices,
-                         self.patch.node_damping_n_s_per_m[self.patch.contact_positions])
+        return (self.tire.beta * self.contact_stiffness).tocsr()
 
     @cached_property
     def stiffness(self) -> sp.csr_matrix:

@@ -237,7 +237,7 @@ def _export_record(native: NativeModel) -> dict[str, str]:
     """The reduction settings and the model's size, machine-readable, for the annotations."""
     r = native.reduced
     s = r.settings
-    op = r.metadata["operating_point"]
+    op = r.metadata.operating_point
     record = {
         "method": s.method,
         "contribution_threshold": repr(s.contribution_threshold),
@@ -251,9 +251,9 @@ def _export_record(native: NativeModel) -> dict[str, str]:
         "states": str(r.n_states),
         "road_delay_groups": str(r.n_inputs - 1),
         "road_delays_s": " ".join(repr(float(t)) for t in r.input_delays_s[1:]),
-        "patch_length_m": repr(float(op["patch_length_m"])),
-        "patch_load_n": repr(float(op["load_n"])),
-        "critical_speed_m_s": repr(float(op["critical_speed_m_s"])),
+        "patch_length_m": repr(float(op.patch_length_m)),
+        "patch_load_n": repr(float(op.load_n)),
+        "critical_speed_m_s": repr(float(op.critical_speed_m_s)),
     }
     if r.report is not None:
         record["max_relative_frf_error"] = repr(float(r.report.max_relative_error))

@@ -79,26 +79,26 @@ def export_parameters(reduced: ReducedModel, operating_point: OperatingPoint | N
     patch load comes out of a bisection and differs in the last digits. Without an operating
     point, or when the patch length was given instead, it is the patch's load.
     """
-    op = reduced.metadata["operating_point"]
+    op = reduced.metadata.operating_point
     settings = reduced.settings
-    load = op["load_n"]
+    load = op.load_n
     if operating_point is not None and operating_point.requested_load_n is not None:
         load = operating_point.requested_load_n
     if operating_point is not None:
         allow_supercritical = operating_point.allow_supercritical
     else:  # only a supercritical export needed it
-        allow_supercritical = op["speed_m_s"] >= op["critical_speed_m_s"]
+        allow_supercritical = op.speed_m_s >= op.critical_speed_m_s
     values = {
         "load": float(load),
-        "speed": float(op["speed_m_s"]),
-        "n_elements": int(op["n_elements"]),
+        "speed": float(op.speed_m_s),
+        "n_elements": int(op.n_elements),
         "f_max": float(settings.f_max_hz or 0.0),
         "n_modes": int(settings.n_modes or 0),
         "static_correction": bool(settings.static_correction),
         "allow_supercritical": bool(allow_supercritical),
     }
-    tire = reduced.metadata["tire"]
-    values.update({f.name: float(tire[f.name]) for f in fields(TireParameters)})
+    tire = reduced.metadata.tire
+    values.update({f.name: float(getattr(tire, f.name)) for f in fields(TireParameters)})
     return values
 
 
@@ -154,7 +154,7 @@ def _guid(arrays, reduced, parameters, model_identifier) -> str:
 
 def describe(reduced: ReducedModel, parameters: dict) -> str:
     """One paragraph: what the FMU is and the operating point and settings it was built for."""
-    op = reduced.metadata["operating_point"]
+    op = reduced.metadata.operating_point
     s = reduced.settings
     groups = reduced.n_inputs - 1
     if s.method == "modal":
@@ -170,8 +170,8 @@ def describe(reduced: ReducedModel, parameters: dict) -> str:
     return (
         f"Open in-plane modal ring tire (tire_fmu {tire_fmu.__version__}), the reduced model "
         f"compiled to C: no Python needed on the host. Exported for load {parameters['load']:.8g} "
-        f"N, speed {parameters['speed']:g} m/s, N = {op['n_elements']} elements, patch "
-        f"{op['patch_length_m'] * 100:.4g} cm ({op['patch_nodes']} nodes), inflation pressure "
+        f"N, speed {parameters['speed']:g} m/s, N = {op.n_elements} elements, patch "
+        f"{op.patch_length_m * 100:.4g} cm ({op.patch_nodes} nodes), inflation pressure "
         f"{parameters['inflation_pressure']:g} Pa; {how}, static correction "
         f"{'on' if s.static_correction else 'off'}: {reduced.n_modes} modes "
         f"({reduced.n_states} states), {groups} road delay group{'s' * (groups != 1)}{error}. "
@@ -273,9 +273,9 @@ def _variable_rows(native: NativeModel) -> str:
 def model_summary(native: NativeModel) -> str:
     """The line the FMU logs when it starts."""
     r, p = native.reduced, native.parameters
-    op = r.metadata["operating_point"]
+    op = r.metadata.operating_point
     return (f"exported reduced model, N = {p['n_elements']}, {r.n_modes} modes "
-            f"({r.n_states} states), patch {op['patch_length_m'] * 100:.3g} cm, static load "
+            f"({r.n_states} states), patch {op.patch_length_m * 100:.3g} cm, static load "
             f"{r.static_outputs['rim_Fz']:.6g} N, speed {p['speed']:g} m/s, "
             f"{r.n_inputs - 1} road delay group(s); tire_fmu {tire_fmu.__version__}")
 

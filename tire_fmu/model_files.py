@@ -1,5 +1,9 @@
 """Saving and loading reduced models: .npz (no pickles), MATLAB .mat, python-control.
 
+File formats are an adapter over the physics core (which knows no files), like the CLI and
+the FMUs: this module turns a :class:`~tire_fmu.core.reduction.ReducedModel` into files and
+back.
+
 ``.npz`` holds the diagonal modal form as plain arrays plus a JSON metadata string (tire data,
 operating point, settings, error report, names, units) with a SHA-256 checksum of every array,
 so a tampered or truncated file is refused with a message saying what is wrong. Loading gives
@@ -19,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .io_model import OUTPUT_UNITS
-from .reduction import ErrorReport, ReducedModel, ReductionSettings
-from .contact import RoadWindows
-from .io_model import OUTPUTS as OUTPUT_NAMES
+from .core.contact import RoadWindows
+from .core.io_model import OUTPUT_UNITS
+from .core.io_model import OUTPUTS as OUTPUT_NAMES
+from .core.reduction import ErrorReport, ReducedModel, ReductionRecord, ReductionSettings
 
 FORMAT = "tire_fmu.reduced-model/2"
 ARRAYS = ("eigenvalues", "b", "c", "d", "e", "road_window_early_s", "road_window_late_s")
@@ -62,7 +66,7 @@ def metadata(reduced: ReducedModel) -> dict:
         "static_outputs": reduced.static_outputs,
         "settings": asdict(reduced.settings),
         "report": reduced.report.to_dict() if reduced.report else None,
-        "model": reduced.metadata,
+        "model": reduced.metadata.to_dict() if reduced.metadata else None,
     }
 
 
@@ -118,7 +122,7 @@ def load_npz(path) -> ReducedModel:
                                  contents["road_window_late_s"], float(meta["road_front_m"])),
         static_outputs={k: float(v) for k, v in meta["static_outputs"].items()},
         settings=ReductionSettings(**settings_values),
-        metadata=meta["model"],
+        metadata=ReductionRecord.from_dict(meta["model"]) if meta.get("model") else None,
         report=report,
         output_names=tuple(meta["outputs"]),
     )

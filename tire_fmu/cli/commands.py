@@ -1,0 +1,33 @@
+"""Which module implements each ``tire-fmu`` command, and its one-line help.
+
+Kept free of numpy and scipy: ``tire-fmu --help`` lists the commands from this table alone,
+and a command's module (with the physics core behind it) is imported only when it is used.
+"""
+
+from __future__ import annotations
+
+#: command -> (module in tire_fmu.cli, help line), in the order --help lists them
+COMMANDS: dict[str, tuple[str, str]] = {
+    "modes": ("ring", "natural frequencies, damping and labelled mode shapes"),
+    "analytic": ("ring", "closed-form frequencies of the undeformed ring (eq. 12)"),
+    "patch": ("ring", "static footprint for a load (or a deflection): length, pressure, "
+              "stiffness"),
+    "convergence": ("ring", "FDM frequencies vs number of elements against the exact ones "
+                    "(Fig. 14)"),
+    "patch-sweep": ("ring", "split of the mode pairs vs contact-patch length (Fig. 17)"),
+    "dispersion": ("rolling", "ground-frame frequency vs signed wavenumber at one speed "
+                   "(Fig. 18)"),
+    "speed-sweep": ("rolling", "ground-frame frequencies vs speed, undeformed and loaded "
+                    "(Fig. 19)"),
+    "critical-speed": ("rolling", "standing-wave speed of the mesh and why it depends on N"),
+    "frf": ("reduce", "frequency response of the full model, and of a reduced one (Bode plot)"),
+    "reduce": ("reduce", "build a reduced model and report its size and accuracy"),
+    "export": ("reduce", "write a reduced model: .npz (with metadata), MATLAB .mat "
+               "(A, B, C, D) or a native C FMU (.fmu)"),
+    "build-fmu": ("fmu", "build TireModal.fmu, the FMI 2.0 co-simulation FMU"),
+    "fit": ("fit", "identify tire data from measured natural frequencies"),
+}
+
+
+def command_help(name: str) -> str:
+    return COMMANDS[name][1]
