@@ -52,15 +52,15 @@ def test_the_delay_line_equals_the_history_search(models):
     windows = models[15.0].windows
     line, search = RoadReader(windows), RoadReader(windows, delay_line=False)
     n = windows.early_s.size
-    a, b = (np.zeros(n), np.zeros(n)), (np.zeros(n), np.zeros(n))
+    a, b = np.zeros(2 * n), np.zeros(2 * n)
     steps = [1e-4] * 650 + [2e-4] * 350 + [1e-4] * 700
     t, used = 0.0, []
     for h in steps:
         z, v = _road(t)
-        line.read(t, z, v, h, *a)
-        search.read(t, z, v, h, *b)
-        np.testing.assert_allclose(a[0], b[0], rtol=1e-9, atol=1e-15)
-        np.testing.assert_allclose(a[1], b[1], rtol=1e-9, atol=1e-12)
+        line.read(t, z, v, h, a)
+        search.read(t, z, v, h, b)
+        np.testing.assert_allclose(a[:n], b[:n], rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(a[n:], b[n:], rtol=1e-9, atol=1e-12)
         used.append(line._line is not None)
         t += h
     assert search._line is None

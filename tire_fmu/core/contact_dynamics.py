@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg.blas import dgemv
 
 from .contact import ContactPatch, RoadWindows, _edges, contact_force
 from .free_ring import FreeRingModel, RingTruncation, free_ring_model
@@ -167,6 +168,123 @@ class _Kernel:
     interface: _Interface
 
 
+#: Steps in a row with one kernel and active set before the fast step is built for them.
+_FAST_AFTER = 8
+_FAST_CACHE_SIZE = 32
+
+
+class _FastStep:
+    """A whole step (the start re-solve and the end solve of ContactSimulator) as one linear
+    map, for one kernel (the same h as the last step) and one active set.
+
+    With the active set fixed, every quantity of the step is linear in the ring readout
+    r = base_q @ q and the contact's state array w: the map is built by running the same
+    operations on identity columns, so it is the general path's arithmetic rearranged. A step
+    is then: r, y = T @ [r; w], a check that the active set did not change (else the general
+    path runs, nothing changed), q advanced by one product, and w's new part copied from y.
+    """
+
+    def __init__(self, sim: ContactSimulator, kernel: _Kernel, active: np.ndarray):
+        nz, n_read = sim.n_zone, sim._n_read
+        n = sim._rw.size
+        eye = np.eye(n)
+        r = eye[:n_read]
+        w = eye[n_read:]
+        df, pen, rate = w[:nz], w[nz:2 * nz], w[2 * nz:3 * nz]
+        z_s, vz_s = w[3 * nz], w[3 * nz + 1]
+        h_s, s_s = w[3 * nz + 2:4 * nz + 2], w[4 * nz + 2:5 * nz + 2]
+        ring = w[5 * nz + 2:5 * nz + 5]
+        z, vz = w[5 * nz + 5], w[5 * nz + 6]
+        heights, slopes = w[5 * nz + 7:6 * nz + 7], w[6 * nz + 7:7 * nz + 7]
+        one = w[7 * nz + 7]
+        f_s, m = sim.f_static[:, None], kernel.interface.m
+        k, c, sec = sim.k[:, None], sim.c[:, None], sim.sec[:, None]
+        inverse = np.linalg.inv(np.eye(int(active.sum())) - kernel.interface.s[
+            np.ix_(active, active)])
+
+        def solve(base):
+            f = np.zeros((nz, n))
+            f[active] = inverse @ base[:nz][active]
+            return f
+
+        # start: the last step's end solved again with the inputs given now
+        pen1 = pen + sim._pen_rim[:, None] * (z - z_s) + sec * (heights - h_s)
+        rate1 = rate + sim._rate_rim[:, None] * (vz - vz_s) + sec * (slopes - s_s)
+        ring1 = ring + sim._out_rim[:, None] * (z - z_s) + sim._out_rim_rate[:, None] * (vz - vz_s)
+        f_old = f_s * one + df
+        base1 = np.vstack([k * pen1 + c * rate1, pen1, rate1]) - m @ f_old
+        f1 = solve(base1)
+        comb1 = base1 + m @ f1
+        change = f1 - f_old
+        ring1 = ring1 + kernel.out_f @ change
+        # the substep: its base reads q after the start's correction, q + G_f change
+        k2 = 2 * sim.ring.n_modes
+        base_q = kernel.base[:, :k2]
+        g_f = kernel.gain[:, 2 + nz:]
+        df1 = f1 - f_s * one
+        buffer_part = kernel.base[:, k2:]  # on [z, ż, Δf(t), Δf(t+h), heights, slopes, 1]
+        inputs = np.vstack([z, vz, df1, np.zeros((nz, n)), heights, slopes, one])
+        base2 = r + (base_q @ g_f) @ change + buffer_part @ inputs
+        f2 = solve(base2)
+        comb2 = base2[:3 * nz] + m @ f2
+        df2 = f2 - f_s * one
+        ring2 = base2[3 * nz:] + kernel.out_f @ df2
+        h = kernel.h
+        rows = [df2, comb2[nz:2 * nz], comb2[2 * nz:], z + h * vz, vz, heights + h * slopes,
+                slopes, ring2]
+        self.new_state = 5 * nz + 5  # rows of y that are the state's first part, in order
+        rows += [change, z, vz, df1, df2]  # what advances q
+        self.q_rows = slice(self.new_state, self.new_state + 3 * nz + 2)
+        rows += [comb1[:nz], comb1[nz:2 * nz], comb2[:nz], comb2[nz:2 * nz]]  # the checks
+        self.checks = slice(self.q_rows.stop, self.q_rows.stop + 4 * nz)
+        rows += [sim.cos[None, :] @ f2]
+        self.contact_row = self.checks.stop
+        self.t = np.asfortranarray(np.vstack([np.atleast_2d(x) for x in rows]))
+        self.base_q = np.asfortranarray(base_q)
+        decayed = (g_f[0::2] + 1j * g_f[1::2]) * kernel.decay[:, None]
+        self.u = np.asfortranarray(np.hstack([_gain_pairs(decayed), kernel.gain]))
+        self.decay = kernel.decay
+        self.pattern = np.tile(active, 4).tobytes()
+        self.check = not sim.linear
+        self.signs = np.zeros(4 * nz, dtype=bool)
+        self.y = np.zeros(self.t.shape[0])
+        # the footprint's edges lie between the same nodes while the active set holds
+        on = np.flatnonzero(active)
+        x = sim.x_road
+        self.edges = None if not on.size or on[0] == 0 or on[-1] == nz - 1 else (
+            int(on[0]), int(on[0] - 1), float(x[on[0]]), float(x[on[0] - 1] - x[on[0]]),
+            int(on[-1]), int(on[-1] + 1), float(x[on[-1]]), float(x[on[-1] + 1] - x[on[-1]]))
+
+    def advance(self, sim: ContactSimulator, z: float, vz: float) -> bool:
+        nz = sim.n_zone
+        state, rw = sim._state, sim._rw
+        state[5 * nz + 5], state[5 * nz + 6] = z, vz
+        dgemv(1.0, self.base_q, sim._q_pairs, 0.0, rw, 0, 1, 0, 1, 0, 1)
+        y = self.y
+        dgemv(1.0, self.t, rw, 0.0, y, 0, 1, 0, 1, 0, 1)
+        if self.check:
+            np.greater(y[self.checks], 0.0, out=self.signs)
+            if self.signs.tobytes() != self.pattern:
+                return False  # the active set changes: the general path takes this step
+        sim._q *= self.decay
+        dgemv(1.0, self.u, y[self.q_rows], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
+        state[:self.new_state] = y[:self.new_state]
+        ring = sim.static_ring + state[5 * nz + 2:5 * nz + 5]
+        edges = self.edges
+        if edges is None:
+            length = sim.contact_length()
+        else:  # _edges with the nodes known: the same interpolation, in floats
+            pen = sim._s_pen
+            a, b, xa, dxa, c, d, xc, dxc = edges
+            pa, pb, pc, pd = float(pen[a]), float(pen[b]), float(pen[c]), float(pen[d])
+            front = xa + (min(pa / (pa - pb), 1.0) if pa > pb else 0.0) * dxa
+            rear = xc + (min(pc / (pc - pd), 1.0) if pc > pd else 0.0) * dxc
+            length = front - rear
+        sim._values = (float(ring[0]), float(ring[1]), float(y[self.contact_row]),
+                       float(ring[2]), length)
+        return True
+
+
 def _pairs(matrix: np.ndarray) -> np.ndarray:
     """Re(M q) as a real matrix on q stored as (re, im) pairs."""
     out = np.empty((matrix.shape[0], 2 * matrix.shape[1]))
@@ -240,15 +358,76 @@ class ContactSimulator:
         self._q_pairs = self._buffer[self._q_slice]
         self._q = self._q_pairs.view(complex)
         self._kernels: dict[float, _Step] = {}
-        self._road_h = np.zeros(z)
-        self._road_v = np.zeros(z)
+        # The contact's own state lives in one array behind the ring readout r that the fast
+        # step reads (see _FastStep): [r (3Z + 3) | Δf, p, ṗ, seen z, ż, heights, slopes,
+        # ring outputs, inputs z, ż, heights, slopes, 1].
+        self._n_read = 3 * z + 3
+        self._rw = np.zeros(self._n_read + 7 * z + 8)
+        self._rw[-1] = 1.0
+        state = self._rw[self._n_read:]
+        self._state = state
+        self._s_df, self._s_pen, self._s_rate = state[:z], state[z:2 * z], state[2 * z:3 * z]
+        self._s_seen_h, self._s_seen_s = state[3 * z + 2:4 * z + 2], state[4 * z + 2:5 * z + 2]
+        self._s_ring = state[5 * z + 2:5 * z + 5]
+        self._s_heights, self._s_slopes = state[5 * z + 7:6 * z + 7], state[6 * z + 7:7 * z + 7]
+        self._road_h, self._road_v = self._s_heights, self._s_slopes  # the road reads here
+        self._s_road = state[5 * z + 7:7 * z + 7]  # both, contiguous
+        self._fast: dict[tuple, _FastStep] = {}
+        self._fast_run = 0  # steps in a row with the same kernel and active set
         self.solver_fallbacks = 0
         self.reset(start_time)
+
+    # -- the contact's state, in the state array ---------------------------------------------
+    @property
+    def df(self) -> np.ndarray:
+        return self._s_df
+
+    @df.setter
+    def df(self, value) -> None:
+        self._s_df[:] = value
+
+    @property
+    def penetration(self) -> np.ndarray:
+        return self._s_pen
+
+    @penetration.setter
+    def penetration(self, value) -> None:
+        self._s_pen[:] = value
+
+    @property
+    def rate(self) -> np.ndarray:
+        return self._s_rate
+
+    @rate.setter
+    def rate(self, value) -> None:
+        self._s_rate[:] = value
+
+    @property
+    def _seen(self) -> tuple:
+        z = self.n_zone
+        return (float(self._state[3 * z]), float(self._state[3 * z + 1]), self._s_seen_h,
+                self._s_seen_s)
+
+    @_seen.setter
+    def _seen(self, value) -> None:
+        z = self.n_zone
+        self._state[3 * z], self._state[3 * z + 1] = value[0], value[1]
+        self._s_seen_h[:], self._s_seen_s[:] = value[2], value[3]
+
+    @property
+    def _ring_out(self) -> np.ndarray:
+        return self._s_ring
+
+    @_ring_out.setter
+    def _ring_out(self, value) -> None:
+        self._s_ring[:] = value
 
     # -- state ---------------------------------------------------------------------------
     def reset(self, start_time: float = 0.0) -> None:
         self.time = float(start_time)
         self._buffer[:-1] = 0.0
+        self._rw[:-1] = 0.0
+        self._fast_run = 0
         z = self.n_zone
         self.df = np.zeros(z)  # force deviation from static at `time`
         self.active = self.static_active.copy()
@@ -284,8 +463,8 @@ class ContactSimulator:
 
     def at_zone_edge(self) -> bool:
         """Whether a zone end node pushes: the footprint may reach beyond the zone."""
-        active = self.df > -self.f_static
-        return bool(active[0] or active[-1])
+        df, fs = self._s_df, self.f_static
+        return df[0] > -fs[0] or df[-1] > -fs[-1]
 
     # -- stepping ----------------------------------------------------------------------------
     def step(self, h: float, rim_z: float, rim_vz: float, road_z: float, road_vz: float
@@ -303,7 +482,14 @@ class ContactSimulator:
         step = self._kernels.get(h) or self._kernel(h)
         kernel, n_sub = step.last, step.n_sub
         heights, slopes = self._road_h, self._road_v
-        self.road.read(self.time, road_z, road_vz, h, heights, slopes)
+        self.road.read(self.time, road_z, road_vz, h, self._s_road)
+        steady = n_sub == 1 and kernel is self._last
+        if steady and self._fast_run >= _FAST_AFTER and self._fast_step(kernel, rim_z, rim_vz):
+            self._fast_run += 1
+            self.time += h
+            self._last_step_s = h
+            return self._values
+        before = self.active.copy()
         self._start(rim_z, rim_vz, heights, slopes)
         buffer = self._buffer
         buffer[self._heights], buffer[self._slopes] = heights, slopes
@@ -311,8 +497,28 @@ class ContactSimulator:
             self._substep(kernel, rim_z + i * kernel.h * rim_vz, rim_vz)
         self.time += h
         self._last_step_s = h
+        # steps in a row on one kernel that kept their active set: the rule for the fast
+        # step, a function of the state alone (so a restored state takes the same path)
+        self._fast_run = self._fast_run + 1 if steady and np.array_equal(
+            before, self.active) else 0
         self._values = self._outputs()
         return self._values
+
+    def _fast_step(self, kernel: _Kernel, z: float, vz: float) -> bool:
+        """The step as one linear map, when the active set stays what it was (see
+        _FastStep); False, with nothing changed, when it does not."""
+        active = self.static_active if self.linear else self.active
+        key = (kernel.h, active.tobytes())
+        fast = self._fast.get(key)
+        if fast is None:
+            fast = _FastStep(self, kernel, active)
+            if len(self._fast) >= _FAST_CACHE_SIZE:
+                self._fast.pop(next(iter(self._fast)))
+            self._fast[key] = fast
+        if not fast.advance(self, z, vz):
+            self._fast_run = 0
+            return False
+        return True
 
     def outputs_with(self, rim_z: float, rim_vz: float, road_z: float, road_vz: float
                      ) -> tuple[float, ...]:
@@ -321,7 +527,7 @@ class ContactSimulator:
         self._check(1.0, (rim_z, rim_vz, road_z, road_vz))
         heights, slopes = self._road_h, self._road_v
         # recorded like a step's own sample: the step at this point replaces it
-        self.road.read(self.time, road_z, road_vz, self._last_step_s, heights, slopes)
+        self.road.read(self.time, road_z, road_vz, self._last_step_s, self._s_road)
         self._start(rim_z, rim_vz, heights, slopes)
         self._values = self._outputs()
         return self._values
@@ -560,10 +766,11 @@ class ContactState:
     history_v: np.ndarray
     road_line: np.ndarray  # the delay line's buffer while it runs (empty otherwise)
     road_run: np.ndarray  # uniform samples counted so far (-1: count again)
+    fast_run: np.ndarray  # steps in a row that kept their kernel and active set
     outputs: np.ndarray
 
     _ARRAYS = ("q", "df", "active", "penetration", "rate", "seen", "ring_out", "history_t",
-               "history_z", "history_v", "road_line", "road_run", "outputs")
+               "history_z", "history_v", "road_line", "road_run", "fast_run", "outputs")
 
     def to_bytes(self) -> bytes:
         """A self-checking byte string: a JSON header (format, scalars, array layout, SHA-256
@@ -622,6 +829,7 @@ def _state_methods():
             active=self.active.copy(), penetration=self.penetration.copy(),
             rate=self.rate.copy(), seen=np.concatenate([[z, vz], heights, slopes]),
             ring_out=self._ring_out.copy(), **self.road.get_state(),
+            fast_run=np.array([self._fast_run], dtype=np.int64),
             outputs=np.array(self._values))
 
     def set_state(self: ContactSimulator, state: ContactState) -> None:
@@ -653,6 +861,7 @@ def _state_methods():
         self._seen = (float(seen[0]), float(seen[1]), seen[2:2 + nz].copy(),
                       seen[2 + nz:].copy())
         self._ring_out = state.ring_out.copy()
+        self._fast_run = int(state.fast_run[0]) if state.fast_run.size == 1 else 0
         self._last_step_s = state.last_step_s
         self._last = (None if math.isnan(state.last_step_s)
                       else self._kernel(state.last_step_s).last)

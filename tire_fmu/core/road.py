@@ -138,31 +138,31 @@ class RoadReader:
             self._line, self._line_h = line, h
 
     # -- reading ---------------------------------------------------------------------------
-    def read(self, now: float, z: float, vz: float, h: float, heights: np.ndarray,
-             slopes: np.ndarray) -> None:
+    def read(self, now: float, z: float, vz: float, h: float, out: np.ndarray) -> None:
         """Record the sample of communication point ``now`` (replacing one already there) and
-        write the road under each node at ``now`` into ``heights`` and ``slopes``.
+        write the road under each node at ``now`` into ``out`` = [heights, slopes].
 
         ``h`` is the step about to be taken: once the samples are h apart over the whole
         reach of the windows, a delay line with fixed weights takes over (the rule depends on
         the history and h alone, so a restored state takes the same path, bit for bit).
         """
+        n = self.windows.early_s.size
         if not self.delayed:
-            heights[:] = z
-            slopes[:] = vz
+            out[:n] = z
+            out[n:] = vz
             return
         line = self._line
         if line is not None and abs(h - self._line_h) <= SAME_POINT_EPS * (abs(now) + h):
             line.push(now, z, vz)
-            line.read_into(heights, slopes)
+            line.read_into(out)
             return
         if line is not None:  # the step size changed: back to the recorded history
             self.history_t, self.history_z, self.history_v = line.history()
             self._line, self._uniform_run = None, None
         appended = self._record(now, z, vz)
         if not (h > 0 and math.isfinite(h)):  # no step size yet: read the history
-            heights[:], slopes[:] = window_reads(self.history_t, self.history_z,
-                                                 self.history_v, now, self.windows)
+            out[:n], out[n:] = window_reads(self.history_t, self.history_z,
+                                            self.history_v, now, self.windows)
             return
         needed = _DelayLine.samples_needed(self.windows, h)
         resolution = SAME_POINT_EPS * (abs(now) + h)
@@ -176,10 +176,10 @@ class RoadReader:
             self._line = _DelayLine(self.windows, h, self.history_t[-needed:],
                                     self.history_z[-needed:], self.history_v[-needed:])
             self._line_h = h
-            self._line.read_into(heights, slopes)
+            self._line.read_into(out)
             return
-        heights[:], slopes[:] = window_reads(self.history_t, self.history_z, self.history_v,
-                                             now, self.windows)
+        out[:n], out[n:] = window_reads(self.history_t, self.history_z, self.history_v, now,
+                                        self.windows)
 
     def _record(self, now: float, z: float, vz: float) -> bool:
         """Add the sample of ``now``, or replace the newest if it is that point again."""
@@ -245,7 +245,6 @@ class _DelayLine:
                  weights_z[end, 3]])
         self._combine = np.asfortranarray(combine)
         self._gathered = np.zeros(self._index.size)
-        self._out = np.zeros(2 * n)
         self._buffer = np.zeros(6 * self.size)  # each sample twice: [z, v h, C] x 2 windows
         self._start = 0  # buffer row of the newest sample
         self.newest_time = math.nan
@@ -282,11 +281,10 @@ class _DelayLine:
             # never accumulates rounding over a long run
             buffer[2::3] -= c
 
-    def read_into(self, heights: np.ndarray, slopes: np.ndarray) -> None:
-        np.take(self._buffer, self._index + 3 * self._start, out=self._gathered)
-        dgemv(1.0, self._combine, self._gathered, 0.0, self._out, 0, 1, 0, 1, 0, 1)
-        n = heights.size
-        heights[:], slopes[:] = self._out[:n], self._out[n:]
+    def read_into(self, out: np.ndarray) -> None:
+        """[heights, slopes] into ``out`` (contiguous), in place."""
+        self._buffer.take(self._index + 3 * self._start, out=self._gathered)
+        dgemv(1.0, self._combine, self._gathered, 0.0, out, 0, 1, 0, 1, 0, 1)
 
     def history(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rows = (self._start + np.arange(self.size)) % self.size  # newest first
