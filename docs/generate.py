@@ -173,6 +173,28 @@ def _demo_summary() -> tuple[dict, dict]:
     return data, data["results"]["demo"]["full_summary"]
 
 
+@generator("demo-contact-events")
+def demo_contact_events() -> str:
+    data, summary = _demo_summary()
+    rows = {q: v for q, v, _ in summary["rows"]} if isinstance(summary, dict) and "rows" in \
+        summary else {r[0]: r[1] for r in summary}
+    events = ("cleat 20 x 20 mm", "cleat 40 x 20 mm", "pothole 50 mm deep, 0.3 m")
+    lines = ["| event | contact | contact force min / max | rim load max | airborne |",
+             "|---|---|---|---|---|"]
+    for event in events:
+        for law in ("unilateral", "linear"):
+            key = f"{event}, {law}"
+            if f"{key}: contact force min" not in rows:
+                raise StaleRecord(f"{key} is not in the recorded demo: run "
+                                  f"{data['command']}")
+            lines.append(f"| {event} | {law} | {rows[key + ': contact force min'] / 1e3:.1f} / "
+                         f"{rows[key + ': contact force max'] / 1e3:.1f} kN | "
+                         f"{rows[key + ': rim load max'] / 1e3:.1f} kN | "
+                         f"{rows[key + ': airborne']:.2f} % of the run |")
+    lines += ["", provenance(data, timing=False)]
+    return "\n".join(lines)
+
+
 @generator("demo-agreement")
 def demo_agreement() -> str:
     from vehicle_demo.quarter_car import RIDE_LABELS
