@@ -72,7 +72,7 @@ def small_amplitude(speed, freqs, amplitude=1e-4):
             sim = ContactSimulator(contact)
             ys = np.empty((n, 2))
 
-            def inputs(t):
+            def inputs(t, w=w, source=source):
                 z, v = amplitude * np.sin(w * t), amplitude * w * np.cos(w * t)
                 return (z, v, 0.0, 0.0) if source == "rim" else (0.0, 0.0, z, v)
 
@@ -154,7 +154,7 @@ def costs(repeats):
                 sim.step_values(H, 0.0, 0.0, road, 0.0)
             steps = 2000
 
-            def work(sim=sim, road=road):
+            def work(sim=sim, road=road, steps=steps):
                 for _ in range(steps):
                     sim.step_values(H, 0.0, 0.0, road, 0.0)
 
@@ -188,8 +188,8 @@ def main(argv=None) -> int:
         results["drop"] = drop_against_unreduced()
         print("3. 5 cm drop and return at rest, N = 40: lift-off, touch-down, landing peak")
         for key, r in results["drop"].items():
-            print(f"   {key:>11s}: {r['lift_off_s'] * 1e3:.3f} ms, {r['touch_down_s'] * 1e3:.3f} ms,"
-                  f" {r['landing_peak_kn']:.2f} kN")
+            print(f"   {key:>11s}: {r['lift_off_s'] * 1e3:.3f} ms, "
+                  f"{r['touch_down_s'] * 1e3:.3f} ms, {r['landing_peak_kn']:.2f} kN")
     results["road_step"] = road_step()
     s = results["road_step"]
     print(f"4. 1 mm road step at rest: contact force peak {s['peak_kn']:.1f} kN, min "

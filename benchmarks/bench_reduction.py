@@ -42,6 +42,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")  # before numpy: one BLAS thr
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
+from tire_fmu.core.simulation import OUTPUT_NAMES, TireSimulator  # noqa: E402
 
 from tire_fmu.core import (  # noqa: E402
     OperatingPoint,
@@ -66,7 +67,6 @@ from tire_fmu.core.reduction import (  # noqa: E402
     reduce,
     static_correction_matrix,
 )
-from tire_fmu.core.simulation import OUTPUT_NAMES, TireSimulator  # noqa: E402
 from tire_fmu.core.stepping import DenseStepper, DiagonalStepper  # noqa: E402
 
 PAPER_SPEED = 20 * np.pi * 0.65

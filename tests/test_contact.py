@@ -381,7 +381,7 @@ def test_long_communication_steps_are_substepped_exactly(contact_models):
     def road(t):  # a ramp: inputs exact for the step, so no correction at the points
         return 1e-3 * t / 0.05, 1e-3 / 0.05
 
-    for i in range(50):
+    for _ in range(50):
         a = coarse.step_values(1e-3, 0.0, 0.0, *road(coarse.time))
         for _ in range(10):
             b = fine.step_values(1e-4, 0.0, 0.0, *road(fine.time))

@@ -32,17 +32,16 @@ from tire_fmu.core import (  # noqa: E402
     DEFAULT_LOAD_N,
     OperatingPoint,
     TireParameters,
-    build_model,
     validate,
 )
-from tire_fmu.core.frequency_response import ringing_modes, sine_response  # noqa: E402
-from tire_fmu.core.io_model import build_io_model  # noqa: E402
 from tire_fmu.core.contact_dynamics import (  # noqa: E402
     INPUT_NAMES,
     OUTPUT_NAMES,
     ContactSimulator,
     build_contact_model,
 )
+from tire_fmu.core.frequency_response import ringing_modes, sine_response  # noqa: E402
+from tire_fmu.core.io_model import build_io_model  # noqa: E402
 from tire_fmu.fmu.builder import SLAVE_MODULE, build_fmu  # noqa: E402
 
 pytestmark = pytest.mark.fmu

@@ -6,9 +6,9 @@ import zipfile
 
 import numpy as np
 import pytest
-import scipy.signal as ss
 
 from tire_fmu.core import OperatingPoint, ParameterError, build_model
+from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
 from tire_fmu.core.io_model import build_io_model
 from tire_fmu.core.modal_form import diagonalise, modal_frequency_response
 from tire_fmu.core.reduction import (
@@ -19,7 +19,6 @@ from tire_fmu.core.reduction import (
     reduce,
     static_outputs,
 )
-from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
 from tire_fmu.core.stepping import DenseStepper, DiagonalStepper, phi_functions
 from tire_fmu.model_files import (
     ModelFileError,

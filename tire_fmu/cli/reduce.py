@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
-from ..core.reduction import ReductionSettings, reduce
 from ..core.io_model import OUTPUTS as OUTPUT_NAMES
+from ..core.reduction import ReductionSettings, reduce
 from .commands import command_help
 from .common import (
     CliError,

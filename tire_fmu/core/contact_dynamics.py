@@ -791,7 +791,8 @@ class ContactState:
         try:
             header = json.loads(head.decode("utf-8"))
         except (UnicodeDecodeError, ValueError) as error:
-            raise StateError(f"not a tire_fmu contact state: header unreadable ({error})")
+            raise StateError(f"not a tire_fmu contact state: header unreadable ({error})"
+                             ) from error
         if not isinstance(header, dict) or header.get("format") != _STATE_FORMAT:
             raise StateError(f"not a tire_fmu contact state: format "
                              f"{header.get('format') if isinstance(header, dict) else header!r}")

@@ -260,7 +260,7 @@ def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
     feedthrough = np.einsum("n,nok->ok", weight,
                             np.einsum("noi,nik->nok", l_v * m_inv[None, None, :], b_v).real)
     values, modal_b, modal_c = [], [], []
-    for index, n in enumerate(orders):
+    for index in range(orders.size):
         if weight[index] == 1.0:  # n = 0 or N/2: a real system, conjugate pairs inside it
             form: ModalForm = diagonalise(a_n[index].real, b_n[index].real, c_n[index].real)
             values.append(form.eigenvalues)

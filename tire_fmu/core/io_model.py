@@ -11,8 +11,8 @@ p_j = w_j + (z_j - z_rim)/cos θ_j the model is
 
     M ü + D u̇ + K u = B_z r + B_v ṙ,
 
-with B_z = [K_s T - K_c (cos - sec), -K_c sec_j], B_v likewise with D_s and C_c. The velocity forcing is removed from the
-state equation by the momentum-like state x = [u, M u̇ - B_v r]:
+with B_z = [K_s T - K_c (cos - sec), -K_c sec_j], B_v likewise with D_s and C_c. The velocity
+forcing is removed from the state equation by the momentum-like state x = [u, M u̇ - B_v r]:
 
     ẋ₁ = M⁻¹ x₂ + M⁻¹ B_v r
     ẋ₂ = -K x₁ - D M⁻¹ x₂ + (B_z - D M⁻¹ B_v) r,

@@ -232,7 +232,8 @@ def _class_eigen(stiffness, mass_diag, count, method):
     return values[order], vectors[:, order]
 
 
-def real_modes(model: TireModel, f_max_hz: float | None = None, method: str = "auto") -> ModalResult:
+def real_modes(model: TireModel, f_max_hz: float | None = None,
+               method: str = "auto") -> ModalResult:
     """Modes of the tire at rest, up to ``f_max_hz`` (all modes when None), ascending.
 
     ``method``: "dense" (LAPACK), "sparse" (ARPACK shift-invert around 0) or "auto".

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from .balanced import BalancedRealization
+from .contact import RoadWindows
 from .io_model import OUTPUTS, PHYSICAL_INPUTS, InputOutputModel, build_io_model, physical_input
 from .modal import symmetry_bases, two_level_eigenpairs
 from .modal_form import (
@@ -45,7 +46,6 @@ from .modal_form import (
     modal_frequency_response,
     real_block_form,
 )
-from .contact import RoadWindows
 from .model import TireModel
 from .parameters import ParameterError, TireParameters
 

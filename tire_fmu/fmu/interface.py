@@ -10,11 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 from xml.etree import ElementTree
 
+from ..core.contact import DEFAULT_ZONE_LENGTH_M
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 from ..core.io_model import OUTPUT_UNITS
 from ..core.parameters import DEFAULT_LOAD_N, TIRE_FIELDS, TireParameters
 from ..core.reduction import ReductionSettings
-from ..core.contact import DEFAULT_ZONE_LENGTH_M
-from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 
 #: JSON file in an FMU's resources/ with the tire data its parameters start from (written by
 #: ``build_fmu(tire=...)``, e.g. from ``tire-fmu build-fmu --tire-file``); absent: GL073A.

@@ -40,8 +40,6 @@ from tire_fmu.core.contact_dynamics import (
     ContactSettings,
     ContactSimulator,
     ContactState,
-    ContactZoneWarning,
-    StateError,
     StepError,
     build_contact_model,
 )

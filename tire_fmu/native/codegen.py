@@ -27,9 +27,9 @@ import numpy as np
 
 import tire_fmu
 
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 from ..core.parameters import OperatingPoint, TireParameters
 from ..core.reduction import ReducedModel
-from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 from ..core.road import SAME_POINT_EPS as SAME_STEP_EPS
 from ..core.stepping import SERIES_LIMIT
 from ..fmu.interface import (
