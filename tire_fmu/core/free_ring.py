@@ -51,6 +51,34 @@ class RingTruncation:
     n_modes: int | None = None
     static_correction: bool = True
 
+    def __post_init__(self) -> None:
+        problems = truncation_problems(self.f_max_hz, self.n_modes)
+        if problems:
+            from .parameters import ParameterError
+
+            raise ParameterError(problems)
+
+
+#: Allowed truncation settings (as for the reduction): f_max in (0, F_MAX_LIMIT_HZ] Hz and
+#: n_modes in [1, N_MODES_LIMIT], or None for no limit.
+F_MAX_LIMIT_HZ = 1e7
+N_MODES_LIMIT = 100_000
+
+
+def truncation_problems(f_max_hz, n_modes) -> list[str]:
+    """Why a truncation setting cannot be used (empty when it can)."""
+    problems = []
+    if f_max_hz is not None and not (
+        isinstance(f_max_hz, (int, float)) and 0 < f_max_hz <= F_MAX_LIMIT_HZ
+    ):
+        problems.append(f"f_max_hz = {f_max_hz!r}: must be in (0, {F_MAX_LIMIT_HZ:g}] Hz, or "
+                        "None for no frequency cut")
+    if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(n_modes, int)
+                                or not 1 <= n_modes <= N_MODES_LIMIT):
+        problems.append(f"n_modes = {n_modes!r}: must be an integer in [1, {N_MODES_LIMIT}] or "
+                        "None")
+    return problems
+
 
 @dataclass(frozen=True, eq=False)
 class FreeRingModel:
