@@ -24,3 +24,20 @@ def _no_supercritical_noise():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SupercriticalSpeedWarning)
         yield
+
+
+@pytest.fixture(scope="session")
+def native_fmu_path(tmp_path_factory):
+    """The native FMU with its default start values, linux64 and (when the cross compiler is
+    installed, as .ci/run does) win64, built once per session."""
+    from tire_fmu.native import build_native_fmu
+
+    return build_native_fmu(tmp_path_factory.mktemp("native") / "TireModalNative.fmu")
+
+
+@pytest.fixture(scope="session")
+def python_fmu_path(tmp_path_factory):
+    """TireModal.fmu (pythonfmu), built once per session."""
+    from tire_fmu.fmu.builder import build_fmu
+
+    return build_fmu(tmp_path_factory.mktemp("python_fmu"))

@@ -164,8 +164,8 @@ def _c_number(value: float | int) -> str:
     if isinstance(value, int):
         return str(value)
     value = float(value)
-    if math.isinf(value):
-        return "HUGE_VAL" if value > 0 else "(-HUGE_VAL)"
+    if not math.isfinite(value):
+        raise ValueError(f"{value!r}: the spec holds finite numbers only")
     return repr(value)  # reads back to the same double
 
 
@@ -192,8 +192,6 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
         " * tire_fmu.fmu.spec.c_header() from the Python core: do not edit, regenerate. */",
         "#ifndef TIRE_SPEC_H",
         "#define TIRE_SPEC_H",
-        "",
-        "#include <math.h>",
         "",
     ]
     for name, value in CONSTANTS.items():

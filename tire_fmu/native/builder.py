@@ -123,10 +123,8 @@ def _table(start_values: dict | None) -> tuple[FmuVariable, ...]:
 
 def _c_double(value) -> str:
     value = float(value)
-    if value != value:
-        return "NAN"
-    if value in (float("inf"), float("-inf")):
-        return "HUGE_VAL" if value > 0 else "(-HUGE_VAL)"
+    if value != value or value in (float("inf"), float("-inf")):
+        raise NativeBuildError(f"start value {value!r}: start values must be finite")
     return repr(value)
 
 
@@ -138,11 +136,10 @@ def export_header(table: tuple[FmuVariable, ...], guid: str, model_identifier: s
         "#ifndef TIRE_EXPORT_H",
         "#define TIRE_EXPORT_H",
         "",
-        '#include "spec.h"',
-        "",
+        "/* one value per variable, by value reference (fmi2_layer.c checks the count) */",
         f'#define EXPORT_MODEL_IDENTIFIER "{model_identifier}"',
         f'#define EXPORT_GUID "{guid}"',
-        "static const double EXPORT_START_VALUES[SPEC_N_VARIABLES] = {",
+        "static const double EXPORT_START_VALUES[] = {",
         f"    {starts}",
         "};",
         "",

@@ -18,10 +18,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "export.h"
 #include "fmi2Functions.h"
 #include "model.h"
 #include "spec.h"
+#include "export.h"
+
+/* export.h holds one start value per variable of spec.h */
+typedef char export_matches_spec[sizeof EXPORT_START_VALUES / sizeof EXPORT_START_VALUES[0]
+                                 == SPEC_N_VARIABLES ? 1 : -1];
 
 #define MESSAGE_SIZE 2048
 

@@ -3,8 +3,6 @@
 #ifndef TIRE_SPEC_H
 #define TIRE_SPEC_H
 
-#include <math.h>
-
 #define SPEC_TIME_ABS_TOLERANCE_S 1e-12
 #define SPEC_TIME_REL_TOLERANCE 1e-09
 #define SPEC_SAME_POINT_EPS 1.7763568394002505e-15
