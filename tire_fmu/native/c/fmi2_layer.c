@@ -491,6 +491,7 @@ static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueRe
             return fmi2Error;
         }
         v = &SPEC_VARIABLES[vr[i]];
+        if (v->causality == SPEC_INPUT && isfinite(in[i])) continue;  /* the hot path */
         number(text, in[i]);
         if (v->causality == SPEC_OUTPUT) {
             log_message(inst, fmi2Error, "%s refused: %s = %s: it is an output; nothing "
@@ -579,14 +580,17 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     double tolerance;
     ENTER(CALL_DO_STEP);
     (void)noSetFMUStatePriorToCurrentPoint;
-    number(t, currentCommunicationPoint);
-    number(h, communicationStepSize);
+    tolerance = fmax(SPEC_TIME_ABS_TOLERANCE_S, SPEC_TIME_REL_TOLERANCE * fabs(inst->time));
+    if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance &&
+          communicationStepSize > 0.0 && isfinite(communicationStepSize))) {
+        number(t, currentCommunicationPoint);  /* the texts only for a refusal */
+        number(h, communicationStepSize);
+    }
     if (!isfinite(currentCommunicationPoint)) {
         log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: t must be "
                     "finite; nothing changed", t, h);
         return fmi2Error;
     }
-    tolerance = fmax(SPEC_TIME_ABS_TOLERANCE_S, SPEC_TIME_REL_TOLERANCE * fabs(inst->time));
     if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance)) {
         number(now, inst->time);
         log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: t must be the "

@@ -32,6 +32,7 @@ static void zone_dft(const Ring* ring, const double* x, cx* out)
         double even = centre[m] + centre[-m], odd = centre[m] - centre[-m];
         const double* c = ring->cos_nm + (size_t)m * n_orders;
         const double* s = ring->sin_nm + (size_t)m * n_orders;
+        if (even == 0.0 && odd == 0.0) continue;  /* nodes off the road push nothing */
         for (n = 0; n < n_orders; n++) {
             out[n].re += c[n] * even;
             out[n].im -= s[n] * odd;
@@ -47,11 +48,19 @@ static void zone_idft(const Ring* ring, const cx* a, double* y)
     for (m = 0; m <= half; m++) {
         const double* c = ring->cos_nm + (size_t)m * n_orders;
         const double* s = ring->sin_nm + (size_t)m * n_orders;
-        double even = 0.0, odd = 0.0;
-        for (n = 0; n < n_orders; n++) {
+        double even = 0.0, odd = 0.0, even2 = 0.0, odd2 = 0.0;
+        for (n = 0; n + 1 < n_orders; n += 2) {  /* two sums each: independent chains */
+            even += a[n].re * c[n];
+            odd += a[n].im * s[n];
+            even2 += a[n + 1].re * c[n + 1];
+            odd2 += a[n + 1].im * s[n + 1];
+        }
+        if (n < n_orders) {
             even += a[n].re * c[n];
             odd += a[n].im * s[n];
         }
+        even += even2;
+        odd += odd2;
         centre[m] = even - odd;
         centre[-m] = even + odd;
     }
@@ -324,15 +333,20 @@ static int active_solve(Simulator* sim, Kernel* k, const char* active, const dou
     return 0;
 }
 
-/* combined = base + M f */
+/* rows [first, last) of combined = base + M f, over the nonzero entries of f only (the
+ * contact forces are zero off the few pushing nodes) */
 static void combine(const Simulator* sim, const Kernel* k, const double* base, const double* f,
-                    double* combined)
+                    double* combined, int first, int last)
 {
-    int Z = sim->n_zone, r, l;
-    for (r = 0; r < 3 * Z; r++) {
+    int Z = sim->n_zone, r, l, n = 0;
+    int* nonzero = sim->iwork + 2 * Z;
+    for (l = 0; l < Z; l++) {
+        if (f[l] != 0.0) nonzero[n++] = l;
+    }
+    for (r = first; r < last; r++) {
         const double* row = k->m + (size_t)r * Z;
         double sum = 0.0;
-        for (l = 0; l < Z; l++) sum += row[l] * f[l];
+        for (l = 0; l < n; l++) sum += row[nonzero[l]] * f[nonzero[l]];
         combined[r] = base[r] + sum;
     }
 }
@@ -370,18 +384,21 @@ static void fallback(Simulator* sim, const Kernel* k, const double* base, double
 }
 
 /* total forces with [sigma; p; p'] = base + M f and the law (or two-sided springs on the
- * static footprint for the linear law) */
-static int solve(Simulator* sim, Kernel* k, const double* base, double* f)
+ * static footprint for the linear law); combined (3Z) receives base + M f */
+static int solve(Simulator* sim, Kernel* k, const double* base, double* f, double* combined)
 {
     int Z = sim->n_zone, iteration, j, limit = SPEC_ACTIVE_SET_PER_NODE * Z + SPEC_ACTIVE_SET_EXTRA;
     char* active = sim->cwork;
-    double* combined = sim->work + 2 * Z * Z + Z;
-    if (sim->linear) return active_solve(sim, k, sim->static_active, base, f);
+    if (sim->linear) {
+        if (active_solve(sim, k, sim->static_active, base, f) != 0) return -1;
+        combine(sim, k, base, f, combined, 0, 3 * Z);
+        return 0;
+    }
     memcpy(active, sim->active, (size_t)Z);
     for (iteration = 0; iteration < limit; iteration++) {
         int same = 1;
         if (active_solve(sim, k, active, base, f) != 0) return -1;
-        combine(sim, k, base, f, combined);
+        combine(sim, k, base, f, combined, 0, 2 * Z);
         for (j = 0; j < Z; j++) {
             char now = (char)(combined[Z + j] > 0.0 && combined[j] > 0.0);
             if (now != active[j]) same = 0;
@@ -389,17 +406,20 @@ static int solve(Simulator* sim, Kernel* k, const double* base, double* f)
         }
         if (same) {
             memcpy(sim->active, active, (size_t)Z);
+            combine(sim, k, base, f, combined, 2 * Z, 3 * Z);
             for (j = 0; j < Z; j++) f[j] = fmax(f[j], 0.0);
             return 0;
         }
     }
     fallback(sim, k, base, f);
+    combine(sim, k, base, f, combined, 0, 3 * Z);
     return 0;
 }
 
 /* -- stepping ------------------------------------------------------------------------------- */
 
-static void add_dft_change(Simulator* sim, const Kernel* k, const double* change)
+/* q += beta_d DFT(change); with the DFT of df known (ok), it is kept current; returns ok */
+static int add_dft_change(Simulator* sim, const Kernel* k, const double* change, int ok)
 {
     const Ring* ring = sim->ring;
     cx* F = sim->orders_a;
@@ -409,7 +429,9 @@ static void add_dft_change(Simulator* sim, const Kernel* k, const double* change
         for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
             sim->q[q] = cx_add(sim->q[q], cx_mul(k->beta_d[q], F[n]));
         }
+        if (ok) sim->dft[n] = cx_add(sim->dft[n], F[n]);
     }
+    return ok;
 }
 
 /* scratch layout: [0, 2Z^2 + 4Z) the solve (and kernel making), then the step's arrays */
@@ -422,7 +444,7 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
 {
     const Ring* ring = sim->ring;
     const Zone* zone = sim->zone;
-    int Z = sim->n_zone, j, i, r;
+    int Z = sim->n_zone, j, i;
     double dz = z - sim->seen_z, dvz = vz - sim->seen_vz;
     double* base = STEP_WORK(sim);  /* 3Z */
     double* f = base + 3 * Z;
@@ -431,6 +453,7 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
     double* rate = pen + Z;
     double kj = zone->stiffness, cj = zone->damping;
     Kernel* k = NULL;
+    int dft_ok = sim->dft_ok;
     for (j = 0; j < Z; j++) {
         pen[j] = sim->penetration[j] + (D_AT(ring, 3 + j, 0) - zone->sec[j]) * dz
                  + zone->sec[j] * (heights[j] - sim->seen_heights[j]);
@@ -448,21 +471,19 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
             base[Z + j] = pen[j];
             base[2 * Z + j] = rate[j];
         }
-        for (r = 0; r < 3 * Z; r++) {
-            const double* row = k->m + (size_t)r * Z;
-            double sum = 0.0;
-            for (j = 0; j < Z; j++) sum += row[j] * change[j];
-            base[r] -= sum;
+        {
+            double* zero = combined;  /* base - M f_old = (base + M (-f_old)) */
+            for (j = 0; j < Z; j++) zero[j] = -change[j];
+            combine(sim, k, base, zero, base, 0, 3 * Z);
         }
-        if (solve(sim, k, base, f) != 0) return -1;
+        if (solve(sim, k, base, f, combined) != 0) return -1;
         for (j = 0; j < Z; j++) change[j] = f[j] - change[j];
-        if (sim->has_last) add_dft_change(sim, k, change);
+        if (sim->has_last) dft_ok = add_dft_change(sim, k, change, dft_ok);
         for (i = 0; i < 3; i++) {
             double sum = 0.0;
             for (j = 0; j < Z; j++) sum += k->out_f[i * Z + j] * change[j];
             sim->ring_out[i] += sum;
         }
-        combine(sim, k, base, f, combined);
         for (j = 0; j < Z; j++) {
             pen[j] = combined[Z + j];
             rate[j] = combined[2 * Z + j];
@@ -489,7 +510,7 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
     }
     sim->seen_z = z;
     sim->seen_vz = vz;
-    sim->dft_ok = 0;
+    sim->dft_ok = k != NULL && sim->has_last ? dft_ok : 0;
     return 0;
 }
 
@@ -569,9 +590,8 @@ static int substep(Simulator* sim, Kernel* k, double z, double vz)
         base[Z + j] = p;
         base[2 * Z + j] = r;
     }
-    if (solve(sim, k, base, f) != 0) return -1;
+    if (solve(sim, k, base, f, combined) != 0) return -1;
     for (j = 0; j < Z; j++) df_end[j] = f[j] - sim->f_static[j];
-    combine(sim, k, base, f, combined);
     /* the end forces' ramp into the modes */
     zone_dft(ring, df_end, F);
     for (n = 0; n < ring->n_orders; n++) {
@@ -715,7 +735,7 @@ int sim_init(Simulator* sim, const Memory* mem, const Ring* ring, const Zone* zo
         ALLOC(df, Z, double) || ALLOC(active, Z, char) || ALLOC(penetration, Z, double) ||
         ALLOC(rate, Z, double) || ALLOC(seen_heights, Z, double) ||
         ALLOC(seen_slopes, Z, double) || ALLOC(kernels, SPEC_KERNEL_CACHE_SIZE, Kernel) ||
-        ALLOC(dft, ring->n_orders, cx) || ALLOC(work, work, double) || ALLOC(iwork, 2 * Z, int) ||
+        ALLOC(dft, ring->n_orders, cx) || ALLOC(work, work, double) || ALLOC(iwork, 3 * Z, int) ||
         ALLOC(cwork, 2 * Z, char) || ALLOC(orders_a, ring->n_orders, cx) ||
         ALLOC(orders_b, ring->n_orders, cx) || ALLOC(heights, Z, double) ||
         ALLOC(slopes, Z, double)) {
