@@ -92,6 +92,7 @@ static void kernel_free(Kernel* k, const Memory* mem, int n_zone)
     mem_free(mem, k->decay);
     mem_free(mem, k->beta_c);
     mem_free(mem, k->beta_d);
+    mem_free(mem, k->fused);
     mem_free(mem, k->m);
     mem_free(mem, k->out_f);
     mem_free(mem, k->pen_const);
@@ -156,7 +157,8 @@ static int make_kernel(Simulator* sim, Kernel* k, double h)
     k->decay = (cx*)mem_alloc(mem, (size_t)K, sizeof(cx));
     k->beta_c = (cx*)mem_alloc(mem, (size_t)K, sizeof(cx));
     k->beta_d = (cx*)mem_alloc(mem, (size_t)K, sizeof(cx));
-    if (!k->decay || !k->beta_c || !k->beta_d || interface_alloc(k, mem, Z) != 0) {
+    k->fused = (cx*)mem_alloc(mem, (size_t)K, sizeof(cx));
+    if (!k->decay || !k->beta_c || !k->beta_d || !k->fused || interface_alloc(k, mem, Z) != 0) {
         kernel_free(k, mem, Z);
         return -1;
     }
@@ -173,6 +175,7 @@ static int make_kernel(Simulator* sim, Kernel* k, double h)
             hphi2 = cx_scale(phi2, h);
             k->beta_c[q] = cx_mul(cx_scale(cx_sub(phi1, phi2), h), ring->beta[q]);
             k->beta_d[q] = cx_mul(hphi2, ring->beta[q]);
+            k->fused[q] = cx_add(cx_mul(k->decay[q], k->beta_d[q]), k->beta_c[q]);
             u[n] = cx_add(u[n], cx_mul(ring->gamma[q], k->beta_d[q]));
             v[n] = cx_add(v[n], cx_mul(ring->eta[q], k->beta_d[q]));
             if (n == 1) {
@@ -478,7 +481,17 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
         }
         if (solve(sim, k, base, f, combined) != 0) return -1;
         for (j = 0; j < Z; j++) change[j] = f[j] - change[j];
-        if (sim->has_last) dft_ok = add_dft_change(sim, k, change, dft_ok);
+        if (sim->has_last) {
+            if (sim->pending) {
+                /* q + beta_d DFT(df) stays the state: the change enters through the DFT */
+                cx* F = sim->orders_a;
+                int n;
+                zone_dft(ring, change, F);
+                for (n = 0; n < ring->n_orders; n++) sim->dft[n] = cx_add(sim->dft[n], F[n]);
+            } else {
+                dft_ok = add_dft_change(sim, k, change, dft_ok);
+            }
+        }
         for (i = 0; i < 3; i++) {
             double sum = 0.0;
             for (j = 0; j < Z; j++) sum += k->out_f[i * Z + j] * change[j];
@@ -510,7 +523,7 @@ static int start(Simulator* sim, double z, double vz, const double* heights,
     }
     sim->seen_z = z;
     sim->seen_vz = vz;
-    sim->dft_ok = k != NULL && sim->has_last ? dft_ok : 0;
+    sim->dft_ok = sim->pending || (k != NULL && sim->has_last && dft_ok);
     return 0;
 }
 
@@ -537,17 +550,36 @@ static int substep(Simulator* sim, Kernel* k, double z, double vz)
         sim->dft_ok = 1;
     }
     /* the free response at t + h: decay, the rim's ramp, the forces at t held to their ramp */
-    for (n = 0; n < ring->n_orders; n++) {
-        cx a = cx_make(0.0, 0.0), b = cx_make(0.0, 0.0), fn = F[n];
-        for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
-            cx value = cx_add(cx_mul(k->decay[q], sim->q[q]), cx_mul(k->beta_c[q], fn));
-            sim->q[q] = value;
-            a = cx_add(a, cx_mul(ring->gamma[q], value));
-            b = cx_add(b, cx_mul(ring->eta[q], value));
+    if (sim->pending && sim->last != k) {  /* another kernel's ramp: add it first */
+        for (n = 0; n < ring->n_orders; n++) {
+            for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
+                sim->q[q] = cx_add(sim->q[q], cx_mul(sim->last->beta_d[q], F[n]));
+            }
         }
-        A[n] = a;
-        B[n] = b;
-        deflection -= a.re;
+        sim->pending = 0;
+    }
+    {
+        /* one pass: the last ramp (pending) and this one's start forces held to their ramp,
+         * decayed, then read at the zone through the orders */
+        const cx* into = sim->pending ? k->fused : k->beta_c;
+        for (n = 0; n < ring->n_orders; n++) {
+            double ar = 0.0, ai = 0.0, br = 0.0, bi = 0.0, fr = F[n].re, fi = F[n].im;
+            for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
+                const cx d = k->decay[q], c = into[q], x = sim->q[q];
+                const cx g = ring->gamma[q], e = ring->eta[q];
+                double vr = d.re * x.re - d.im * x.im + c.re * fr - c.im * fi;
+                double vi = d.re * x.im + d.im * x.re + c.re * fi + c.im * fr;
+                sim->q[q].re = vr;
+                sim->q[q].im = vi;
+                ar += g.re * vr - g.im * vi;
+                ai += g.re * vi + g.im * vr;
+                br += e.re * vr - e.im * vi;
+                bi += e.re * vi + e.im * vr;
+            }
+            A[n] = cx_make(ar, ai);
+            B[n] = cx_make(br, bi);
+            deflection -= ar;
+        }
     }
     for (i = 0; i < ring->rim_count; i++) {
         int m = ring->first_rim + i;
@@ -593,12 +625,8 @@ static int substep(Simulator* sim, Kernel* k, double z, double vz)
     if (solve(sim, k, base, f, combined) != 0) return -1;
     for (j = 0; j < Z; j++) df_end[j] = f[j] - sim->f_static[j];
     /* the end forces' ramp into the modes */
-    zone_dft(ring, df_end, F);
-    for (n = 0; n < ring->n_orders; n++) {
-        for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
-            sim->q[q] = cx_add(sim->q[q], cx_mul(k->beta_d[q], F[n]));
-        }
-    }
+    zone_dft(ring, df_end, F);  /* the end forces' ramp: pending until the next pass */
+    sim->pending = 1;
     for (i = 0; i < 3; i++) {
         double sum = 0.0;
         for (j = 0; j < Z; j++) sum += k->out_f[i * Z + j] * df_end[j];
@@ -681,6 +709,20 @@ int sim_outputs_with(Simulator* sim, const double inputs[4])
     return 0;
 }
 
+/* q with the pending ramp added (the state the core's simulator holds) */
+void sim_settle(Simulator* sim)
+{
+    const Ring* ring = sim->ring;
+    int n, q;
+    if (!sim->pending) return;
+    for (n = 0; n < ring->n_orders; n++) {
+        for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
+            sim->q[q] = cx_add(sim->q[q], cx_mul(sim->last->beta_d[q], sim->dft[n]));
+        }
+    }
+    sim->pending = 0;
+}
+
 /* the kernel of a restored state's last step (set_state: self._kernel(last_step_s).last) */
 int sim_restore_last(Simulator* sim)
 {
@@ -711,6 +753,7 @@ void sim_reset(Simulator* sim, double start_time)
     sim->has_last = 0;
     sim->last_step = 0.0;
     sim->dft_ok = 0;
+    sim->pending = 0;
     road_reset(&sim->road, sim->mem);
     update_outputs(sim);
 }

@@ -182,6 +182,7 @@ typedef struct {
     cx* decay;        /* K */
     cx* beta_c;       /* K: h (phi1 - phi2) beta, on the DFT of the forces at t */
     cx* beta_d;       /* K: h phi2 beta, on the DFT of the forces at t + h */
+    cx* fused;        /* K: decay beta_d + beta_c: a pending end-force ramp into the next */
     cx rim_z[4], rim_vz[4];
     double* m;        /* (3Z x Z): [S; W_p; W_r] */
     double* out_f;    /* 3 x Z */
@@ -226,6 +227,9 @@ typedef struct {
     int has_instant;
     cx* dft;          /* n_orders: DFT of df (valid when dft_ok) */
     int dft_ok;
+    /* the last substep's end-force ramp, not yet added to q: the modal state is
+     * q + last->beta_d * dft (added in the next substep's pass over the modes) */
+    int pending;
     /* scratch */
     double* work;
     int* iwork;
@@ -245,6 +249,7 @@ void sim_reset(Simulator* sim, double start_time);
 int sim_step(Simulator* sim, double h, const double inputs[4]);
 int sim_outputs_with(Simulator* sim, const double inputs[4]);
 int sim_restore_last(Simulator* sim);
+void sim_settle(Simulator* sim);
 int sim_in_contact(const Simulator* sim);
 int sim_at_zone_edge(const Simulator* sim);
 double sim_contact_length(const Simulator* sim);

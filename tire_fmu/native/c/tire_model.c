@@ -438,6 +438,7 @@ static void put_doubles(unsigned char** out, const double* values, int count)
 void model_state_write(const Model* model, unsigned char* out)
 {
     const Simulator* sim = &model->sim;
+    sim_settle((Simulator*)&model->sim);  /* the modal state with its pending ramp added */
     int K = sim->ring->n_modes, Z = sim->n_zone, history = road_history_length(&sim->road);
     double head[12];
     put_int(&out, K);
@@ -593,5 +594,6 @@ void model_state_apply(Model* model, const unsigned char* in)
     p += sizeof(double) * (size_t)(3 * history);
     for (i = 0; i < Z; i++) sim->active[i] = (char)p[i];
     sim->dft_ok = 0;
+    sim->pending = 0;
     sim_restore_last(sim);
 }
