@@ -506,7 +506,8 @@ def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
                    speed_m_s: float, max_length_m: float) -> ContactPatch:
     """The footprint that carries ``load_n``; FootprintError (with the allowed range) when the
     footprint would leave the zone or exceed ``max_length_m``."""
-    path = FootprintPath(zone, compliance, max_deflection_m=MAX_DEFLECTION_FRACTION * zone.grid.radius_m)
+    path = FootprintPath(zone, compliance,
+                         max_deflection_m=MAX_DEFLECTION_FRACTION * zone.grid.radius_m)
     limit = max_credible_load(path, max_length_m)
     if load_n > limit.load_n:
         reason = ("its footprint reaches the end of the contact zone (raise "
