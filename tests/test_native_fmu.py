@@ -98,6 +98,15 @@ def test_spec_templates_are_the_core_messages(make, key, args):
     assert MESSAGES[key] % args == _core_problem(make)
 
 
+def test_ring_truncation_refuses_what_it_cannot_use():
+    """A fix in the reference: RingTruncation took any f_max and n_modes (f_max = -1 kept no
+    mode at all) while the Python FMU expected it to raise ParameterError for them."""
+    with pytest.raises(ParameterError) as caught:
+        RingTruncation(f_max_hz=math.nan, n_modes=0)
+    assert len(caught.value.problems) == 2
+    assert RingTruncation(f_max_hz=150.0, n_modes=40).n_modes == 40
+
+
 def test_c_compiles_without_a_warning(tmp_path):
     from tire_fmu.fmu.interface import fmu_variables
 
