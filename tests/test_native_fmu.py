@@ -261,6 +261,26 @@ def test_refused_steps_change_nothing(native):
     disturbed.free()
 
 
+def test_calls_outside_their_phase_are_refused(native):
+    """The FMI 2.0 state machine, one table in the C: a call its phase does not allow is
+    refused with fmi2Error and the phase named."""
+    instance = Instance(native)
+    assert instance.step(0.0) == 3  # not initialised
+    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+    outputs = (fmi2ValueReference * 1)(instance.vr["rim_Fz"])
+    assert instance.call("fmi2GetReal", outputs, 1, (fmi2Real * 1)()) == 3  # instantiated
+    assert instance.call("fmi2ExitInitializationMode") == 3  # not in initialisation mode
+    assert instance.initialise() == 0
+    assert instance.call("fmi2EnterInitializationMode") == 3
+    instance.slave.terminate()
+    assert instance.step(0.0) == 3  # terminated
+    assert instance.slave.getBooleanStatus(3) is True  # fmi2Terminated
+    assert all("refused: the FMU is" in m for m in instance.errors())
+    assert "terminated" in instance.errors()[-1]
+    instance.slave.freeInstance()
+
+
 def test_setup_experiment_refuses_non_finite_times(native):
     instance = Instance(native)
     for start, stop in ((math.nan, None), (math.inf, None), (-math.inf, None), (0.0, -1.0)):
