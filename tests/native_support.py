@@ -56,7 +56,7 @@ class Instance:
                                instanceName=self.name)
 
         def logger(component, instance, status, category, message):
-            self.log.append((status, category.decode(), message.decode()))
+            self.log.append((status, (category or b"").decode(), (message or b"").decode()))
 
         self._logger = fmi2CallbackLoggerTYPE(logger)  # keep a reference while in use
         callbacks = fmi2CallbackFunctions()

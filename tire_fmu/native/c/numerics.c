@@ -106,8 +106,14 @@ int order_roots(const double m[2], const cx d[4], const cx k[4], int real_system
             }
             w = cx_div(ratio, cx_sub(cx_make(1.0, 0.0), cx_mul(ratio, sum)));
             x[i] = cx_sub(x[i], w);
-            if (!(cx_abs(w) <= 1e-14 * cx_abs(x[i]))) converged = 0;
+            if (!(cx_abs(w) <= 1e-13 * cx_abs(x[i]))) converged = 0;
         }
+    }
+    /* a polynomial whose rounding floor stops the corrections above that still has its roots
+     * to working accuracy: the Newton steps on the determinant below settle them */
+    converged = 1;
+    for (i = 0; i < 4; i++) {
+        if (!(isfinite(x[i].re) && isfinite(x[i].im))) converged = 0;
     }
     for (i = 0; i < 4; i++) {
         cx s = cx_scale(x[i], scale);
@@ -121,6 +127,16 @@ int order_roots(const double m[2], const cx d[4], const cx k[4], int real_system
             s = cx_sub(s, cx_div(value, slope));
         }
         if (!(isfinite(s.re) && isfinite(s.im))) return -1;
+        {   /* a root: det Q(s) vanishes against the size of its two products */
+            cx s2 = cx_mul(s, s);
+            cx q11 = cx_add(cx_add(cx_scale(s2, m[0]), cx_mul(d[0], s)), k[0]);
+            cx q22 = cx_add(cx_add(cx_scale(s2, m[1]), cx_mul(d[3], s)), k[3]);
+            cx q12 = cx_add(cx_mul(d[1], s), k[1]);
+            cx q21 = cx_add(cx_mul(d[2], s), k[2]);
+            double products = cx_abs(cx_mul(q11, q22)) + cx_abs(cx_mul(q12, q21));
+            double residual = cx_abs(cx_sub(cx_mul(q11, q22), cx_mul(q12, q21)));
+            if (!(residual <= 1e-8 * products)) return -1;
+        }
         roots[i] = s;
     }
     return converged ? 0 : -1;
