@@ -1,169 +1,194 @@
-"""Native (C) FMU benchmark through fmpy, printed side by side in one run.
+"""The native (C) FMU against its references, through fmpy, printed side by side in one run.
 
-Cost per communication step (setReal of the 4 inputs, doStep, getReal of the 4 outputs) at
-h = 1e-4 s, at each operating point asked for (default N = 100, at rest and at 10 m/s):
+1. Initialisation (instantiate, set load and mesh, setupExperiment, enter and exit
+   initialisation, which builds the model) against N = 100, 200, 400: the native FMU against
+   the Python FMU (TireModal.fmu).
+2. Cost per communication step at h = 1e-4 s (setReal of the 4 inputs, doStep, getReal of the
+   5 outputs) at N = 100: the native FMU against a trivial C FMU with the same interface whose
+   doStep copies (benchmarks/trivial_fmu/trivial.c, built here), i.e. fmpy's own call cost; at
+   rest and at 20 m/s, in contact (a small road undulation) and during lift-off (the road held
+   5 cm below the tread).
 
-  (a) the native FMU exported from the reduced model (tire_fmu.native);
-  (b) the Python FMU, TireModal.fmu, with the same parameters and default settings;
-  (c) the plain fmpy call overhead: an FMU built by the same machinery from the same model
-      with its modes removed, so its doStep checks the step and feeds the inputs through but
-      has nothing to integrate.
+Rounds of the cases alternate, so load on the machine hits all alike; medians side by side.
+Targets: native initialisation at N = 100 well under 0.1 s; native step <= 1.2-1.5 x the
+trivial FMU's. ``--json FILE`` writes the numbers that docs/native.md quotes.
 
-Rounds of (a), (b) and (c) alternate, so load on the machine hits all of them alike; medians
-(the target's measure) and minima (the least disturbed round) side by side.
-Target: median (a) <= 1.2 x median (c).
-
-    python benchmarks/bench_native.py [--elements 100] [--speeds 0,10] [--rounds 30]
-                                      [--steps 2000]
+    python benchmarks/bench_native.py [--rounds 15] [--steps 2000] [--json FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import platform
 import shlex
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import replace
+import zipfile
 from pathlib import Path
+from xml.etree import ElementTree
 
-import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-from tire_fmu.core import DEFAULT_LOAD_N, build_model, validate
-from tire_fmu.core.reduction import ReductionSettings, reduce
 from tire_fmu.fmu.builder import build_fmu
 from tire_fmu.native import build_native_fmu
+from tire_fmu.native.builder import c_folder
 
 H = 1e-4
 INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
-OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
-#: a gentle rim and road motion that stays in contact (no warnings in the loop)
-VALUES = [1e-4, 1e-3, 2e-4, -1e-3]
+OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
+HERE = Path(__file__).parent
 
 
-class Stepper:
-    """The three calls of a communication step on one initialised FMU instance."""
-
-    def __init__(self, path: Path, name: str, start_values: dict | None = None):
-        description = read_model_description(str(path))
-        self.slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(path)),
-                               modelIdentifier=description.coSimulation.modelIdentifier,
-                               instanceName=name)
-        vr = {v.name: v.valueReference for v in description.modelVariables}
-        self.inputs = [vr[n] for n in INPUTS]
-        self.outputs = [vr[n] for n in OUTPUTS]
-        self.slave.instantiate()
-        self.slave.setupExperiment(startTime=0.0)
-        self.slave.enterInitializationMode()
-        for name, value in (start_values or {}).items():
-            if isinstance(value, int):
-                self.slave.setInteger([vr[name]], [value])
-            else:
-                self.slave.setReal([vr[name]], [value])
-        started = time.perf_counter()
-        self.slave.exitInitializationMode()
-        self.init_seconds = time.perf_counter() - started
-        self.time = 0.0
-
-    def run(self, steps: int) -> float:
-        """Seconds per communication step over ``steps`` steps."""
-        set_real, do_step, get_real = self.slave.setReal, self.slave.doStep, self.slave.getReal
-        inputs, outputs, t = self.inputs, self.outputs, self.time
-        started = time.perf_counter()
-        for _ in range(steps):
-            set_real(inputs, VALUES)
-            do_step(t, H)
-            get_real(outputs)
-            t += H
-        elapsed = time.perf_counter() - started
-        self.time = t
-        return elapsed / steps
-
-    def close(self) -> None:
-        self.slave.terminate()
-        self.slave.freeInstance()
+def trivial_fmu(folder: Path) -> Path:
+    """The copying C FMU with the tire's value references 0-8."""
+    binary = folder / "binaries" / "linux64" / "Trivial.so"
+    binary.parent.mkdir(parents=True)
+    subprocess.run(["gcc", "-shared", "-fPIC", "-O2", "-I", str(c_folder()), "-o", str(binary),
+                    str(HERE / "trivial_fmu" / "trivial.c")], check=True)
+    root = ElementTree.Element("fmiModelDescription", fmiVersion="2.0", modelName="Trivial",
+                               guid="{trivial}", numberOfEventIndicators="0")
+    ElementTree.SubElement(root, "CoSimulation", modelIdentifier="Trivial",
+                           canHandleVariableCommunicationStepSize="true")
+    variables = ElementTree.SubElement(root, "ModelVariables")
+    for vr, name in enumerate(INPUTS + OUTPUTS):
+        causality = "input" if vr < len(INPUTS) else "output"
+        v = ElementTree.SubElement(variables, "ScalarVariable", name=name,
+                                   valueReference=str(vr), causality=causality,
+                                   variability="continuous")
+        ElementTree.SubElement(v, "Real", **({"start": "0.0"} if causality == "input" else {}))
+    structure = ElementTree.SubElement(root, "ModelStructure")
+    outputs = ElementTree.SubElement(structure, "Outputs")
+    for index in range(len(INPUTS) + 1, len(INPUTS) + len(OUTPUTS) + 1):
+        ElementTree.SubElement(outputs, "Unknown", index=str(index))
+    (folder / "modelDescription.xml").write_bytes(ElementTree.tostring(root))
+    fmu = folder.parent / "Trivial.fmu"
+    with zipfile.ZipFile(fmu, "w") as archive:
+        for path in sorted(folder.rglob("*")):
+            if path.is_file():
+                archive.write(path, path.relative_to(folder).as_posix())
+    return fmu
 
 
-def without_modes(reduced):
-    """The same model with nothing to integrate: the overhead FMU's."""
-    m = reduced.n_inputs
-    return replace(reduced, eigenvalues=np.zeros(0, complex), b=np.zeros((0, m), complex),
-                   c=np.zeros((4, 0), complex))
+class Opened:
+    def __init__(self, path: Path):
+        self.description = read_model_description(str(path))
+        self.folder = extract(str(path))
+        self.vr = {v.name: v.valueReference for v in self.description.modelVariables}
+        self.count = 0
+
+    def instance(self) -> FMU2Slave:
+        self.count += 1
+        return FMU2Slave(guid=self.description.guid, unzipDirectory=self.folder,
+                         modelIdentifier=self.description.coSimulation.modelIdentifier,
+                         instanceName=f"bench{self.count}")
 
 
-def bench_point(folder: Path, python_fmu: Path, n_elements: int, speed: float, rounds: int,
-                steps: int) -> dict:
-    tire, op = validate({}, {"n_elements": n_elements, "load_n": DEFAULT_LOAD_N,
-                             "speed_m_s": speed})
-    reduced = reduce(build_model(tire, op), ReductionSettings(), report=False)
-    tag = f"n{n_elements}_v{speed:g}"
-    native = build_native_fmu(reduced, folder / f"native_{tag}.fmu", op)
-    overhead = build_native_fmu(without_modes(reduced), folder / f"overhead_{tag}.fmu", op,
-                                model_identifier="TireOverhead")
-    cases = {
-        "(a) native C FMU": Stepper(native, "native"),
-        "(b) Python FMU": Stepper(python_fmu, "python", {"n_elements": n_elements,
-                                                          "speed": float(speed)}),
-        "(c) fmpy overhead": Stepper(overhead, "overhead"),
-    }
-    for case in cases.values():
-        case.run(steps // 10)  # warm up
-    times = {name: [] for name in cases}
-    for _ in range(rounds):
-        for name, case in cases.items():
-            times[name].append(case.run(steps))
-    result = {
-        "reduced": reduced,
-        "costs": {name: statistics.median(values) for name, values in times.items()},
-        "best": {name: min(values) for name, values in times.items()},
-        "init": {name: case.init_seconds for name, case in cases.items()},
-    }
-    for case in cases.values():
-        case.close()
-    return result
+def initialise(fmu: Opened, parameters: dict) -> tuple[FMU2Slave, float]:
+    started = time.perf_counter()
+    slave = fmu.instance()
+    slave.instantiate()
+    slave.setupExperiment(startTime=0.0)
+    slave.enterInitializationMode()
+    for name, value in parameters.items():
+        if name in fmu.vr:
+            setter = slave.setInteger if isinstance(value, int) else slave.setReal
+            setter([fmu.vr[name]], [value])
+    slave.exitInitializationMode()
+    return slave, time.perf_counter() - started
 
 
-def main(argv=None) -> None:
+def loop_seconds(slave: FMU2Slave, fmu: Opened, signal, steps: int, t0: float) -> float:
+    inputs = [fmu.vr[n] for n in INPUTS]
+    outputs = [fmu.vr[n] for n in OUTPUTS]
+    values = [signal(t0 + k * H) for k in range(steps)]
+    set_real, do_step, get_real = slave.setReal, slave.doStep, slave.getReal
+    started = time.perf_counter()
+    for k in range(steps):
+        set_real(inputs, values[k])
+        do_step(t0 + k * H, H)
+        get_real(outputs)
+    return (time.perf_counter() - started) / steps
+
+
+def in_contact(t: float) -> list[float]:
+    w = 2 * math.pi * 10.0  # a 1 mm, 10 Hz road undulation
+    return [0.0, 0.0, 1e-3 * math.sin(w * t), 1e-3 * w * math.cos(w * t)]
+
+
+def lifted(t: float) -> list[float]:
+    return [0.0, 0.0, -0.05, 0.0]
+
+
+def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--elements", type=int, default=100, help="mesh nodes (100)")
-    parser.add_argument("--speeds", default="0,10", help="speeds in m/s, comma-separated (0,10)")
-    parser.add_argument("--rounds", type=int, default=30, help="alternating rounds (30)")
-    parser.add_argument("--steps", type=int, default=2000, help="steps per round (2000)")
+    parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--steps", type=int, default=2000)
+    parser.add_argument("--json", type=Path, default=None, help="write the numbers here")
     args = parser.parse_args(argv)
-    speeds = [float(v) for v in args.speeds.split(",")]
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        native = Opened(build_native_fmu(tmp / "TireModalNative.fmu", platforms=("linux64",)))
+        python = Opened(build_fmu(tmp / "python"))
+        trivial = Opened(trivial_fmu(tmp / "trivial"))
 
-    print("command: " + shlex.join([Path(sys.argv[0]).as_posix(), *sys.argv[1:]]))
-    print(f"Cost per communication step through fmpy (setReal 4 inputs, doStep, getReal 4 "
-          f"outputs), h = {H:g} s, median of {args.rounds} alternating rounds of "
-          f"{args.steps} steps; default reduction settings, N = {args.elements}\n")
-    with tempfile.TemporaryDirectory(prefix="bench_native_") as folder:
-        folder = Path(folder)
-        python_fmu = build_fmu(folder / "python")
-        for speed in speeds:
-            result = bench_point(folder, python_fmu, args.elements, speed, args.rounds,
-                                 args.steps)
-            reduced, costs = result["reduced"], result["costs"]
-            floor = costs["(c) fmpy overhead"]
-            print(f"V = {speed:g} m/s: {reduced.n_states} states ({reduced.n_modes} complex "
-                  f"modes), {reduced.n_inputs - 1} road delay group(s)")
-            best, best_floor = result["best"], result["best"]["(c) fmpy overhead"]
-            print(f"   {'':<22} {'median us':>9} {'x (c)':>6} {'min us':>7} {'x (c)':>6} "
-                  f"{'init s':>7}")
-            for name, cost in costs.items():
-                print(f"   {name:<22} {cost * 1e6:9.2f} {cost / floor:6.2f} "
-                      f"{best[name] * 1e6:7.2f} {best[name] / best_floor:6.2f} "
-                      f"{result['init'][name]:7.3f}")
-            ratio = costs["(a) native C FMU"] / floor
-            verdict = "meets" if ratio <= 1.2 else "MISSES"
-            print(f"   (a) / (c) = {ratio:.2f}: {verdict} the target <= 1.2; "
-                  f"(b) / (a) = {costs['(b) Python FMU'] / costs['(a) native C FMU']:.1f}; "
-                  f"C work per step ~ {(costs['(a) native C FMU'] - floor) * 1e6:.2f} us\n")
-    print(f"Python {sys.version.split()[0]}; the native FMU compiled with the local gcc -O2 "
-          "(tire_fmu.native.builder.COMPILE_FLAGS).")
+        # 1. initialisation against N
+        meshes = (100, 200, 400)
+        init = {(kind, n): [] for kind in ("native", "python") for n in meshes}
+        for _ in range(max(3, args.rounds // 3)):
+            for n in meshes:
+                for kind, fmu in (("native", native), ("python", python)):
+                    slave, seconds = initialise(fmu, {"n_elements": n})
+                    init[kind, n].append(seconds)
+                    slave.terminate()
+                    slave.freeInstance()
+
+        # 2. cost per step
+        cases = {}
+        for speed in (0.0, 20.0):
+            for regime, signal in (("contact", in_contact), ("lift-off", lifted)):
+                tire, _ = initialise(native, {"speed": speed})
+                copy, _ = initialise(trivial, {})
+                warm = 2000  # past the transient and the road history's general path
+                loop_seconds(tire, native, signal, warm, 0.0)
+                loop_seconds(copy, trivial, signal, warm, 0.0)
+                cases[speed, regime] = (tire, copy, signal, [], [], warm * H)
+        for _ in range(args.rounds):
+            for (speed, regime), (tire, copy, signal, a, b, t0) in cases.items():
+                a.append(loop_seconds(tire, native, signal, args.steps, t0))
+                b.append(loop_seconds(copy, trivial, signal, args.steps, t0 + 1.0))
+                cases[speed, regime] = (tire, copy, signal, a, b, t0 + args.steps * H)
+
+    median = statistics.median
+    print(f"python {sys.version.split()[0]}, {platform.machine()}; command: python "
+          f"{' '.join(shlex.quote(a) for a in sys.argv)}")
+    print("\ninitialisation (instantiate .. fmi2ExitInitializationMode), median s:")
+    print(f"{'N':>6} {'native':>10} {'Python FMU':>12} {'Python/native':>14}")
+    result = {"initialisation_s": {}, "step_us": {}}
+    for n in meshes:
+        a, b = median(init["native", n]), median(init["python", n])
+        print(f"{n:>6} {a:>10.4f} {b:>12.4f} {b / a:>14.1f}")
+        result["initialisation_s"][str(n)] = {"native": a, "python_fmu": b}
+    print(f"\nper step through fmpy (setReal 4, doStep, getReal 5), N = 100, median µs over "
+          f"{args.rounds} rounds of {args.steps} steps:")
+    print(f"{'speed':>6} {'regime':>9} {'native':>8} {'trivial C':>10} {'native/trivial':>15}")
+    for (speed, regime), (tire, copy, _, a, b, _) in cases.items():
+        x, y = 1e6 * median(a), 1e6 * median(b)
+        print(f"{speed:>6g} {regime:>9} {x:>8.2f} {y:>10.2f} {x / y:>15.2f}")
+        result["step_us"][f"{speed:g} m/s, {regime}"] = {"native": x, "trivial": y,
+                                                          "ratio": x / y}
+        for slave in (tire, copy):
+            slave.terminate()
+            slave.freeInstance()
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -51,10 +51,27 @@ def pytest_configure(config):
 
     # the two steps every build goes through: pythonfmu's packaging and the C compiler
     python_builder.build_pythonfmu = _only_in_fmu_tests(python_builder.build_pythonfmu)
-    native_builder.compile_sources = _only_in_fmu_tests(native_builder.compile_sources)
+    native_builder.compile_binary = _only_in_fmu_tests(native_builder.compile_binary)
 
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
     # before the item's fixtures, module- and session-scoped ones included, are set up
     _BUILDING_ALLOWED[0] = item.get_closest_marker("fmu") is not None
+
+
+@pytest.fixture(scope="session")
+def native_fmu_path(tmp_path_factory):
+    """The native FMU with its default start values, linux64 and (when the cross compiler is
+    installed, as .ci/run does) win64, built once per session."""
+    from tire_fmu.native import build_native_fmu
+
+    return build_native_fmu(tmp_path_factory.mktemp("native") / "TireModalNative.fmu")
+
+
+@pytest.fixture(scope="session")
+def python_fmu_path(tmp_path_factory):
+    """TireModal.fmu (pythonfmu), built once per session."""
+    from tire_fmu.fmu.builder import build_fmu
+
+    return build_fmu(tmp_path_factory.mktemp("python_fmu"))

@@ -22,6 +22,7 @@ from .common import (
     model_from_args,
     operating_point_values,
     output_file,
+    parse_tire_overrides,
     plot_with,
     raise_problems,
     range_problem,
@@ -138,8 +139,10 @@ def register(subparsers) -> None:
         help=command_help("export"),
         description="Export the reduced model. npz: diagonal modal form, JSON metadata, "
         "checksums (load with tire_fmu.model_files.load_npz). mat: real A, B, C, D for "
-        "ss(A, B, C, D), inputs [r; dr/dt]. fmu: an FMI 2.0 co-simulation FMU in C, compiled "
-        "for linux64 with its sources, that needs no Python on the host (docs/native.md).",
+        "ss(A, B, C, D), inputs [r; dr/dt]. fmu: the native FMI 2.0 co-simulation FMU in C "
+        "(linux64 and win64 binaries and its sources), which needs no Python on the host and "
+        "builds its model at initialisation; the options become its parameters' start values "
+        "(docs/native.md).",
     )
     p.add_argument("out", metavar="OUT", type=Path,
                    help="file to write (.npz, .mat or .fmu; for .fmu also an existing folder "
@@ -148,6 +151,19 @@ def register(subparsers) -> None:
                    help="file format (default: from the extension of OUT)")
     _add_model_options(p)
     add_reduction_options(p)
+    g = p.add_argument_group("native FMU (--format fmu)",
+                             "The FMU builds its model at initialisation from its parameters: "
+                             "the options above only become their start values (--f-max, "
+                             "--n-modes and --no-static-correction as the FMU's truncation; the "
+                             "other reduction settings do not apply).")
+    g.add_argument("--zone-length", metavar="M", type=float, default=None,
+                   help="contact_zone_length: road length under the tread nodes that may meet "
+                   "it (default 0.6)")
+    g.add_argument("--linear-contact", action="store_true",
+                   help="linear_contact: two-sided springs on the static footprint")
+    g.add_argument("--platform", action="append", choices=("linux64", "win64"), default=None,
+                   help="binaries to include (repeatable; default: linux64 and win64 when "
+                   "x86_64-w64-mingw32-gcc is installed)")
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_export)
 
@@ -220,19 +236,18 @@ def run_export(args: argparse.Namespace) -> Output:
         raise CliError(f"--format = {fmt!r}: must be npz, mat or fmu (or give OUT a .npz, .mat "
                        "or .fmu extension)")
     if fmt == "fmu":
-        from ..native.codegen import DEFAULT_MODEL_IDENTIFIER
+        from ..native import DEFAULT_MODEL_IDENTIFIER
 
         out = output_file("OUT", args.out, ".fmu", f"{DEFAULT_MODEL_IDENTIFIER}.fmu")
         _check_native_tools()
-    else:
-        out = output_file("OUT", args.out, f".{fmt}")
+        return _export_native_fmu(args, out)
+    out = output_file("OUT", args.out, f".{fmt}")
+    if args.zone_length is not None or args.linear_contact or args.platform:
+        raise CliError("--zone-length, --linear-contact and --platform apply to --format fmu")
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
     reduced = reduce(model, settings)
-    if fmt == "fmu":
-        path = _export_native_fmu(args, reduced, out)
-    else:
-        path = (save_npz if fmt == "npz" else save_mat)(reduced, out)
+    path = (save_npz if fmt == "npz" else save_mat)(reduced, out)
     output = Output(text=_report_text(reduced, model), data={**reduced.summary(),
                                                              "file": str(path)})
     output.written.append(path)
@@ -241,7 +256,7 @@ def run_export(args: argparse.Namespace) -> Output:
 
 def _check_native_tools() -> None:
     """The native export takes the FMI headers and the validator from fmpy: say so before the
-    model is reduced, naming the extra that brings it."""
+    model is built, naming the extra that brings it."""
     try:
         import fmpy  # noqa: F401
     except ImportError as error:
@@ -249,14 +264,48 @@ def _check_native_tools() -> None:
                        "validator): pip install 'tire_fmu[fmu]'") from error
 
 
-def _export_native_fmu(args: argparse.Namespace, reduced, out: Path) -> Path:
-    """The reduced model compiled into a native FMU; its fixed ``load`` parameter is the load
-    asked for, which the operating point keeps (the model only has its bisected patch load)."""
-    from ..core.parameters import OperatingPoint
+def _export_native_fmu(args: argparse.Namespace, out: Path) -> Output:
+    """The native FMU with the options as its parameters' start values. The core builds the
+    model once here, so that values it cannot run fail now, with its messages."""
+    from ..core.contact_dynamics import ContactSettings, build_contact_model
+    from ..core.free_ring import RingTruncation
+    from ..core.parameters import validate
     from ..native import NativeBuildError, build_native_fmu
 
-    operating_point = OperatingPoint(**operating_point_values(args, undeformed_default=False))
+    if args.patch_length is not None:
+        raise CliError("--patch-length: the native FMU computes its footprint from the load; "
+                       "give --load")
+    op_values = operating_point_values(args, undeformed_default=False)
+    if args.zone_length is not None:
+        op_values["contact_zone_length_m"] = args.zone_length
+    tire, op = validate(parse_tire_overrides(args), op_values)
+    truncation = RingTruncation(f_max_hz=args.f_max, n_modes=args.n_modes,
+                                static_correction=not args.no_static_correction)
+    law = "linear" if args.linear_contact else "unilateral"
+    contact = build_contact_model(tire, op, truncation, ContactSettings(law=law))
+    start_values = {**tire.as_dict(), "load": op.requested_load_n, "speed": op.speed_m_s,
+                    "n_elements": op.n_elements, "f_max": args.f_max or 0.0,
+                    "n_modes": args.n_modes or 0,
+                    "static_correction": not args.no_static_correction,
+                    "allow_supercritical": op.allow_supercritical,
+                    "contact_zone_length": op.contact_zone_length_m,
+                    "linear_contact": args.linear_contact}
+    platforms = tuple(args.platform) if args.platform else None
     try:
-        return build_native_fmu(reduced, out, operating_point)
+        path = build_native_fmu(out, start_values, platforms=platforms)
     except NativeBuildError as error:
         raise CliError(f"OUT = {str(out)!r}: {error}") from error
+    import zipfile
+
+    binaries = sorted(n.split("/")[1] for n in zipfile.ZipFile(path).namelist()
+                      if n.startswith("binaries/") and n.count("/") == 2)
+    summary = contact.summary()
+    data = {"file": str(path), "binaries": binaries,
+            "start_values": start_values, "model_at_start_values": summary}
+    text = (f"wrote {path} (binaries: {', '.join(binaries) or 'none, sources only'}); at its "
+            f"start values the FMU builds {summary['ring_modes']} of "
+            f"{summary['ring_modes_total']} ring modes, a {summary['patch_length_m'] * 100:.3g} "
+            f"cm footprint at {summary['load_n']:.6g} N")
+    output = Output(text=text, data=data)
+    output.written.append(path)
+    return output

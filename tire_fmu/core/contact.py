@@ -64,6 +64,18 @@ MAX_ZONE_HALF_ANGLE = math.pi / 3
 #: Relative tolerance on events of the footprint continuation (deflections, in m, of the
 #: order of the tire's size).
 _EVENT_TOLERANCE = 1e-12
+#: Events of the continuation within this relative distance of the first happen together.
+EVENTS_TOGETHER = 1e-9
+#: Nodes whose unloaded ray is this close to vertical (|cos θ - 1|) touch the road at δ = 0.
+TOUCH_ATOL = 1e-14
+#: Relative slack on the zone's half angle, so a node exactly at it belongs to the zone.
+ZONE_ANGLE_SLACK = 1e-12
+#: Segments the footprint continuation may trace: this many per zone node, plus as many more.
+SEGMENTS_PER_NODE = 8
+#: The static path is traced up to this fraction of R of rim deflection.
+MAX_DEFLECTION_FRACTION = 0.5
+#: Bisections for the deflection at which the footprint reaches its longest credible length.
+LENGTH_BISECTIONS = 60
 
 
 # -- the zone ---------------------------------------------------------------------------------
@@ -112,7 +124,7 @@ def contact_zone(grid: Grid, k_cw: float, beta: float,
                  zone_length_m: float = DEFAULT_ZONE_LENGTH_M) -> ContactZone:
     """The zone of nodes whose unloaded ray meets the road within ``zone_length_m / 2``."""
     half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
-    inside = np.abs(grid.theta) <= half_angle * (1 + 1e-12)
+    inside = np.abs(grid.theta) <= half_angle * (1 + ZONE_ANGLE_SLACK)
     nodes = np.flatnonzero(inside)
     nodes = nodes[np.argsort(grid.theta[nodes], kind="stable")]
     stiffness = np.full(nodes.size, k_cw * grid.node_arc_m)
@@ -269,10 +281,10 @@ class FootprintPath:
         active = np.zeros(zone.size, dtype=bool)
         start = 0.0
         segments = []
-        for _ in range(8 * zone.size + 8):
+        for _ in range(SEGMENTS_PER_NODE * (zone.size + 1)):
             if not active.any():
                 # the touching node(s) enter as soon as δ > 0
-                active = np.isclose(zone.cos, 1.0, rtol=0.0, atol=1e-14)
+                active = np.isclose(zone.cos, 1.0, rtol=0.0, atol=TOUCH_ATOL)
             segment = self._segment(start, active)
             segments.append(segment)
             (f0, f1), (p0, p1) = segment.forces_at, segment.penetration_at
@@ -286,7 +298,7 @@ class FootprintPath:
             if not math.isfinite(nxt) or nxt >= self.max_deflection_m:
                 return segments
             # every event within rounding of the first happens together
-            together = events <= nxt * (1 + 1e-9) + _EVENT_TOLERANCE * radius
+            together = events <= nxt * (1 + EVENTS_TOGETHER) + _EVENT_TOLERANCE * radius
             active = active.copy()
             active[together & (leave <= enter)] = False
             active[together & (enter < leave)] = True
@@ -501,7 +513,8 @@ def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
                    speed_m_s: float, max_length_m: float) -> ContactPatch:
     """The footprint that carries ``load_n``; FootprintError (with the allowed range) when the
     footprint would leave the zone or exceed ``max_length_m``."""
-    path = FootprintPath(zone, compliance, max_deflection_m=0.5 * zone.grid.radius_m)
+    path = FootprintPath(zone, compliance,
+                         max_deflection_m=MAX_DEFLECTION_FRACTION * zone.grid.radius_m)
     limit = max_credible_load(path, max_length_m)
     if load_n > limit.load_n:
         reason = ("its footprint reaches the end of the contact zone (raise "
@@ -544,9 +557,9 @@ def max_credible_load(path: FootprintPath, max_length_m: float) -> Footprint:
                else path.max_deflection_m)
         if segment.active[0] or segment.active[-1]:
             return path.at_deflection(start)  # a zone end node enters here, with no force yet
-        if path.at_deflection(end * (1 - 1e-12)).length_m > max_length_m:
+        if path.at_deflection(end * (1 - _EVENT_TOLERANCE)).length_m > max_length_m:
             low, high = start, end
-            for _ in range(60):  # the length grows continuously along a segment
+            for _ in range(LENGTH_BISECTIONS):  # the length grows continuously along a segment
                 middle = 0.5 * (low + high)
                 if path.at_deflection(middle).length_m > max_length_m:
                     high = middle

@@ -59,6 +59,14 @@ MAX_SUBSTEP_S = 1e-4
 _STATE_FORMAT = "tire_fmu.contact-state/1"
 _KERNEL_CACHE_SIZE = 32
 _SOLVE_CACHE_SIZE = 256
+#: Active-set iterations per solve: this many per zone node, plus ACTIVE_SET_EXTRA; then PGS.
+ACTIVE_SET_PER_NODE = 2
+ACTIVE_SET_EXTRA = 4
+#: Projected Gauss-Seidel fallback: sweeps, and the relative change that ends it.
+PGS_SWEEPS = 1000
+PGS_TOLERANCE = 1e-13
+#: A step within this relative distance of a multiple of the substep needs no extra substep.
+SUBSTEP_SLACK = 1e-12
 
 
 class StepError(ValueError):
@@ -251,7 +259,8 @@ class _FastStep:
         # the footprint's edges lie between the same nodes while the active set holds
         on = np.flatnonzero(active)
         x = sim.x_road
-        self.edges = None if not on.size or on[0] == 0 or on[-1] == nz - 1 else (
+        # (the unilateral law's pushing nodes are the active set; a two-sided spring can pull)
+        self.edges = None if sim.linear or not on.size or on[0] == 0 or on[-1] == nz - 1 else (
             int(on[0]), int(on[0] - 1), float(x[on[0]]), float(x[on[0] - 1] - x[on[0]]),
             int(on[-1]), int(on[-1] + 1), float(x[on[-1]]), float(x[on[-1] + 1] - x[on[-1]]))
 
@@ -627,7 +636,7 @@ class ContactSimulator:
             return f
         active = self.active
         m = interface.m
-        for _ in range(2 * nz + 4):
+        for _ in range(ACTIVE_SET_PER_NODE * nz + ACTIVE_SET_EXTRA):
             f = np.zeros(nz)
             if active.any():
                 f[active] = self._active_solve(interface, active, sigma0)
@@ -657,13 +666,13 @@ class ContactSimulator:
         nz = self.n_zone
         s, w_p = interface.m[:nz], interface.m[nz:2 * nz]
         f = np.maximum(self.forces, 0.0)
-        for _ in range(1000):
+        for _ in range(PGS_SWEEPS):
             previous = f.copy()
             for j in range(nz):
                 pen_j = base[nz + j] + w_p[j] @ f
                 rest = base[j] + s[j] @ f - s[j, j] * f[j]
                 f[j] = max(0.0, rest / (1.0 - s[j, j])) if pen_j > 0.0 else 0.0
-            if np.max(np.abs(f - previous)) <= 1e-13 * max(1.0, float(np.max(np.abs(f)))):
+            if np.max(np.abs(f - previous)) <= PGS_TOLERANCE * max(1.0, float(np.max(np.abs(f)))):
                 break
         self.active = f > 0.0
         return f
@@ -674,7 +683,7 @@ class ContactSimulator:
         for cached_h, step in self._kernels.items():
             if abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
                 return step
-        n_sub = max(1, math.ceil(h / self.contact.substep_s * (1 - 1e-12)))
+        n_sub = max(1, math.ceil(h / self.contact.substep_s * (1 - SUBSTEP_SLACK)))
         step = _Step(h, n_sub, self._make_kernel(h / n_sub))
         if len(self._kernels) >= _KERNEL_CACHE_SIZE:
             self._kernels.pop(next(iter(self._kernels)))

@@ -52,20 +52,32 @@ class RingTruncation:
     static_correction: bool = True
 
     def __post_init__(self) -> None:
-        problems = []
-        f_max = self.f_max_hz
-        if f_max is not None and not (isinstance(f_max, (int, float)) and not isinstance(
-                f_max, bool) and 0 < f_max <= 1e7):
-            problems.append(f"f_max_hz = {f_max!r}: must be in (0, 1e7] Hz, or None for no "
-                            "frequency cut")
-        n = self.n_modes
-        if n is not None and (isinstance(n, bool) or not isinstance(n, int)
-                              or not 1 <= n <= 100_000):
-            problems.append(f"n_modes = {n!r}: must be an integer in [1, 100000] or None")
+        problems = truncation_problems(self.f_max_hz, self.n_modes)
         if problems:
             from .parameters import ParameterError
 
             raise ParameterError(problems)
+
+
+#: Allowed truncation settings (as for the reduction): f_max in (0, F_MAX_LIMIT_HZ] Hz and
+#: n_modes in [1, N_MODES_LIMIT], or None for no limit.
+F_MAX_LIMIT_HZ = 1e7
+N_MODES_LIMIT = 100_000
+
+
+def truncation_problems(f_max_hz, n_modes) -> list[str]:
+    """Why a truncation setting cannot be used (empty when it can)."""
+    problems = []
+    if f_max_hz is not None and not (
+        isinstance(f_max_hz, (int, float)) and 0 < f_max_hz <= F_MAX_LIMIT_HZ
+    ):
+        problems.append(f"f_max_hz = {f_max_hz!r}: must be in (0, {F_MAX_LIMIT_HZ:g}] Hz, or "
+                        "None for no frequency cut")
+    if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(n_modes, int)
+                                or not 1 <= n_modes <= N_MODES_LIMIT):
+        problems.append(f"n_modes = {n_modes!r}: must be an integer in [1, {N_MODES_LIMIT}] or "
+                        "None")
+    return problems
 
 
 @dataclass(frozen=True, eq=False)

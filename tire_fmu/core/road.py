@@ -26,6 +26,8 @@ from .contact import RoadWindows
 
 #: Communication points closer than this times the time are one point (a few ulps).
 SAME_POINT_EPS = 8 * np.finfo(float).eps
+#: Slack when a delay is cut into whole steps, so a delay of exactly k steps is k steps.
+LAG_SLACK = 1e-12
 
 
 def hermite_value(t, z, v, x):
@@ -221,7 +223,7 @@ class _DelayLine:
         n = windows.early_s.size
         width = windows.late_s - windows.early_s
         ends = np.concatenate([windows.early_s, windows.late_s]) / h  # lag of each end
-        older = np.floor(ends + 1e-12).astype(int) + 1  # the older sample of its interval
+        older = np.floor(ends + LAG_SLACK).astype(int) + 1  # the older sample of its interval
         s = np.clip(older - ends, 0.0, 1.0)  # fraction from the older sample to the newer
         s2, s3 = s * s, s * s * s
         weights_z = np.stack([2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2,
@@ -255,7 +257,7 @@ class _DelayLine:
     @classmethod
     def samples_needed(cls, windows: RoadWindows, h: float) -> int:
         """Samples a read reaches: the older sample of the latest window end, and lag 0."""
-        return int(np.floor(windows.horizon_s / h + 1e-12)) + 2
+        return int(np.floor(windows.horizon_s / h + LAG_SLACK)) + 2
 
     def push(self, time: float, z: float, v: float) -> None:
         """Add the sample of communication point ``time``; the same point again replaces it."""

@@ -22,6 +22,10 @@ from .parameters import TireParameters
 
 #: Speeds are scanned up to this; a tire with no standing wave below it reports infinity.
 MAX_SCANNED_SPEED_M_S = 400.0
+#: Spins scanned (evenly, from 0 to the largest) before a crossing is refined with brentq.
+SCAN_POINTS = 801
+#: brentq's absolute and relative tolerance on the critical spin (rad/s).
+ROOT_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -58,7 +62,7 @@ def critical_speed(tire: TireParameters, n_elements: int) -> CriticalSpeed:
 def _critical_speed(tire: TireParameters, n_elements: int) -> CriticalSpeed:
     orders = np.arange(1, n_elements // 2 + 1)
     kappa = (order_symbols(orders, n_elements)["d1"] / 1j).real
-    spins = np.linspace(0.0, MAX_SCANNED_SPEED_M_S / tire.R, 801)[1:]
+    spins = np.linspace(0.0, MAX_SCANNED_SPEED_M_S / tire.R, SCAN_POINTS)[1:]
     previous = 0.0
     for spin in spins:
         margins = _margins(tire, orders, kappa, n_elements, spin)
@@ -74,7 +78,7 @@ def _critical_speed(tire: TireParameters, n_elements: int) -> CriticalSpeed:
                     value = _margins(tire, n, k, n_elements, s)[b, 0]
                     return value if np.isfinite(value) else -1.0
 
-                root = so.brentq(margin, previous, spin, xtol=1e-12, rtol=1e-12)
+                root = so.brentq(margin, previous, spin, xtol=ROOT_TOLERANCE, rtol=ROOT_TOLERANCE)
                 candidates.append((root, int(n[0]), ("in", "out")[branch_index]))
             root, order, branch = min(candidates)
             return CriticalSpeed(root * tire.R, root, order, branch, n_elements)

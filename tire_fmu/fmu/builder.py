@@ -117,7 +117,7 @@ def _stage_project(folder: Path) -> list[Path]:
     shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
     for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
         shutil.copyfile(source, package / "core" / source.name)
-    for name in ("__init__.py", "interface.py"):  # the variable table the slave declares
+    for name in ("__init__.py", "interface.py", "spec.py"):  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"

@@ -26,7 +26,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 import time
 import warnings
 from dataclasses import dataclass
@@ -59,16 +58,7 @@ from tire_fmu.fmu.interface import (
     FmuVariable,
     fmu_variables,
 )
-
-# The core names operating-point fields after their units, and "no limit" None, where the
-# FMU user set ``load`` and 0.
-_CORE_WORDING = [
-    (re.compile(r"\bload_n\b"), "load"),
-    (re.compile(r"\bspeed_m_s\b"), "speed"),
-    (re.compile(r"\bf_max_hz\b"), "f_max"),
-    (re.compile(r"\bcontact_zone_length_m\b"), "contact_zone_length"),
-    (re.compile(r"^((?:f_max|n_modes) = .*) or None\b"), r"\1 or 0"),
-]
+from tire_fmu.fmu.spec import fmu_message
 
 _STATE_FORMAT = "tire_fmu.fmu-state/1"
 
@@ -475,7 +465,5 @@ def _baked_parameter_values(resources: str | None) -> dict | None:
 
 
 def _fmu_wording(message: str) -> str:
-    """A core message in the FMU's variable names."""
-    for pattern, replacement in _CORE_WORDING:
-        message = pattern.sub(replacement, message)
-    return message
+    """A core message in the FMU's variable names (the wording the native FMU uses too)."""
+    return fmu_message(message)

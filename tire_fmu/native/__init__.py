@@ -1,21 +1,26 @@
-"""The reduced model as a self-contained C FMU: FMI 2.0 co-simulation, no Python on the host.
+"""The native C FMU: FMI 2.0 co-simulation in C, no Python on the host.
 
-- :mod:`.codegen`: the export's declaration (variables with their fixed values, GUID,
-  description) and the C sources, the model as ``static const double`` tables;
-- :mod:`.runtime`: the FMI 2.0 runtime in C, the same for every export;
-- :mod:`.builder`: ``build_native_fmu(reduced, out)`` writes the model description, compiles
-  the sources with the local C compiler for linux64 and packs binary and sources.
-
-See docs/native.md. ``tire-fmu export --format fmu OUT.fmu`` is the command-line way in.
+The C (``tire_fmu/native/c``, package data) builds the model itself at
+``fmi2ExitInitializationMode`` from its parameters: validation with the Python FMU's messages,
+the critical speed, the free ring order by order, the static footprint, the road windows; then
+it steps with the unilateral contact exactly as :class:`tire_fmu.core.contact_dynamics.
+ContactSimulator` does. :mod:`.builder` writes the generated headers, the model description and
+the linux64 and win64 binaries into one ``.fmu``. See docs/native.md; ``tire-fmu export
+--format fmu OUT.fmu`` is the command-line way in.
 """
 
-from .builder import NativeBuildError, build_native_fmu
-from .codegen import DEFAULT_MODEL_IDENTIFIER, NativeModel, native_model
+from .builder import (
+    DEFAULT_MODEL_IDENTIFIER,
+    NativeBuildError,
+    build_native_fmu,
+    default_platforms,
+    parameter_start_values,
+)
 
 __all__ = [
     "DEFAULT_MODEL_IDENTIFIER",
     "NativeBuildError",
-    "NativeModel",
     "build_native_fmu",
-    "native_model",
+    "default_platforms",
+    "parameter_start_values",
 ]

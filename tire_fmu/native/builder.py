@@ -1,40 +1,51 @@
-"""Build a native FMU: C sources from :mod:`.codegen`, the model description, a linux64 binary
-compiled with the local C compiler, all packed into one ``.fmu``.
+"""Build the native FMU: the C of ``tire_fmu/native/c`` (package data), the generated headers,
+the model description, linux64 and win64 binaries, all in one ``.fmu``.
 
-The FMU holds ``sources/`` (the generated C and the FMI 2.0 headers, copied from fmpy, a
-maintained package, rather than typed by hand) listed in the model description's
-``SourceFiles``, so a host on another platform can compile it: the folder builds on its own,
-and the binary here is built from exactly that folder. The build fails unless
-``fmpy.validation.validate_fmu`` reports no problem.
+The C builds the model itself at ``fmi2ExitInitializationMode`` from its parameters, so an
+export only chooses the parameters' start values (an operating point, a tire); every parameter
+stays settable before initialisation. What the C and the Python FMU must agree on comes from
+:mod:`tire_fmu.fmu.spec`, written into ``spec.h`` here; the export's own values (identifier,
+GUID, start values) go into ``export.h``. ``sources/`` holds everything a host needs to compile
+the FMU elsewhere: the C files, the headers, and ``buildDescription.xml`` (also listed as
+``SourceFiles`` in the model description), so ``fmpy.build.build_platform_binary`` or a plain
+``cc -shared sources/*.c -lm`` makes a binary.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import platform
 import shutil
 import subprocess
 import sys
 import tempfile
+import uuid
 import zipfile
+from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from xml.etree import ElementTree
 
 import tire_fmu
 
-from ..core.parameters import OperatingPoint
-from ..core.reduction import ReducedModel
 from ..fmu.interface import CAPABILITIES as SHARED_CAPABILITIES
-from ..fmu.interface import unit_definitions
-from .codegen import DEFAULT_MODEL_IDENTIFIER, NativeModel, generate_sources, native_model
-from .runtime import RUNTIME_FILE
+from ..fmu.interface import FmuVariable, fmu_variables, unit_definitions
+from ..fmu.spec import LOG_CATEGORIES, c_header
 
-#: The FMI 2.0 headers the sources include.
-FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
-COMPILE_FLAGS = ("-shared", "-fPIC", "-O2", "-Wall", "-Wextra")
-PLATFORM = "linux64"
+DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
+#: The C files of the FMU, in compile order, and the headers they include.
+C_SOURCES = ("fmi2_layer.c", "tire_model.c", "ring.c", "contact.c", "road.c", "simulator.c",
+             "numerics.c")
+C_HEADERS = ("model.h", "tire.h", "numerics.h", "fmi2Functions.h", "fmi2FunctionTypes.h",
+             "fmi2TypesPlatform.h")
+GENERATED = ("spec.h", "export.h")
+C_STANDARD = "C99"
+WARNING_FLAGS = ("-Wall", "-Wextra")
 
-#: What the C runtime really does (see tire_fmu/native/runtime.py).
+_GUID_NAMESPACE = uuid.UUID("6f1c3a52-5d1e-4f57-9a53-2b1e0c7d9e41")
+
+#: What the C really does.
 CAPABILITIES = {
     "needsExecutionTool": False,
     "canInterpolateInputs": False,  # the velocity inputs carry the ramp instead
@@ -46,113 +57,276 @@ CAPABILITIES = {
     **SHARED_CAPABILITIES,  # variable steps, state get/set and serialisation: as the Python FMU
 }
 
-LOG_CATEGORIES = {
-    "logStatusWarning": "Messages with status fmi2Warning (loss of contact); always on unless "
-                        "categories are chosen",
-    "logStatusDiscard": "Messages with status fmi2Discard (a refused doStep)",
-    "logStatusError": "Messages with status fmi2Error (a refused call)",
-    "logAll": "All messages, including information when the FMU starts",
-}
-
 
 class NativeBuildError(RuntimeError):
     """The native FMU could not be built, or what was built does not validate."""
 
 
-def build_native_fmu(reduced: ReducedModel, out: str | Path,
-                     operating_point: OperatingPoint | None = None,
+@dataclass(frozen=True)
+class Toolchain:
+    """How one platform's binary is compiled on this machine."""
+
+    platform: str  # FMI 2.0 binaries/ folder
+    compiler: str  # a command (the first word of $CC for linux64)
+    suffix: str
+    flags: tuple[str, ...]
+    libraries: tuple[str, ...]
+
+    def available(self) -> bool:
+        return shutil.which(self.compiler) is not None
+
+
+def toolchains() -> dict[str, Toolchain]:
+    cc = os.environ.get("CC", "").split() or ["gcc"]
+    return {
+        "linux64": Toolchain("linux64", cc[0], ".so",
+                             (*cc[1:], "-shared", "-fPIC", "-fvisibility=hidden", "-O2"),
+                             ("-lm",)),
+        # mingw's own printf (correctly rounded, "1e+07" not "1e+007") and no DLL needed
+        # beyond the C runtime Windows ships
+        "win64": Toolchain("win64", "x86_64-w64-mingw32-gcc", ".dll",
+                           ("-shared", "-O2", "-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"),
+                           ()),
+    }
+
+
+def c_folder():
+    """The C sources shipped with the package (importlib.resources, so zipped installs work)."""
+    return resources.files("tire_fmu.native") / "c"
+
+
+def parameter_start_values(tire=None, load_n=None, speed_m_s=None, **settings) -> dict:
+    """Start values by FMU parameter name: a tire (TireParameters), the load and speed, and any
+    other parameter by its FMU name (n_elements, f_max, ...)."""
+    values = dict(tire.as_dict()) if tire is not None else {}
+    if load_n is not None:
+        values["load"] = float(load_n)
+    if speed_m_s is not None:
+        values["speed"] = float(speed_m_s)
+    values.update(settings)
+    return values
+
+
+def _table(start_values: dict | None) -> tuple[FmuVariable, ...]:
+    table = fmu_variables(parameter_values=start_values)
+    known = {v.name: v for v in table if v.causality == "parameter"}
+    unknown = sorted(set(start_values or {}) - set(known))
+    if unknown:
+        raise NativeBuildError(f"start values for unknown parameters {unknown}; known: "
+                               f"{sorted(known)}")
+    for name, value in (start_values or {}).items():
+        kind = known[name].type
+        if kind == "Integer" and (isinstance(value, bool) or int(value) != value):
+            raise NativeBuildError(f"{name} = {value!r}: an Integer parameter needs an integer")
+    return table
+
+
+def _c_double(value) -> str:
+    value = float(value)
+    if value != value or value in (float("inf"), float("-inf")):
+        raise NativeBuildError(f"start value {value!r}: start values must be finite")
+    return repr(value)
+
+
+def export_header(table: tuple[FmuVariable, ...], guid: str, model_identifier: str) -> str:
+    starts = ", ".join(_c_double(0.0 if v.start is None else v.start) for v in table)
+    return "\n".join([
+        "/* export.h: this export's identifier, GUID and start values. GENERATED by",
+        " * tire_fmu.native.builder: do not edit. */",
+        "#ifndef TIRE_EXPORT_H",
+        "#define TIRE_EXPORT_H",
+        "",
+        "/* one value per variable, by value reference (fmi2_layer.c checks the count) */",
+        f'#define EXPORT_MODEL_IDENTIFIER "{model_identifier}"',
+        f'#define EXPORT_GUID "{guid}"',
+        "static const double EXPORT_START_VALUES[] = {",
+        f"    {starts}",
+        "};",
+        "",
+        "#endif",
+        "",
+    ])
+
+
+def write_sources(folder: Path, table, guid: str, model_identifier: str) -> list[Path]:
+    """The C, the FMI headers, spec.h (from tire_fmu.fmu.spec) and export.h into ``folder``:
+    a folder that compiles on its own."""
+    folder.mkdir(parents=True, exist_ok=True)
+    source = c_folder()
+    written = []
+    for name in C_SOURCES + C_HEADERS:
+        path = folder / name
+        path.write_bytes((source / name).read_bytes())
+        written.append(path)
+    (folder / "spec.h").write_text(c_header(table), encoding="utf-8")
+    (folder / "export.h").write_text(export_header(table, guid, model_identifier),
+                                     encoding="utf-8")
+    written += [folder / "spec.h", folder / "export.h"]
+    return written
+
+
+def build_description(model_identifier: str) -> bytes:
+    """sources/buildDescription.xml (FMI 3.0 / 2.0.4 layout, read by fmpy's build)."""
+    root = ElementTree.Element("fmiBuildDescription", fmiVersion="3.0")
+    config = ElementTree.SubElement(root, "BuildConfiguration",
+                                    modelIdentifier=model_identifier)
+    files = ElementTree.SubElement(config, "SourceFileSet", language=C_STANDARD)
+    for name in C_SOURCES:
+        ElementTree.SubElement(files, "SourceFile", name=name)
+    ElementTree.SubElement(config, "Library", name="m", description="libm (not on Windows)")
+    ElementTree.indent(root, space="  ")
+    return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def compile_binary(sources: Path, toolchain: Toolchain, model_identifier: str, target: Path,
+                   extra_flags: tuple[str, ...] = ()) -> Path:
+    """``sources/*.c`` into ``target/<model_identifier><suffix>`` (include path: that folder
+    only, which proves it stands alone)."""
+    if not toolchain.available():
+        raise NativeBuildError(f"{toolchain.platform}: compiler {toolchain.compiler} not found"
+                               + (" (Debian: apt-get install gcc-mingw-w64-x86-64)"
+                                  if toolchain.platform == "win64" else " (set CC)"))
+    target.mkdir(parents=True, exist_ok=True)
+    library = target / f"{model_identifier}{toolchain.suffix}"
+    command = [toolchain.compiler, f"-std={C_STANDARD.lower()}", *toolchain.flags,
+               *WARNING_FLAGS, *extra_flags, "-I", str(sources), "-o", str(library),
+               *(str(sources / name) for name in C_SOURCES), *toolchain.libraries]
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0 or result.stderr.strip():
+        raise NativeBuildError(f"compiling for {toolchain.platform} failed or warned "
+                               f"({' '.join(command)}):\n{result.stderr.strip()}")
+    return library
+
+
+def default_platforms() -> tuple[str, ...]:
+    """linux64 (on Linux x86-64) and win64 when the cross compiler is installed."""
+    chains = toolchains()
+    found = []
+    if sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64"):
+        found.append("linux64")
+    if chains["win64"].available():
+        found.append("win64")
+    return tuple(found)
+
+
+def _xml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    return repr(float(value))
+
+
+def model_description(table, guid: str, model_identifier: str) -> bytes:
+    """``modelDescription.xml`` from the same variable table as spec.h and export.h."""
+    root = ElementTree.Element("fmiModelDescription", {
+        "fmiVersion": "2.0",
+        "modelName": model_identifier,
+        "guid": guid,
+        "description": "Open in-plane ring tire (0-300 Hz), native C: builds its free-ring "
+                       "modal model and static footprint for the parameters at initialisation, "
+                       "then steps with the unilateral contact; inputs are deviations from "
+                       "static equilibrium, forces are totals. Needs no Python.",
+        "author": "tire_fmu contributors",
+        "version": tire_fmu.__version__,
+        "license": "MIT",
+        "generationTool": f"tire_fmu {tire_fmu.__version__} (tire_fmu.native)",
+        "variableNamingConvention": "structured",
+        "numberOfEventIndicators": "0",
+    })
+    co_simulation = ElementTree.SubElement(root, "CoSimulation", {
+        "modelIdentifier": model_identifier,
+        **{name: _xml_value(value) for name, value in CAPABILITIES.items()},
+    })
+    sources = ElementTree.SubElement(co_simulation, "SourceFiles")
+    for name in C_SOURCES:
+        ElementTree.SubElement(sources, "File", name=name)
+    root.append(unit_definitions(v.unit for v in table if v.unit))
+    categories = ElementTree.SubElement(root, "LogCategories")
+    for name, description in LOG_CATEGORIES.items():
+        ElementTree.SubElement(categories, "Category", name=name, description=description)
+    ElementTree.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="1.0",
+                           stepSize="0.0001")
+    variables = ElementTree.SubElement(root, "ModelVariables")
+    for vr, v in enumerate(table):
+        attributes = {"name": v.name, "valueReference": str(vr), "description": v.description,
+                      "causality": v.causality, "variability": v.variability}
+        if v.causality == "parameter":
+            attributes["initial"] = "exact"
+        elif v.causality == "output":
+            attributes["initial"] = "calculated"
+        element = ElementTree.SubElement(variables, "ScalarVariable", attributes)
+        typed = ElementTree.SubElement(element, v.type)
+        if v.causality != "output":  # outputs are calculated: no start value
+            value = v.start
+            if v.type == "Integer":
+                value = int(value)
+            elif v.type == "Boolean":
+                value = bool(value)
+            typed.set("start", _xml_value(value))
+        if v.unit:
+            typed.set("unit", v.unit)
+    structure = ElementTree.SubElement(root, "ModelStructure")
+    outputs = [i for i, v in enumerate(table, 1) if v.causality == "output"]
+    for tag in ("Outputs", "InitialUnknowns"):
+        group = ElementTree.SubElement(structure, tag)
+        for index in outputs:
+            ElementTree.SubElement(group, "Unknown", index=str(index))
+    ElementTree.indent(root, space="  ")
+    return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def export_guid(table, model_identifier: str) -> str:
+    """A GUID from the content: the model description without its GUID and every source."""
+    digest = hashlib.sha256(model_description(table, "", model_identifier))
+    digest.update(c_header(table).encode())
+    source = c_folder()
+    for name in C_SOURCES + C_HEADERS:
+        digest.update((source / name).read_bytes())
+    return "{" + str(uuid.uuid5(_GUID_NAMESPACE, digest.hexdigest())) + "}"
+
+
+def build_native_fmu(out: str | Path, start_values: dict | None = None,
+                     platforms: tuple[str, ...] | None = None,
                      model_identifier: str = DEFAULT_MODEL_IDENTIFIER,
-                     binary: bool = True, validate: bool = True) -> Path:
-    """Write the native FMU of ``reduced`` to ``out`` (a ``.fmu`` path, or a folder to hold
+                     validate: bool = True) -> Path:
+    """Write the native FMU to ``out`` (a ``.fmu`` path, or a folder for
     ``<model_identifier>.fmu``) and return its path.
 
-    ``operating_point`` supplies the requested load for the ``load`` parameter (see
-    :func:`~tire_fmu.native.codegen.export_parameters`). ``binary=False`` leaves out the
-    linux64 binary: a sources-only FMU for a host that compiles it. ``validate`` runs fmpy's
-    validation and raises :class:`NativeBuildError` listing any problem.
+    ``start_values`` (FMU parameter name -> value, see :func:`parameter_start_values`) become
+    the parameters' start values: an operating point frozen as defaults, still settable before
+    initialisation. ``platforms`` chooses the binaries (default :func:`default_platforms`;
+    ``()`` writes a sources-only FMU). ``validate`` runs fmpy's validation and raises
+    :class:`NativeBuildError` listing any problem.
     """
-    try:
-        native = native_model(reduced, operating_point, model_identifier)
-    except ValueError as error:
-        raise NativeBuildError(str(error)) from error
+    table = _table(start_values)
+    platforms = default_platforms() if platforms is None else tuple(platforms)
+    chains = toolchains()
+    unknown = [p for p in platforms if p not in chains]
+    if unknown:
+        raise NativeBuildError(f"platforms {unknown}: known {sorted(chains)}")
     out = Path(out)
     if out.is_dir():
-        out = out / f"{native.model_identifier}.fmu"
+        out = out / f"{model_identifier}.fmu"
     if not out.parent.is_dir():
         raise NativeBuildError(f"{out}: folder {out.parent} does not exist")
+    guid = export_guid(table, model_identifier)
     with tempfile.TemporaryDirectory(prefix="tire_fmu_native_") as staging:
         staging = Path(staging)
-        write_sources(native, staging / "sources")
-        if binary:
-            compile_sources(staging / "sources", native.model_identifier,
-                            staging / "binaries" / PLATFORM)
-        (staging / "modelDescription.xml").write_bytes(model_description(native))
+        write_sources(staging / "sources", table, guid, model_identifier)
+        (staging / "sources" / "buildDescription.xml").write_bytes(
+            build_description(model_identifier))
+        for name in platforms:
+            compile_binary(staging / "sources", chains[name], model_identifier,
+                           staging / "binaries" / name)
+        (staging / "modelDescription.xml").write_bytes(
+            model_description(table, guid, model_identifier))
         pack(staging, out)
     if validate:
         problems = validation_problems(out)
         if problems:
             raise NativeBuildError(f"{out} does not validate: " + "; ".join(problems))
     return out
-
-
-def write_sources(native: NativeModel, folder: Path) -> list[Path]:
-    """The generated C and the FMI headers, a folder that compiles on its own."""
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-    for name, text in generate_sources(native).items():
-        path = folder / name
-        path.write_text(text, encoding="utf-8")
-        written.append(path)
-    headers = fmi_header_folder()
-    for name in FMI_HEADERS:
-        written.append(Path(shutil.copyfile(headers / name, folder / name)))
-    return written
-
-
-def fmi_header_folder() -> Path:
-    """fmpy's copy of the FMI 2.0 headers."""
-    try:
-        import fmpy
-    except ImportError as error:
-        raise NativeBuildError("the FMI 2.0 headers come from fmpy: pip install fmpy") from error
-    folder = Path(fmpy.__file__).parent / "c-code"
-    missing = [name for name in FMI_HEADERS if not (folder / name).is_file()]
-    if missing:
-        raise NativeBuildError(f"fmpy {fmpy.__version__} at {folder} lacks {missing}")
-    return folder
-
-
-def find_compiler() -> list[str]:
-    """$CC (a command, perhaps with flags) when set, else gcc, else cc."""
-    chosen = os.environ.get("CC", "").split()
-    if chosen:
-        if shutil.which(chosen[0]) is None:
-            raise NativeBuildError(f"CC = {os.environ['CC']!r}: {chosen[0]} not found")
-        return chosen
-    for candidate in ("gcc", "cc"):
-        if shutil.which(candidate):
-            return [candidate]
-    raise NativeBuildError("no C compiler found (set CC, or install gcc); or build a "
-                           "sources-only FMU with binary=False")
-
-
-def compile_sources(sources: Path, model_identifier: str, target_folder: Path,
-                    extra_flags: tuple[str, ...] = ()) -> Path:
-    """Compile ``sources`` (include path: that folder only, which proves it stands alone)
-    into ``target_folder/<model_identifier>.so``."""
-    if not (sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")):
-        raise NativeBuildError(f"binaries are built for {PLATFORM} only, and this is "
-                               f"{sys.platform}/{platform.machine()}; build a sources-only FMU "
-                               "with binary=False and let the host compile it")
-    target_folder.mkdir(parents=True, exist_ok=True)
-    library = target_folder / f"{model_identifier}.so"
-    command = [*find_compiler(), *COMPILE_FLAGS, *extra_flags, "-I", str(sources),
-               "-o", str(library), str(sources / RUNTIME_FILE), "-lm"]
-    result = subprocess.run(command, capture_output=True, text=True)
-    if result.returncode != 0:
-        raise NativeBuildError(f"compiling the FMU failed ({' '.join(command)}):\n"
-                               + result.stderr.strip())
-    return library
 
 
 def pack(folder: Path, fmu: Path) -> None:
@@ -165,99 +339,6 @@ def pack(folder: Path, fmu: Path) -> None:
         for path in files:
             archive.write(path, path.relative_to(folder).as_posix())
     partial.replace(fmu)
-
-
-# -- the model description ----------------------------------------------------------------
-
-def _xml_value(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    return repr(float(value))
-
-
-def model_description(native: NativeModel) -> bytes:
-    """``modelDescription.xml`` from the same variable table as the C code."""
-    root = ElementTree.Element("fmiModelDescription", {
-        "fmiVersion": "2.0",
-        "modelName": native.model_identifier,
-        "guid": native.guid,
-        "description": native.description,
-        "author": "tire_fmu contributors",
-        "version": tire_fmu.__version__,
-        "license": "MIT",
-        "generationTool": f"tire_fmu {tire_fmu.__version__} (tire_fmu.native)",
-        "variableNamingConvention": "structured",
-        "numberOfEventIndicators": "0",
-    })
-    co_simulation = ElementTree.SubElement(root, "CoSimulation", {
-        "modelIdentifier": native.model_identifier,
-        **{name: _xml_value(value) for name, value in CAPABILITIES.items()},
-    })
-    sources = ElementTree.SubElement(co_simulation, "SourceFiles")
-    ElementTree.SubElement(sources, "File", name=RUNTIME_FILE)
-
-    root.append(unit_definitions(v.unit for v in native.variables if v.unit))
-    categories = ElementTree.SubElement(root, "LogCategories")
-    for name, description in LOG_CATEGORIES.items():
-        ElementTree.SubElement(categories, "Category", name=name, description=description)
-    ElementTree.SubElement(root, "DefaultExperiment", startTime="0.0", stopTime="1.0",
-                           stepSize="0.0001")
-    annotations = ElementTree.SubElement(root, "VendorAnnotations")
-    tool = ElementTree.SubElement(annotations, "Tool", name="tire_fmu")
-    ElementTree.SubElement(tool, "ReducedModel", _export_record(native))
-
-    variables = ElementTree.SubElement(root, "ModelVariables")
-    for vr, v in enumerate(native.variables):
-        attributes = {"name": v.name, "valueReference": str(vr), "description": v.description,
-                      "causality": v.causality, "variability": v.variability}
-        if v.causality == "parameter":
-            attributes["initial"] = "exact"
-        elif v.causality == "output":
-            attributes["initial"] = "calculated"
-        element = ElementTree.SubElement(variables, "ScalarVariable", attributes)
-        typed = ElementTree.SubElement(element, v.type)
-        if v.causality != "output":  # outputs are calculated: no start value
-            typed.set("start", _xml_value(v.start))
-        if v.unit:
-            typed.set("unit", v.unit)
-
-    structure = ElementTree.SubElement(root, "ModelStructure")
-    outputs = [i for i, v in enumerate(native.variables, 1) if v.causality == "output"]
-    for tag in ("Outputs", "InitialUnknowns"):  # every output is calculated
-        group = ElementTree.SubElement(structure, tag)
-        for index in outputs:
-            ElementTree.SubElement(group, "Unknown", index=str(index))
-    ElementTree.indent(root, space="  ")
-    return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
-
-
-def _export_record(native: NativeModel) -> dict[str, str]:
-    """The reduction settings and the model's size, machine-readable, for the annotations."""
-    r = native.reduced
-    s = r.settings
-    op = r.metadata.operating_point
-    record = {
-        "method": s.method,
-        "contribution_threshold": repr(s.contribution_threshold),
-        "f_max_hz": "none" if s.f_max_hz is None else repr(float(s.f_max_hz)),
-        "n_modes_limit": "none" if s.n_modes is None else str(s.n_modes),
-        "static_correction": _xml_value(s.static_correction),
-        "n_states_requested": "none" if s.n_states is None else str(s.n_states),
-        "target_error": repr(s.target_error),
-        "error_band_hz": f"{s.error_band_hz[0]!r} {s.error_band_hz[1]!r}",
-        "modes": str(r.n_modes),
-        "states": str(r.n_states),
-        "road_delay_groups": str(r.n_inputs - 1),
-        "road_delays_s": " ".join(repr(float(t)) for t in r.input_delays_s[1:]),
-        "patch_length_m": repr(float(op.patch_length_m)),
-        "patch_load_n": repr(float(op.load_n)),
-        "critical_speed_m_s": repr(float(op.critical_speed_m_s)),
-    }
-    if r.report is not None:
-        record["max_relative_frf_error"] = repr(float(r.report.max_relative_error))
-    return record
 
 
 def validation_problems(fmu: str | Path) -> list[str]:

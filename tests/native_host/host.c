@@ -1,0 +1,118 @@
+/* A minimal FMI 2.0 co-simulation host for the tests: loads the FMU's binary with
+ * LoadLibrary/GetProcAddress (Windows) or dlopen/dlsym, reads commands from a file, prints
+ * the outputs after each step with %.17g, and every status and log line.
+ *
+ *   host BINARY GUID COMMANDS
+ *
+ * Commands, one per line:
+ *   real VR VALUE | integer VR VALUE | boolean VR 0|1   set a variable (any phase)
+ *   init                                                 setup, enter and exit initialisation
+ *   step T H                                             doStep, then print the outputs
+ *   get VR...                                            print fmi2GetReal of the references
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <stdarg.h>
+
+#ifdef _WIN32
+#include <windows.h>
+#define LOAD(path) (void*)LoadLibraryA(path)
+#define SYMBOL(lib, name) (void*)GetProcAddress((HMODULE)(lib), name)
+#else
+#include <dlfcn.h>
+#define LOAD(path) dlopen(path, RTLD_NOW | RTLD_LOCAL)
+#define SYMBOL(lib, name) dlsym(lib, name)
+#endif
+
+#include "fmi2Functions.h"
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String message, ...)
+{
+    char text[4096];
+    va_list args;
+    (void)env;
+    va_start(args, message);
+    vsnprintf(text, sizeof text, message, args);
+    va_end(args);
+    printf("log %s %d %s %s\n", name, (int)status, category, text);
+}
+
+#define GET(type, name) type name = (type)SYMBOL(lib, #name); if (!name) { printf("missing %s\n", #name); return 2; }
+
+int main(int argc, char** argv)
+{
+    void* lib;
+    char line[512];
+    FILE* commands;
+    fmi2Component c;
+    fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+    fmi2ValueReference outputs[5] = {4, 5, 6, 7, 8};
+    if (argc != 4) {
+        printf("usage: host BINARY GUID COMMANDS\n");
+        return 2;
+    }
+    lib = LOAD(argv[1]);
+    if (!lib) {
+        printf("cannot load %s\n", argv[1]);
+        return 2;
+    }
+    {
+        GET(fmi2InstantiateTYPE*, fmi2Instantiate)
+        GET(fmi2SetupExperimentTYPE*, fmi2SetupExperiment)
+        GET(fmi2EnterInitializationModeTYPE*, fmi2EnterInitializationMode)
+        GET(fmi2ExitInitializationModeTYPE*, fmi2ExitInitializationMode)
+        GET(fmi2SetRealTYPE*, fmi2SetReal)
+        GET(fmi2SetIntegerTYPE*, fmi2SetInteger)
+        GET(fmi2SetBooleanTYPE*, fmi2SetBoolean)
+        GET(fmi2GetRealTYPE*, fmi2GetReal)
+        GET(fmi2DoStepTYPE*, fmi2DoStep)
+        GET(fmi2TerminateTYPE*, fmi2Terminate)
+        GET(fmi2FreeInstanceTYPE*, fmi2FreeInstance)
+        c = fmi2Instantiate("host", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2True);
+        if (!c) {
+            printf("instantiate failed\n");
+            return 1;
+        }
+        commands = fopen(argv[3], "r");
+        if (!commands) return 2;
+        while (fgets(line, sizeof line, commands)) {
+            char word[32];
+            unsigned vr;
+            double x, y;
+            int status = 0, i;
+            if (sscanf(line, "%31s", word) != 1) continue;
+            if (strcmp(word, "real") == 0 && sscanf(line, "%*s %u %lf", &vr, &x) == 2) {
+                fmi2ValueReference r = vr;
+                status = fmi2SetReal(c, &r, 1, &x);
+            } else if (strcmp(word, "integer") == 0 && sscanf(line, "%*s %u %lf", &vr, &x) == 2) {
+                fmi2ValueReference r = vr;
+                fmi2Integer v = (fmi2Integer)x;
+                status = fmi2SetInteger(c, &r, 1, &v);
+            } else if (strcmp(word, "boolean") == 0 && sscanf(line, "%*s %u %lf", &vr, &x) == 2) {
+                fmi2ValueReference r = vr;
+                fmi2Boolean v = x != 0.0;
+                status = fmi2SetBoolean(c, &r, 1, &v);
+            } else if (strcmp(word, "init") == 0) {
+                status = fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+                status |= fmi2EnterInitializationMode(c) << 4;
+                status |= fmi2ExitInitializationMode(c) << 8;
+            } else if (strcmp(word, "step") == 0 && sscanf(line, "%*s %lf %lf", &x, &y) == 2) {
+                double values[5];
+                status = fmi2DoStep(c, x, y, fmi2True);
+                fmi2GetReal(c, outputs, 5, values);
+                printf("out");
+                for (i = 0; i < 5; i++) printf(" %.17g", values[i]);
+                printf("\n");
+            } else {
+                continue;
+            }
+            printf("status %s %d\n", word, status);
+        }
+        fclose(commands);
+        fmi2Terminate(c);
+        fmi2FreeInstance(c);
+    }
+    return 0;
+}

@@ -1,0 +1,148 @@
+"""Helpers for the native FMU's tests: an fmpy runner that records statuses and log lines, the
+excitations of the acceptance runs, and the comparison rule."""
+
+from __future__ import annotations
+
+import math
+from ctypes import byref
+from dataclasses import dataclass, field
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    defaultCallbacks,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.logging import addLoggerProxy
+
+OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
+INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
+H = 1e-4
+
+
+@dataclass
+class Opened:
+    """An extracted FMU, opened once per test session."""
+
+    path: str
+    model_description: object
+    folder: str
+
+    @classmethod
+    def of(cls, path) -> Opened:
+        return cls(str(path), read_model_description(str(path)), extract(str(path)))
+
+    @property
+    def vr(self) -> dict[str, int]:
+        return {v.name: v.valueReference for v in self.model_description.modelVariables}
+
+
+@dataclass
+class Instance:
+    """One FMU instance through fmpy with its log captured."""
+
+    fmu: Opened
+    name: str = "tire"
+    logging_on: bool = True
+    log: list[tuple[int, str, str]] = field(default_factory=list)
+
+    def __post_init__(self):
+        md = self.fmu.model_description
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=self.fmu.folder,
+                               modelIdentifier=md.coSimulation.modelIdentifier,
+                               instanceName=self.name)
+
+        def logger(component, instance, status, category, message):
+            self.log.append((status, (category or b"").decode(), (message or b"").decode()))
+
+        self._logger = fmi2CallbackLoggerTYPE(logger)  # keep a reference while in use
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = self._logger
+        callbacks.allocateMemory = defaultCallbacks.allocateMemory
+        callbacks.freeMemory = defaultCallbacks.freeMemory
+        addLoggerProxy(byref(callbacks))
+        self._callbacks = callbacks
+        self.slave.instantiate(callbacks=callbacks, loggingOn=self.logging_on)
+        self.vr = self.fmu.vr
+        self.inputs = [self.vr[n] for n in INPUTS]
+        self.outputs = [self.vr[n] for n in OUTPUTS]
+
+    def set(self, **values) -> None:
+        for name, value in values.items():
+            v = next(x for x in self.fmu.model_description.modelVariables if x.name == name)
+            if v.type == "Integer":
+                self.slave.setInteger([v.valueReference], [int(value)])
+            elif v.type == "Boolean":
+                self.slave.setBoolean([v.valueReference], [bool(value)])
+            else:
+                self.slave.setReal([v.valueReference], [float(value)])
+
+    def initialise(self, start_time: float = 0.0, **parameters) -> int:
+        self.slave.setupExperiment(startTime=start_time)
+        self.slave.enterInitializationMode()
+        self.set(**parameters)
+        return self.call("fmi2ExitInitializationMode")
+
+    def call(self, function: str, *args) -> int:
+        """The status of an fmi2 function (fmpy raises for worse than warning: return it)."""
+        try:
+            return getattr(self.slave, function)(self.slave.component, *args)
+        except FMICallException as error:
+            return int(str(error).split("status ")[1].split(" ")[0])
+
+    def step(self, t: float, h: float = H) -> int:
+        return self.call("fmi2DoStep", t, h, True)
+
+    def outputs_now(self) -> list[float]:
+        return self.slave.getReal(self.outputs)
+
+    def errors(self) -> list[str]:
+        return [m for s, _, m in self.log if s >= 3]
+
+    def free(self) -> None:
+        self.slave.terminate()
+        self.slave.freeInstance()
+
+
+def road_drop(t: float) -> tuple[float, float, float, float]:
+    """A 5 cm drop of the road for 50 ms and back: the tread leaves the road and lands."""
+    return 0.0, 0.0, (-0.05 if 0.02 <= t < 0.07 else 0.0), 0.0
+
+
+def rim_lift(t: float) -> tuple[float, float, float, float]:
+    """The rim lifted 8 cm and lowered again as a 20 Hz cosine (ramped with its velocity)."""
+    w = 2 * math.pi * 20.0
+    if t < 0.05:
+        return 0.04 * (1 - math.cos(w * t)), 0.04 * w * math.sin(w * t), 0.0, 0.0
+    return 0.0, 0.0, 0.0, 0.0
+
+
+def run(fmu: Opened, parameters: dict, signal, steps: int = 1500, h: float = H,
+        read_first: bool = False) -> np.ndarray:
+    """Outputs (steps + 1, 5) of the usual host loop: set the inputs, step, get the outputs;
+    ``read_first`` also reads the outputs before every third step (direct feedthrough)."""
+    instance = Instance(fmu, logging_on=False)
+    status = instance.initialise(**parameters)
+    assert status == 0, instance.errors()
+    rows = [instance.outputs_now()]
+    for k in range(steps):
+        t = k * h
+        instance.slave.setReal(instance.inputs, list(signal(t)))
+        if read_first and k % 3 == 0:
+            instance.outputs_now()
+        instance.slave.doStep(t, h)
+        rows.append(instance.outputs_now())
+    instance.free()
+    return np.array(rows)
+
+
+def relative_errors(reference: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Per output: the largest difference over the run, relative to the largest magnitude of
+    its kind (forces: rim_Fz, whose static load sets the scale; lengths: their own)."""
+    force_scale = np.abs(reference[:, 0]).max()
+    scales = np.array([force_scale, force_scale, force_scale,
+                       np.abs(reference[:, 3]).max(), np.abs(reference[:, 4]).max()])
+    return np.abs(reference - other).max(axis=0) / scales

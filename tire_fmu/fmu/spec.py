@@ -1,0 +1,253 @@
+"""Everything the Python FMU and the native C FMU must agree on, written once.
+
+The native FMU's C reads these values from ``spec.h``, which :func:`c_header` generates from
+this module (``tire_fmu/native/c/spec.h`` is that output, checked in so that the C builds on
+its own; a test regenerates it and compares). The values themselves come from the core and
+from :mod:`.interface`, which the Python FMU uses directly, so the two runtimes cannot drift:
+
+- numerical rules: time-point tolerance, the step cache (a step within ``SAME_POINT_EPS`` of a
+  cached one is that step), substeps, the active-set and Gauss-Seidel limits of the contact
+  solve, the footprint continuation's tolerances, the delay line's lag rule, the critical-speed
+  scan;
+- the variable table: names, types, causalities, value references, start values;
+- the parameter ranges (:data:`~tire_fmu.core.parameters.TIRE_FIELDS` and the operating-point
+  limits) and the problem messages: printf templates that, filled in with Python's ``%``, give
+  exactly the core's messages in the FMU's names (``tests/test_native_fmu.py`` checks each
+  against the core), and that the C fills in with the same values.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..core import (
+    contact,
+    contact_dynamics,
+    free_ring,
+    model,
+    parameters,
+    road,
+    standing_waves,
+    stepping,
+)
+from .interface import (
+    IN_CONTACT,
+    INPUTS,
+    OUTPUTS,
+    TIME_ABS_TOLERANCE_S,
+    TIME_REL_TOLERANCE,
+    FmuVariable,
+    fmu_variables,
+)
+
+#: Core names -> the FMU's names for the same thing, applied to every core message an FMU logs.
+FMU_WORDING = (
+    ("load_n", "load"),
+    ("speed_m_s", "speed"),
+    ("f_max_hz", "f_max"),
+    ("contact_zone_length_m", "contact_zone_length"),
+)
+#: The FMU's spelling of "no limit" for f_max and n_modes (the core's is None).
+FMU_UNSET = "0"
+
+#: Numbers both runtimes use, by the C name they get in spec.h.
+CONSTANTS: dict[str, float | int] = {
+    # communication points and the step cache
+    "TIME_ABS_TOLERANCE_S": TIME_ABS_TOLERANCE_S,
+    "TIME_REL_TOLERANCE": TIME_REL_TOLERANCE,
+    "SAME_POINT_EPS": road.SAME_POINT_EPS,
+    "LAG_SLACK": road.LAG_SLACK,
+    "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,
+    "SUBSTEP_SLACK": contact_dynamics.SUBSTEP_SLACK,
+    "SERIES_LIMIT": stepping.SERIES_LIMIT,
+    "KERNEL_CACHE_SIZE": contact_dynamics._KERNEL_CACHE_SIZE,
+    # the inputs a step accepts (beyond them a product inside the step could overflow)
+    "MAX_DISPLACEMENT_M": contact_dynamics.MAX_DISPLACEMENT_M,
+    "MAX_VELOCITY_M_S": contact_dynamics.MAX_VELOCITY_M_S,
+    # the contact solve
+    "ACTIVE_SET_PER_NODE": contact_dynamics.ACTIVE_SET_PER_NODE,
+    "ACTIVE_SET_EXTRA": contact_dynamics.ACTIVE_SET_EXTRA,
+    "PGS_SWEEPS": contact_dynamics.PGS_SWEEPS,
+    "PGS_TOLERANCE": contact_dynamics.PGS_TOLERANCE,
+    # the zone and the static footprint
+    "DEFAULT_ZONE_LENGTH_M": contact.DEFAULT_ZONE_LENGTH_M,
+    "MAX_ZONE_HALF_ANGLE": contact.MAX_ZONE_HALF_ANGLE,
+    "ZONE_ANGLE_SLACK": contact.ZONE_ANGLE_SLACK,
+    "EVENT_TOLERANCE": contact._EVENT_TOLERANCE,
+    "EVENTS_TOGETHER": contact.EVENTS_TOGETHER,
+    "TOUCH_ATOL": contact.TOUCH_ATOL,
+    "SEGMENTS_PER_NODE": contact.SEGMENTS_PER_NODE,
+    "MAX_DEFLECTION_FRACTION": contact.MAX_DEFLECTION_FRACTION,
+    "LENGTH_BISECTIONS": contact.LENGTH_BISECTIONS,
+    "MAX_PATCH_FRACTION": parameters.MAX_PATCH_FRACTION,
+    # the critical speed
+    "CRITICAL_SPEED_WARNING_FRACTION": model.CRITICAL_SPEED_WARNING_FRACTION,
+    "MAX_SCANNED_SPEED_M_S": standing_waves.MAX_SCANNED_SPEED_M_S,
+    "SCAN_POINTS": standing_waves.SCAN_POINTS,
+    "ROOT_TOLERANCE": standing_waves.ROOT_TOLERANCE,
+    # parameter limits
+    "MIN_ELEMENTS": parameters.MIN_ELEMENTS,
+    "MAX_ELEMENTS": parameters.MAX_ELEMENTS,
+    "F_MAX_LIMIT_HZ": free_ring.F_MAX_LIMIT_HZ,
+    "N_MODES_LIMIT": free_ring.N_MODES_LIMIT,
+}
+
+#: Problem messages, as printf templates. Arguments: ``%s`` takes a value written as Python's
+#: ``repr`` would (the C has py_repr for it) or a text; ``%g`` and friends a number.
+MESSAGES: dict[str, str] = {
+    # tire data (TIRE_FIELDS): name, repr(value) or value, [unit,] range text, description
+    "FIELD_NOT_FINITE": "%s = %s: must be finite, in %s (%s)",
+    "FIELD_RANGE": "%s = %g %s: must be in %s (%s)",
+    "PRESSURE_LAW": "inflation_pressure = 0 Pa with sidewall_pressure_exponent = %g: the "
+                    "pressure law would leave the sidewall without stiffness; give a pressure "
+                    "> 0 or set the exponent to 0",
+    # operating point
+    "ELEMENTS_RANGE": "n_elements = %d: must be in [%d, %d] (the 5-point bending stencil needs "
+                      "at least 8 nodes around the ring)",
+    "NOT_NONNEGATIVE": "%s = %s: must be a finite number >= 0 %s",
+    # truncation
+    "F_MAX_RANGE": "f_max = %s: must be in (0, %g] Hz, or 0 for no frequency cut",
+    "N_MODES_RANGE": "n_modes = %d: must be an integer in [1, %d] or 0",
+    # what needs the model
+    "SUPERCRITICAL": "speed = %g m/s: must be below the critical (standing-wave) speed %.4g m/s "
+                     "of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > "
+                     "0 raises it, allow_supercritical runs anyway",
+    "NEAR_CRITICAL": "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): "
+                     "sidewall modes near zero frequency dominate the response",
+    "ZONE_RANGE": "contact_zone_length = %s m: must be in (0, %.4g] m (at most 60 degrees of "
+                  "the ring either side of the contact centre)",
+    "ZONE_TOO_SHORT": "contact_zone_length = %g m holds only the centre node of a mesh of %d "
+                      "elements: must be at least %.4g m (one node either side), or refine the "
+                      "mesh",
+    "LOAD_RANGE": "load = %g N: must be in [0, %.6g] N for this tire and mesh; at %.6g N "
+                  "(deflection %.3g mm) %s",
+    "LOAD_REASON_ZONE": "its footprint reaches the end of the contact zone (raise "
+                        "contact_zone_length)",
+    "LOAD_REASON_LENGTH": "its footprint reaches %.4g m, beyond which the linear ring is not "
+                          "credible",
+    "PROBLEM_LINE": "parameter problem %d/%d: %s",
+    # the running FMU
+    "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
+                 "beyond it are missing; raise contact_zone_length (logged once until the "
+                 "footprint is back inside)",
+}
+
+#: Serialized FMU states of the native FMU start with these bytes, then this version.
+STATE_MAGIC = "TIREFMUS"
+STATE_VERSION = 1
+#: Log categories of the native FMU (model description and C), and what each carries.
+LOG_CATEGORIES = {
+    "logEvents": "the tread leaving the road and coming back (status OK, information)",
+    "logStatusWarning": "messages with status fmi2Warning (the footprint at the end of the "
+                        "contact zone, a speed near the critical speed)",
+    "logStatusError": "messages with status fmi2Error (every refused call, with its reason)",
+    "logAll": "all messages, including the summary when the model is built",
+}
+
+#: Value references of the hot path (inputs, outputs and in_contact are contiguous blocks).
+VALUE_REFERENCES = {"INPUTS_FIRST": INPUTS.start, "N_INPUTS": INPUTS.stop - INPUTS.start,
+                    "OUTPUTS_FIRST": OUTPUTS.start, "N_OUTPUTS": OUTPUTS.stop - OUTPUTS.start,
+                    "IN_CONTACT": IN_CONTACT}
+
+
+def fmu_message(text: str) -> str:
+    """A core message in the FMU's names for the parameters and for "no limit"."""
+    import re
+
+    for core, fmu in FMU_WORDING:
+        text = re.sub(rf"\b{core}\b", fmu, text)
+    return re.sub(r"^((?:f_max|n_modes) = .*) or None\b", rf"\1 or {FMU_UNSET}", text)
+
+
+# -- the C header ------------------------------------------------------------------------------
+
+def _c_number(value: float | int) -> str:
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, int):
+        return str(value)
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{value!r}: the spec holds finite numbers only")
+    return repr(value)  # reads back to the same double
+
+
+def _c_string(text: str) -> str:
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
+    return f'"{escaped}"'
+
+
+_C_TYPES = {"Real": "SPEC_REAL", "Integer": "SPEC_INTEGER", "Boolean": "SPEC_BOOLEAN"}
+_C_CAUSALITY = {"input": "SPEC_INPUT", "output": "SPEC_OUTPUT", "parameter": "SPEC_PARAMETER"}
+
+
+def _variable_row(v: FmuVariable) -> str:
+    start = 0.0 if v.start is None else float(v.start)
+    return (f"    {{{_c_string(v.name)}, {_C_TYPES[v.type]}, {_C_CAUSALITY[v.causality]}, "
+            f"{_c_number(start)}, {_c_string(v.unit)}}},")
+
+
+def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
+    """spec.h: this module as C (constants, variable table, tire fields, messages)."""
+    variables = variables or fmu_variables()
+    lines = [
+        "/* spec.h: what the Python FMU and this C agree on. GENERATED by",
+        " * tire_fmu.fmu.spec.c_header() from the Python core: do not edit, regenerate. */",
+        "#ifndef TIRE_SPEC_H",
+        "#define TIRE_SPEC_H",
+        "",
+    ]
+    for name, value in CONSTANTS.items():
+        lines.append(f"#define SPEC_{name} {_c_number(value)}")
+    lines.append("")
+    for name, value in VALUE_REFERENCES.items():
+        lines.append(f"#define SPEC_BLOCK_{name} {value}")
+    lines.append(f"#define SPEC_N_VARIABLES {len(variables)}")
+    for vr, v in enumerate(variables):
+        lines.append(f"#define SPEC_VR_{v.name.upper()} {vr}")
+    lines += [
+        "",
+        "typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;",
+        "typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;",
+        "typedef struct {",
+        "    const char* name;",
+        "    SpecType type;",
+        "    SpecCausality causality;",
+        "    double start; /* the default; an export's own start values are in export.h */",
+        "    const char* unit;",
+        "} SpecVariable;",
+        "",
+        "static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {",
+    ]
+    lines += [_variable_row(v) for v in variables]
+    lines += [
+        "};",
+        "",
+        "/* tire data, in the order of the core's TIRE_FIELDS (the order of the problems) */",
+        "typedef struct {",
+        "    const char* name;",
+        "    const char* unit;",
+        "    const char* description;",
+        "    const char* range_text;",
+        "    double low, high;",
+        "    int low_inclusive;",
+        "} SpecField;",
+        "",
+        f"#define SPEC_N_TIRE_FIELDS {len(parameters.TIRE_FIELDS)}",
+        "static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {",
+    ]
+    for f in parameters.TIRE_FIELDS.values():
+        lines.append(f"    {{{_c_string(f.name)}, {_c_string(f.unit)}, "
+                     f"{_c_string(f.description)}, {_c_string(f.range_text())}, "
+                     f"{_c_number(f.low)}, {_c_number(f.high)}, {int(f.low_inclusive)}}},")
+    lines += ["};", ""]
+    lines.append(f"#define SPEC_STATE_MAGIC {_c_string(STATE_MAGIC)}")
+    lines.append(f"#define SPEC_STATE_VERSION {STATE_VERSION}")
+    lines.append(f"#define SPEC_N_LOG_CATEGORIES {len(LOG_CATEGORIES)}")
+    lines.append("static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {")
+    lines += [f"    {_c_string(name)}," for name in LOG_CATEGORIES]
+    lines += ["};", ""]
+    for name, template in MESSAGES.items():
+        lines.append(f"#define SPEC_MSG_{name} {_c_string(template)}")
+    lines += ["", "#endif", ""]
+    return "\n".join(lines)

@@ -1,0 +1,48 @@
+/* model.h: what the generic FMI 2.0 co-simulation layer (fmi2_layer.c) needs of a model, and
+ * what it offers the model. The layer owns the variable values (one double per value
+ * reference, Integer and Boolean ones exact), the lifecycle, the time, the call checks and the
+ * FMU-state framing; the model builds itself from the parameter values, steps, recomputes its
+ * outputs for new inputs, and writes and reads its own part of an FMU state. */
+#ifndef TIRE_MODEL_H
+#define TIRE_MODEL_H
+
+#include <stddef.h>
+
+#include "tire.h"
+
+/* the FMI statuses the model returns (the values of fmi2Status) */
+enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_DISCARD = 2, MODEL_ERROR = 3 };
+
+typedef struct {
+    Memory mem;
+    void* layer;
+    /* status: an fmi2Status; category: a log category of the model description */
+    void (*log)(void* layer, int status, const char* category, const char* message);
+} ModelHost;
+
+typedef struct Model Model;
+
+Model* model_create(const ModelHost* host);
+void model_destroy(Model* model);
+/* the values the outputs show before initialisation (after instantiate, reset, a set) */
+void model_preview(const double* values, double* out_values);
+/* build from the parameters in values; outputs written into values. MODEL_ERROR after logging
+ * every problem (nothing changed then) */
+int model_initialise(Model* model, const double* values, double start_time, double* out_values);
+/* one communication step from model_time to + h with the inputs in values */
+int model_step(Model* model, double h, double* values);
+/* the outputs at model_time for the inputs in values (direct feedthrough) */
+int model_refresh(Model* model, double* values);
+double model_time(const Model* model);
+void model_set_time(Model* model, double time);
+/* does the model hold a built simulator for exactly these parameter values? */
+int model_built_for(const Model* model, const double* values);
+/* its part of an FMU state */
+size_t model_state_size(const Model* model);
+void model_state_write(const Model* model, unsigned char* out);
+/* MODEL_OK, or MODEL_ERROR with why (nothing changed then) */
+int model_state_check(const Model* model, const unsigned char* in, size_t size, char* why,
+                      size_t why_size);
+void model_state_apply(Model* model, const unsigned char* in);
+
+#endif

@@ -1,0 +1,257 @@
+/* tire.h: the tire model's parts, each the C of one module of tire_fmu.core:
+ *   ring.c       free_ring.py, dispersion.py, standing_waves.py (the free ring, order by order)
+ *   contact.c    contact.py (zone, static footprint by active-set continuation, road windows)
+ *   road.c       road.py (the road under each node: history and delay line)
+ *   simulator.c  contact_dynamics.py (kernels, the contact solve, stepping)
+ * Everything an instance needs is in its structs: no global mutable state. */
+#ifndef TIRE_H
+#define TIRE_H
+
+#include <stddef.h>
+
+#include "numerics.h"
+
+/* the host's memory functions (FMI 2.0: calloc-like allocate, free) */
+typedef struct {
+    void* (*allocate)(size_t count, size_t size);
+    void (*release)(void* pointer);
+} Memory;
+
+void* mem_alloc(const Memory* mem, size_t count, size_t size);
+void mem_free(const Memory* mem, void* pointer);
+
+/* -- tire data and operating point ---------------------------------------------------------- */
+typedef struct {
+    double R, b, inflation_pressure, rhoA, m_s, k_r1, k_r2, EI, k_cw, alpha, beta;
+    double sidewall_shear, sidewall_pressure_exponent, reference_pressure;
+} Tire;
+
+double tire_stiffness_factor(const Tire* tire);  /* the pressure law's (p0/p_ref)^e */
+
+/* -- the free ring (ring.c) ------------------------------------------------------------------ */
+typedef struct {
+    int n_elements, n_orders; /* orders n = 0 .. N/2 */
+    int n_zone, half;         /* zone nodes m = -half .. half (offsets from the centre) */
+    double dtheta, arc, spin;
+    double mass[2];           /* node masses: tread, sidewall */
+    int total_modes, n_modes; /* before and after truncation */
+    /* kept modes, grouped by order: modes order_start[n] .. order_start[n + 1] - 1 */
+    int* order_start;
+    cx* lam;                  /* eigenvalue */
+    cx* beta;                 /* b on zone force j = beta * e^{-i n theta_j} */
+    cx* gamma;                /* c on w_j = gamma * e^{i n theta_j}; deflection -gamma */
+    cx* eta;                  /* c on the rate of w_j = eta * e^{i n theta_j} */
+    cx b_rim[4], c_rim[2][4]; /* order 1 only: b on rim_z, c of rim_Fz and rim_Fx */
+    int first_rim;            /* index of the first order-1 mode, count rim_count */
+    int rim_count;
+    /* cos and sin of n * m * dtheta: trig[m * n_orders + n], m = 0 .. 2 half */
+    double* cos_nm;
+    double* sin_nm;
+    /* direct terms and exact DC gain: rows rim_Fz, rim_Fx, deflection, w (Z), rate of w (Z);
+     * columns rim_z, zone forces (Z); row major */
+    int rows, cols;
+    double* d;
+    double* e;
+    double* static_gain;
+    int truncated;            /* d or e reach the zone forces: the forces couple at an instant */
+} Ring;
+
+typedef struct {
+    double f_max_hz; /* 0: no cut */
+    int n_modes;     /* 0: no limit */
+    int static_correction;
+} Truncation;
+
+int ring_build(Ring* ring, const Memory* mem, const Tire* tire, int n_elements, double spin,
+               int half, const Truncation* truncation);
+void ring_free(Ring* ring, const Memory* mem);
+/* G (Z x Z, m/N) from the static gain: w = -G f for zone forces f pushing inwards */
+void ring_compliance(const Ring* ring, double* compliance);
+/* the lowest speed at which a ground-frame frequency of the undeformed mesh reaches zero */
+double critical_speed(const Tire* tire, int n_elements);
+
+/* -- the contact zone and the static footprint (contact.c) -------------------------------- */
+typedef struct {
+    int n_zone, half, centre;
+    double radius;
+    double* theta;     /* front (theta < 0) to rear */
+    double* cos;
+    double* sin;
+    double* sec;
+    double stiffness;  /* k_j, the same for every node */
+    double damping;    /* c_j = beta k_j */
+} Zone;
+
+int zone_half_count(double radius, int n_elements, double zone_length);
+int zone_build(Zone* zone, const Memory* mem, int n_elements, double radius, double k_cw,
+               double beta, int half);
+void zone_free(Zone* zone, const Memory* mem);
+
+typedef struct {
+    double deflection, load, length, front, rear, tangent;
+    double* forces;      /* Z */
+    double* penetration; /* Z */
+    char* active;        /* Z */
+    double* x;           /* Z: where each node's ray meets the road */
+    int touches_edge;
+} Footprint;
+
+typedef struct {
+    int count, capacity;
+    double* start;    /* deflection where each segment starts */
+    char* active;     /* count x Z */
+    double* f0;       /* count x Z: f = f0 + f1 d */
+    double* f1;
+    double* p0;       /* penetration = p0 + p1 d */
+    double* p1;
+    double* w0;       /* load = w0 + w1 d */
+    double* w1;
+    double max_deflection;
+} FootprintPath;
+
+/* 0, or -1 (out of memory), or -2 (the continuation did not terminate) */
+int footprint_path(FootprintPath* path, const Memory* mem, const Zone* zone, double radius,
+                   const double* compliance, double max_deflection);
+void footprint_path_free(FootprintPath* path, const Memory* mem);
+int footprint_alloc(Footprint* fp, const Memory* mem, int n_zone);
+void footprint_free(Footprint* fp, const Memory* mem);
+void footprint_at_deflection(const FootprintPath* path, const Zone* zone, double radius,
+                             double deflection, Footprint* out);
+int footprint_at_load(const FootprintPath* path, const Zone* zone, double radius, double load,
+                      Footprint* out); /* -1 beyond the path */
+void max_credible_load(const FootprintPath* path, const Zone* zone, double radius,
+                       double max_length, Footprint* out);
+/* front and rear edge (road x) of the footprint */
+void footprint_edges(const double* x, const double* penetration, const char* active, int n,
+                     double* front, double* rear);
+
+typedef struct {
+    double* early; /* Z: delays of each window's ends from the zone front (s) */
+    double* late;
+    double front, horizon;
+    int delayed;
+} Windows;
+
+int windows_build(Windows* w, const Memory* mem, const Zone* zone, double radius,
+                  int n_elements, double deflection, double speed);
+void windows_free(Windows* w, const Memory* mem);
+
+/* -- the road under each node (road.c) ------------------------------------------------------- */
+typedef struct {
+    int size, count, start;
+    double h, newest_time;
+    int* index;      /* 2Z ends x 5: buffer positions relative to the newest sample's row */
+    double* combine; /* 2Z ends x 5 weights on the mean (rows 0..Z-1), 2Z x 5 on the slope */
+    double* buffer;  /* 6 size: [z, v h, C] twice */
+} DelayLine;
+
+typedef struct {
+    const Windows* windows;
+    int n;
+    /* the recorded history (used while no delay line runs) */
+    int length, capacity;
+    double* t;
+    double* z;
+    double* v;
+    double* work;  /* capacity: cumulative integrals */
+    DelayLine line;
+    int line_on;
+    double line_h;
+    int uniform_run; /* -1: not known */
+} RoadReader;
+
+int road_init(RoadReader* road, const Memory* mem, const Windows* windows, int n);
+void road_free(RoadReader* road, const Memory* mem);
+void road_reset(RoadReader* road, const Memory* mem);
+/* record the sample of now and write the road under each node; -1 out of memory */
+int road_read(RoadReader* road, const Memory* mem, double now, double z, double vz, double h,
+              double* heights, double* slopes);
+/* the history as samples (t, z, v), oldest first; count samples */
+int road_history_length(const RoadReader* road);
+void road_history(const RoadReader* road, double* t, double* z, double* v);
+int road_set_history(RoadReader* road, const Memory* mem, const double* t, const double* z,
+                     const double* v, int count);
+
+/* -- stepping with the unilateral contact (simulator.c) --------------------------------------- */
+typedef struct SolveEntry SolveEntry;
+
+typedef struct {
+    double h;         /* the substep */
+    double h_comm;    /* the communication step it belongs to */
+    int n_sub;
+    cx* decay;        /* K */
+    cx* beta_c;       /* K: h (phi1 - phi2) beta, on the DFT of the forces at t */
+    cx* beta_d;       /* K: h phi2 beta, on the DFT of the forces at t + h */
+    cx* fused;        /* K: decay beta_d + beta_c: a pending end-force ramp into the next */
+    cx rim_z[4], rim_vz[4];
+    double* m;        /* (3Z x Z): [S; W_p; W_r] */
+    double* out_f;    /* 3 x Z */
+    double* pen_const;  /* Z: pen_static - W_p f_static */
+    double* rate_const; /* Z: -W_r f_static */
+    SolveEntry* solves;
+    int n_solves, next_solve;
+} Kernel;
+
+typedef struct {
+    const Ring* ring;
+    const Zone* zone;
+    const Memory* mem;
+    int n_zone, linear;
+    double substep_s;
+    double* f_static;
+    double* pen_static;
+    char* static_active;
+    double* x_road;
+    double static_ring[3];
+    /* the state */
+    double time;
+    cx* q;            /* K, grouped by order as the ring's modes */
+    double* df;       /* force deviation from static at time */
+    char* active;
+    double* penetration;
+    double* rate;
+    double seen_z, seen_vz;
+    double* seen_heights;
+    double* seen_slopes;
+    double ring_out[3];
+    double last_step;  /* the communication step whose end _start re-solves */
+    int has_last;
+    Kernel* last;
+    double outputs[5];
+    RoadReader road;
+    long solver_fallbacks;
+    /* derived, rebuilt on demand */
+    Kernel* kernels;
+    int n_kernels, next_kernel;
+    Kernel instant;   /* a truncated ring couples the forces at an instant */
+    int has_instant;
+    cx* dft;          /* n_orders: DFT of df (valid when dft_ok) */
+    int dft_ok;
+    /* the last substep's end-force ramp, not yet added to q: the modal state is
+     * q + last->beta_d * dft (added in the next substep's pass over the modes) */
+    int pending;
+    /* scratch */
+    double* work;
+    int* iwork;
+    char* cwork;
+    cx* orders_a;
+    cx* orders_b;
+    double* heights;
+    double* slopes;
+} Simulator;
+
+int sim_init(Simulator* sim, const Memory* mem, const Ring* ring, const Zone* zone,
+             const Footprint* fp, const Windows* windows, const double* compliance,
+             double deflection, double k_cw, double rhoA, int linear);
+void sim_free(Simulator* sim);
+void sim_reset(Simulator* sim, double start_time);
+/* 0, or -1 out of memory (nothing changed) */
+int sim_step(Simulator* sim, double h, const double inputs[4]);
+int sim_outputs_with(Simulator* sim, const double inputs[4]);
+int sim_restore_last(Simulator* sim);
+void sim_settle(Simulator* sim);
+int sim_in_contact(const Simulator* sim);
+int sim_at_zone_edge(const Simulator* sim);
+double sim_contact_length(const Simulator* sim);
+
+#endif

@@ -1,0 +1,599 @@
+/* tire_model.c: the tire as a model of the generic FMI layer (model.h).
+ *
+ * At initialisation: the parameters are checked as the Python FMU checks them (the core's
+ * validation: tire data, operating point, truncation, then what needs the model: the critical
+ * speed, the contact zone, the load the footprint can carry), every problem is logged with the
+ * same text, and only then the model is built: zone, free ring for the speed (order by order),
+ * the static footprint for the load by active-set continuation, the road windows, the
+ * simulator. The message templates and every tolerance come from spec.h. */
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "model.h"
+#include "spec.h"
+
+#define PI 3.14159265358979323846
+#define MAX_PROBLEMS 32
+#define MESSAGE_SIZE 1024
+
+struct Model {
+    ModelHost host;
+    int built;
+    double built_for[SPEC_N_VARIABLES];
+    Tire tire;
+    int n_elements, linear;
+    double speed, critical;
+    Ring ring;
+    Zone zone;
+    FootprintPath path;
+    Footprint footprint;
+    Windows windows;
+    double* compliance;
+    Simulator sim;
+    int zone_warning_armed;
+    int in_contact;
+};
+
+static void say(const Model* model, int status, const char* category, const char* text)
+{
+    if (model->host.log != NULL) model->host.log(model->host.layer, status, category, text);
+}
+
+Model* model_create(const ModelHost* host)
+{
+    Model* model = (Model*)mem_alloc(&host->mem, 1, sizeof(Model));
+    if (model == NULL) return NULL;
+    memset(model, 0, sizeof *model);
+    model->host = *host;
+    return model;
+}
+
+static void model_clear(Model* model)
+{
+    const Memory* mem = &model->host.mem;
+    if (model->sim.mem != NULL) sim_free(&model->sim);
+    footprint_path_free(&model->path, mem);
+    footprint_free(&model->footprint, mem);
+    windows_free(&model->windows, mem);
+    zone_free(&model->zone, mem);
+    ring_free(&model->ring, mem);
+    mem_free(mem, model->compliance);
+    model->compliance = NULL;
+    model->built = 0;
+}
+
+void model_destroy(Model* model)
+{
+    Memory mem;
+    if (model == NULL) return;
+    mem = model->host.mem;
+    model_clear(model);
+    mem_free(&mem, model);
+}
+
+void model_preview(const double* values, double* out_values)
+{
+    /* before initialisation the forces echo the static load */
+    double load = values[SPEC_VR_LOAD];
+    out_values[SPEC_VR_RIM_FZ] = load;
+    out_values[SPEC_VR_CONTACT_FZ] = load;
+    out_values[SPEC_VR_IN_CONTACT] = load > 0 ? 1.0 : 0.0;
+}
+
+/* -- the problems, in the core's words ------------------------------------------------------- */
+
+typedef struct {
+    int count;
+    char text[MAX_PROBLEMS][MESSAGE_SIZE];
+} Problems;
+
+static char* next_problem(Problems* p)
+{
+    if (p->count >= MAX_PROBLEMS) return NULL;
+    return p->text[p->count++];
+}
+
+#define PROBLEM(p, ...)                                     \
+    do {                                                    \
+        char* slot_ = next_problem(p);                      \
+        if (slot_ != NULL) snprintf(slot_, MESSAGE_SIZE, __VA_ARGS__); \
+    } while (0)
+
+static int variable_index(const char* name)
+{
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (strcmp(SPEC_VARIABLES[vr].name, name) == 0) return vr;
+    }
+    return -1;
+}
+
+static void tire_from_values(const double* values, Tire* t)
+{
+    t->R = values[SPEC_VR_R];
+    t->b = values[SPEC_VR_B];
+    t->inflation_pressure = values[SPEC_VR_INFLATION_PRESSURE];
+    t->rhoA = values[SPEC_VR_RHOA];
+    t->m_s = values[SPEC_VR_M_S];
+    t->k_r1 = values[SPEC_VR_K_R1];
+    t->k_r2 = values[SPEC_VR_K_R2];
+    t->EI = values[SPEC_VR_EI];
+    t->k_cw = values[SPEC_VR_K_CW];
+    t->alpha = values[SPEC_VR_ALPHA];
+    t->beta = values[SPEC_VR_BETA];
+    t->sidewall_shear = values[SPEC_VR_SIDEWALL_SHEAR];
+    t->sidewall_pressure_exponent = values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT];
+    t->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
+}
+
+/* what the Python FMU checks before it builds: truncation, tire data, operating point */
+static void plain_problems(const double* values, Problems* p)
+{
+    char text[40];
+    double f_max = values[SPEC_VR_F_MAX];
+    double n_modes = values[SPEC_VR_N_MODES];
+    int field, tire_problems = 0;
+    if (f_max != 0.0 && !(0 < f_max && f_max <= SPEC_F_MAX_LIMIT_HZ)) {
+        py_repr(f_max, text, sizeof text);
+        PROBLEM(p, SPEC_MSG_F_MAX_RANGE, text, SPEC_F_MAX_LIMIT_HZ);
+    }
+    if (n_modes != 0.0 && !(1 <= n_modes && n_modes <= SPEC_N_MODES_LIMIT)) {
+        PROBLEM(p, SPEC_MSG_N_MODES_RANGE, (int)n_modes, SPEC_N_MODES_LIMIT);
+    }
+    for (field = 0; field < SPEC_N_TIRE_FIELDS; field++) {
+        const SpecField* f = &SPEC_TIRE_FIELDS[field];
+        double value = values[variable_index(f->name)];
+        int below;
+        if (!isfinite(value)) {
+            py_repr(value, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_NOT_FINITE, f->name, text, f->range_text, f->description);
+            tire_problems++;
+            continue;
+        }
+        below = f->low_inclusive ? value < f->low : value <= f->low;
+        if (below || value > f->high) {
+            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, value, f->unit, f->range_text,
+                    f->description);
+            tire_problems++;
+        }
+    }
+    if (tire_problems == 0 && values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT] > 0.0 &&
+        values[SPEC_VR_INFLATION_PRESSURE] == 0.0) {
+        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
+    }
+    {
+        double n = values[SPEC_VR_N_ELEMENTS];
+        if (!(SPEC_MIN_ELEMENTS <= n && n <= SPEC_MAX_ELEMENTS)) {
+            PROBLEM(p, SPEC_MSG_ELEMENTS_RANGE, (int)n, SPEC_MIN_ELEMENTS, SPEC_MAX_ELEMENTS);
+        }
+    }
+    {
+        static const struct {
+            int vr;
+            const char *name, *unit;
+        } op[2] = {{SPEC_VR_LOAD, "load", "N"}, {SPEC_VR_SPEED, "speed", "m/s"}};
+        int i;
+        for (i = 0; i < 2; i++) {
+            double value = values[op[i].vr];
+            if (!isfinite(value) || value < 0) {
+                py_repr(value, text, sizeof text);
+                PROBLEM(p, SPEC_MSG_NOT_NONNEGATIVE, op[i].name, text, op[i].unit);
+            }
+        }
+    }
+}
+
+/* the zone length on this mesh (contact.zone_problems); 0 when usable */
+static int zone_problem(double radius, int n_elements, double length, Problems* p)
+{
+    double limit = 2 * radius * tan(SPEC_MAX_ZONE_HALF_ANGLE), dtheta = 2.0 * PI / n_elements;
+    char text[40];
+    if (!(isfinite(length) && 0 < length && length <= limit)) {
+        py_repr(length, text, sizeof text);
+        PROBLEM(p, SPEC_MSG_ZONE_RANGE, text, limit);
+        return 1;
+    }
+    if (atan(0.5 * length / radius) < dtheta) {
+        PROBLEM(p, SPEC_MSG_ZONE_TOO_SHORT, length, n_elements, 2 * radius * tan(dtheta));
+        return 1;
+    }
+    return 0;
+}
+
+/* -- initialisation ------------------------------------------------------------------------- */
+
+static int build(Model* model, const double* values, Problems* p, char* warning)
+{
+    const Memory* mem = &model->host.mem;
+    Tire* tire = &model->tire;
+    int n = (int)values[SPEC_VR_N_ELEMENTS], half, status;
+    double speed = values[SPEC_VR_SPEED], load = values[SPEC_VR_LOAD], spin;
+    Truncation truncation;
+    Footprint limit;
+    warning[0] = '\0';
+    tire_from_values(values, tire);
+    model->n_elements = n;
+    model->speed = speed;
+    model->linear = values[SPEC_VR_LINEAR_CONTACT] != 0.0;
+    model->critical = critical_speed(tire, n);
+    if (speed >= model->critical && values[SPEC_VR_ALLOW_SUPERCRITICAL] == 0.0) {
+        PROBLEM(p, SPEC_MSG_SUPERCRITICAL, speed, model->critical, n);
+        return MODEL_ERROR;
+    }
+    if (SPEC_CRITICAL_SPEED_WARNING_FRACTION * model->critical <= speed &&
+        speed < model->critical) {
+        snprintf(warning, MESSAGE_SIZE, SPEC_MSG_NEAR_CRITICAL, speed,
+                 100 * speed / model->critical, model->critical, n);
+    }
+    if (zone_problem(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH], p)) return MODEL_ERROR;
+    half = zone_half_count(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH]);
+    spin = speed / tire->R;
+    truncation.f_max_hz = values[SPEC_VR_F_MAX];
+    truncation.n_modes = (int)values[SPEC_VR_N_MODES];
+    truncation.static_correction = values[SPEC_VR_STATIC_CORRECTION] != 0.0;
+    if (zone_build(&model->zone, mem, n, tire->R, tire->k_cw, tire->beta, half) != 0) goto memory;
+    status = ring_build(&model->ring, mem, tire, n, spin, half, &truncation);
+    if (status != 0) {
+        PROBLEM(p, "the free ring's modes could not be computed for these parameters (the "
+                   "eigenvalues of an order did not converge)");
+        return MODEL_ERROR;
+    }
+    model->compliance = (double*)mem_alloc(mem, (size_t)(model->zone.n_zone * model->zone.n_zone),
+                                           sizeof(double));
+    if (model->compliance == NULL) goto memory;
+    ring_compliance(&model->ring, model->compliance);
+    status = footprint_path(&model->path, mem, &model->zone, tire->R, model->compliance,
+                            SPEC_MAX_DEFLECTION_FRACTION * tire->R);
+    if (status == -2) {
+        PROBLEM(p, "the footprint continuation did not terminate (a degenerate contact path); "
+                   "report the tire data");
+        return MODEL_ERROR;
+    }
+    if (status != 0) goto memory;
+    if (footprint_alloc(&limit, mem, model->zone.n_zone) != 0) goto memory;
+    max_credible_load(&model->path, &model->zone, tire->R,
+                      SPEC_MAX_PATCH_FRACTION * (2.0 * PI * tire->R), &limit);
+    if (load > limit.load) {
+        char reason[256];
+        if (limit.touches_edge) {
+            snprintf(reason, sizeof reason, "%s", SPEC_MSG_LOAD_REASON_ZONE);
+        } else {
+            snprintf(reason, sizeof reason, SPEC_MSG_LOAD_REASON_LENGTH,
+                     SPEC_MAX_PATCH_FRACTION * (2.0 * PI * tire->R));
+        }
+        PROBLEM(p, SPEC_MSG_LOAD_RANGE, load, limit.load, limit.load, limit.deflection * 1e3,
+                reason);
+        footprint_free(&limit, mem);
+        return MODEL_ERROR;
+    }
+    footprint_free(&limit, mem);
+    if (footprint_alloc(&model->footprint, mem, model->zone.n_zone) != 0) goto memory;
+    if (footprint_at_load(&model->path, &model->zone, tire->R, load, &model->footprint) != 0) {
+        PROBLEM(p, "load = %g N needs a rim deflection beyond %g m", load,
+                model->path.max_deflection);
+        return MODEL_ERROR;
+    }
+    if (windows_build(&model->windows, mem, &model->zone, tire->R, n,
+                      model->footprint.deflection, speed) != 0) {
+        goto memory;
+    }
+    if (sim_init(&model->sim, mem, &model->ring, &model->zone, &model->footprint,
+                 &model->windows, model->compliance, model->footprint.deflection, tire->k_cw,
+                 tire->rhoA, model->linear) != 0) {
+        goto memory;
+    }
+    return MODEL_OK;
+memory:
+    PROBLEM(p, "out of memory while building the model (N = %d)", n);
+    return MODEL_ERROR;
+}
+
+static void show_outputs(Model* model, double* values)
+{
+    int i;
+    for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
+        values[SPEC_BLOCK_OUTPUTS_FIRST + i] = model->sim.outputs[i];
+    }
+    values[SPEC_BLOCK_IN_CONTACT] = sim_in_contact(&model->sim) ? 1.0 : 0.0;
+}
+
+int model_initialise(Model* model, const double* values, double start_time, double* out_values)
+{
+    Problems problems;
+    char warning[MESSAGE_SIZE], line[MESSAGE_SIZE + 64];
+    clock_t started = clock();
+    int status, i;
+    problems.count = 0;
+    model_clear(model);
+    plain_problems(values, &problems);
+    status = problems.count ? MODEL_ERROR : build(model, values, &problems, warning);
+    if (status != MODEL_OK) {
+        for (i = 0; i < problems.count; i++) {
+            snprintf(line, sizeof line, SPEC_MSG_PROBLEM_LINE, i + 1, problems.count,
+                     problems.text[i]);
+            say(model, MODEL_ERROR, "logStatusError", line);
+        }
+        model_clear(model);
+        return MODEL_ERROR;
+    }
+    if (warning[0] != '\0') say(model, MODEL_WARNING, "logStatusWarning", warning);
+    model->built = 1;
+    memcpy(model->built_for, values, sizeof model->built_for);
+    sim_reset(&model->sim, start_time);
+    model->zone_warning_armed = 1;
+    show_outputs(model, out_values);
+    model->in_contact = sim_in_contact(&model->sim);
+    snprintf(line, sizeof line,
+             "ready in %.3f s (CPU): N = %d, %d of %d ring modes, %d contact-zone nodes, "
+             "footprint %.3g cm at %.6g N, deflection %.4g mm, vertical stiffness %.6g N/m, "
+             "critical speed %.4g m/s, %s contact",
+             (double)(clock() - started) / CLOCKS_PER_SEC, model->n_elements,
+             model->ring.n_modes, model->ring.total_modes, model->zone.n_zone,
+             model->footprint.length * 100, model->footprint.load,
+             model->footprint.deflection * 1e3, model->footprint.tangent, model->critical,
+             model->linear ? "linear" : "unilateral");
+    say(model, MODEL_OK, "logAll", line);
+    return MODEL_OK;
+}
+
+int model_built_for(const Model* model, const double* values)
+{
+    int vr;
+    if (!model->built) return 0;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (SPEC_VARIABLES[vr].causality != SPEC_PARAMETER) continue;
+        if (memcmp(&model->built_for[vr], &values[vr], sizeof(double)) != 0) return 0;
+    }
+    return 1;
+}
+
+/* -- stepping ---------------------------------------------------------------------------------- */
+
+static int after_step(Model* model, double* values)
+{
+    char line[MESSAGE_SIZE];
+    int status = MODEL_OK, in_contact;
+    show_outputs(model, values);
+    in_contact = sim_in_contact(&model->sim);
+    if (in_contact != model->in_contact) {
+        /* losing contact is physics (a unilateral contact): information, not a warning */
+        snprintf(line, sizeof line,
+                 in_contact ? "t = %.9g s: the tread is back on the road (in_contact = true)"
+                            : "t = %.9g s: the tread left the road (in_contact = false)",
+                 model->sim.time);
+        say(model, MODEL_OK, "logEvents", line);
+        model->in_contact = in_contact;
+    }
+    if (sim_at_zone_edge(&model->sim)) {
+        if (model->zone_warning_armed) {
+            model->zone_warning_armed = 0;
+            snprintf(line, sizeof line, SPEC_MSG_ZONE_EDGE, model->sim.time);
+            say(model, MODEL_WARNING, "logStatusWarning", line);
+            status = MODEL_WARNING;
+        }
+    } else {
+        model->zone_warning_armed = 1;
+    }
+    return status;
+}
+
+int model_step(Model* model, double h, double* values)
+{
+    const double* inputs = values + SPEC_BLOCK_INPUTS_FIRST;
+    if (sim_step(&model->sim, h, inputs) != 0) {
+        say(model, MODEL_ERROR, "logStatusError", "fmi2DoStep: out of memory");
+        return MODEL_ERROR;
+    }
+    return after_step(model, values);
+}
+
+int model_refresh(Model* model, double* values)
+{
+    if (sim_outputs_with(&model->sim, values + SPEC_BLOCK_INPUTS_FIRST) != 0) {
+        say(model, MODEL_ERROR, "logStatusError", "out of memory recomputing the outputs");
+        return MODEL_ERROR;
+    }
+    show_outputs(model, values);
+    return MODEL_OK;
+}
+
+double model_time(const Model* model) { return model->sim.time; }
+
+void model_set_time(Model* model, double time) { model->sim.time = time; }
+
+/* -- the model's part of an FMU state --------------------------------------------------------
+ * int32: K, Z, history length, has_last, zone warning armed, in contact; then doubles: time,
+ * last step, seen z and z', ring_out (3), outputs (5), q (2K), df, penetration, rate, seen
+ * heights, seen slopes (Z each), history t, z, v; then the active flags (Z bytes). */
+
+#define STATE_INTS 6
+
+static size_t doubles_for(int K, int Z, int history)
+{
+    return (size_t)(12 + 2 * K + 5 * Z + 3 * history);
+}
+
+size_t model_state_size(const Model* model)
+{
+    const Simulator* sim = &model->sim;
+    int history = road_history_length(&sim->road);
+    return STATE_INTS * 4 + doubles_for(sim->ring->n_modes, sim->n_zone, history) * 8
+           + (size_t)sim->n_zone;
+}
+
+static void put_int(unsigned char** out, int value)
+{
+    int32_t v = (int32_t)value;
+    memcpy(*out, &v, 4);
+    *out += 4;
+}
+
+static void put_doubles(unsigned char** out, const double* values, int count)
+{
+    memcpy(*out, values, sizeof(double) * (size_t)count);
+    *out += sizeof(double) * (size_t)count;
+}
+
+void model_state_write(const Model* model, unsigned char* out)
+{
+    const Simulator* sim = &model->sim;
+    sim_settle((Simulator*)&model->sim);  /* the modal state with its pending ramp added */
+    int K = sim->ring->n_modes, Z = sim->n_zone, history = road_history_length(&sim->road);
+    double head[12];
+    put_int(&out, K);
+    put_int(&out, Z);
+    put_int(&out, history);
+    put_int(&out, sim->has_last);
+    put_int(&out, model->zone_warning_armed);
+    put_int(&out, model->in_contact);
+    head[0] = sim->time;
+    head[1] = sim->has_last ? sim->last_step : 0.0;
+    head[2] = sim->seen_z;
+    head[3] = sim->seen_vz;
+    memcpy(head + 4, sim->ring_out, sizeof(double) * 3);
+    memcpy(head + 7, sim->outputs, sizeof(double) * 5);
+    put_doubles(&out, head, 12);
+    put_doubles(&out, (const double*)sim->q, 2 * K);
+    put_doubles(&out, sim->df, Z);
+    put_doubles(&out, sim->penetration, Z);
+    put_doubles(&out, sim->rate, Z);
+    put_doubles(&out, sim->seen_heights, Z);
+    put_doubles(&out, sim->seen_slopes, Z);
+    road_history(&sim->road, (double*)out, (double*)out + history, (double*)out + 2 * history);
+    out += sizeof(double) * (size_t)(3 * history);
+    memcpy(out, sim->active, (size_t)Z);
+}
+
+static int get_int(const unsigned char* in, int index)
+{
+    int32_t v;
+    memcpy(&v, in + 4 * index, 4);
+    return (int)v;
+}
+
+int model_state_check(const Model* model, const unsigned char* in, size_t size, char* why,
+                      size_t why_size)
+{
+    const Simulator* sim = &model->sim;
+    int K, Z, history, i;
+    size_t count, expected;
+    const unsigned char* doubles = in + STATE_INTS * 4;
+    if (size < STATE_INTS * 4) {
+        snprintf(why, why_size, "its model part is %lu bytes, shorter than its header",
+                 (unsigned long)size);
+        return MODEL_ERROR;
+    }
+    K = get_int(in, 0);
+    Z = get_int(in, 1);
+    history = get_int(in, 2);
+    if (K != sim->ring->n_modes || Z != sim->n_zone) {
+        snprintf(why, why_size, "it holds %d modes and %d zone nodes, this model %d and %d",
+                 K, Z, sim->ring->n_modes, sim->n_zone);
+        return MODEL_ERROR;
+    }
+    if (history < 0 || history > (int)((size - STATE_INTS * 4) / 24)) {
+        snprintf(why, why_size, "its road history length %d is impossible", history);
+        return MODEL_ERROR;
+    }
+    expected = STATE_INTS * 4 + doubles_for(K, Z, history) * 8 + (size_t)Z;
+    if (size != expected) {
+        snprintf(why, why_size, "its model part is %lu bytes, expected %lu",
+                 (unsigned long)size, (unsigned long)expected);
+        return MODEL_ERROR;
+    }
+    for (i = 3; i < STATE_INTS; i++) {
+        int flag = get_int(in, i);
+        if (flag != 0 && flag != 1) {
+            snprintf(why, why_size, "flag %d of its model part is %d, not 0 or 1", i, flag);
+            return MODEL_ERROR;
+        }
+    }
+    count = doubles_for(K, Z, history);
+    for (i = 0; i < (int)count; i++) {
+        double v;
+        memcpy(&v, doubles + 8 * (size_t)i, 8);
+        if (!isfinite(v)) {
+            snprintf(why, why_size, "value %d of its model part is not finite", i);
+            return MODEL_ERROR;
+        }
+    }
+    {
+        double last;
+        memcpy(&last, doubles + 8, 8);
+        if (get_int(in, 3) && !(last > 0.0)) {
+            snprintf(why, why_size, "its last step is %g s, not > 0", last);
+            return MODEL_ERROR;
+        }
+    }
+    {
+        const double* t = NULL;
+        double previous = -HUGE_VAL;
+        size_t offset = STATE_INTS * 4 + (size_t)(12 + 2 * K + 5 * Z) * 8;
+        for (i = 0; i < history; i++) {
+            double ti;
+            memcpy(&ti, in + offset + 8 * (size_t)i, 8);
+            if (!(ti > previous)) {
+                snprintf(why, why_size, "its road history times do not increase");
+                return MODEL_ERROR;
+            }
+            previous = ti;
+        }
+        (void)t;
+    }
+    for (i = 0; i < Z; i++) {
+        unsigned char a = in[size - (size_t)Z + (size_t)i];
+        if (a > 1) {
+            snprintf(why, why_size, "its contact flags are not 0 or 1");
+            return MODEL_ERROR;
+        }
+    }
+    return MODEL_OK;
+}
+
+void model_state_apply(Model* model, const unsigned char* in)
+{
+    Simulator* sim = &model->sim;
+    int K = get_int(in, 0), Z = get_int(in, 1), history = get_int(in, 2), i;
+    const unsigned char* p = in + STATE_INTS * 4;
+    double head[12];
+    const double *t, *z, *v;
+    double* scratch;
+    memcpy(head, p, sizeof head);
+    p += sizeof head;
+    sim->has_last = get_int(in, 3);
+    model->zone_warning_armed = get_int(in, 4);
+    model->in_contact = get_int(in, 5);
+    sim->time = head[0];
+    sim->last_step = head[1];
+    sim->seen_z = head[2];
+    sim->seen_vz = head[3];
+    memcpy(sim->ring_out, head + 4, sizeof(double) * 3);
+    memcpy(sim->outputs, head + 7, sizeof(double) * 5);
+    memcpy(sim->q, p, sizeof(double) * (size_t)(2 * K));
+    p += sizeof(double) * (size_t)(2 * K);
+#define TAKE(field)                                        \
+    memcpy(sim->field, p, sizeof(double) * (size_t)Z);     \
+    p += sizeof(double) * (size_t)Z
+    TAKE(df);
+    TAKE(penetration);
+    TAKE(rate);
+    TAKE(seen_heights);
+    TAKE(seen_slopes);
+#undef TAKE
+    /* the history arrays may be unaligned in the bytes: copy them out first */
+    scratch = (double*)mem_alloc(&model->host.mem, (size_t)(3 * history), sizeof(double));
+    if (scratch != NULL) {
+        memcpy(scratch, p, sizeof(double) * (size_t)(3 * history));
+        t = scratch;
+        z = scratch + history;
+        v = scratch + 2 * history;
+        road_set_history(&sim->road, &model->host.mem, t, z, v, history);
+        mem_free(&model->host.mem, scratch);
+    }
+    p += sizeof(double) * (size_t)(3 * history);
+    for (i = 0; i < Z; i++) sim->active[i] = (char)p[i];
+    sim->dft_ok = 0;
+    sim->pending = 0;
+    sim_restore_last(sim);
+}
