@@ -64,15 +64,14 @@ def demo_wall_time(folder: Path) -> dict:
 
 
 def native_tire(folder: Path, speed: float, n_elements: int = 100) -> Path:
-    """The native C tire for the car's load at ``speed`` (its parameters are compiled in)."""
-    from tire_fmu.core import OperatingPoint, TireParameters, build_model
-    from tire_fmu.core.reduction import reduce
+    """The native C tire with the car's load and ``speed`` as its start values (it builds its
+    model at initialisation for whatever the host sets)."""
     from tire_fmu.native import build_native_fmu
+    from tire_fmu.native.builder import parameter_start_values
 
-    op = OperatingPoint(n_elements=n_elements, load_n=QuarterCarParameters().static_tire_load_n,
-                        speed_m_s=speed)
-    reduced = reduce(build_model(TireParameters(), op), report=False)
-    return build_native_fmu(reduced, folder / f"native_{speed:g}.fmu", op)
+    start = parameter_start_values(load_n=QuarterCarParameters().static_tire_load_n,
+                                   speed_m_s=speed, n_elements=n_elements)
+    return build_native_fmu(folder / f"native_{speed:g}.fmu", start, platforms=("linux64",))
 
 
 def cosim_cost(fmus, speed: float, seconds: float, tire_parameters: dict) -> dict:

@@ -176,10 +176,9 @@ def _demo_summary() -> tuple[dict, dict]:
 @generator("demo-contact-events")
 def demo_contact_events() -> str:
     data, summary = _demo_summary()
-    rows = {q: v for q, v, _ in summary["rows"]} if isinstance(summary, dict) and "rows" in \
-        summary else {r[0]: r[1] for r in summary}
+    rows = {r["quantity"]: r["value"] for r in summary["rows"]}
     events = ("cleat 20 x 20 mm", "cleat 40 x 20 mm", "pothole 50 mm deep, 0.3 m")
-    lines = ["| event | contact | contact force min / max | rim load max | airborne |",
+    lines = ["| event | contact | contact force min / max | rim load max | in_contact false |",
              "|---|---|---|---|---|"]
     for event in events:
         for law in ("unilateral", "linear"):

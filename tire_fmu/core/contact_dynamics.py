@@ -225,6 +225,16 @@ class _FastStep:
         comb1 = base1 + m @ f1
         change = f1 - f_old
         ring1 = ring1 + kernel.out_f @ change
+        # the start alone (outputs read after new inputs): the state's first part, then what
+        # corrects q, the checks and the contact force, at the current time
+        self.start_rows = np.asfortranarray(np.vstack([np.atleast_2d(x) for x in (
+            f1 - f_s * one, comb1[nz:2 * nz], comb1[2 * nz:], z, vz, heights, slopes, ring1,
+            change, comb1[:nz], comb1[nz:2 * nz], sim.cos[None, :] @ f1)]))
+        self.start_change = slice(5 * nz + 5, 6 * nz + 5)
+        self.start_checks = slice(6 * nz + 5, 8 * nz + 5)
+        self.start_pattern = np.tile(active, 2).tobytes()
+        self.start_signs = np.zeros(2 * nz, dtype=bool)
+        self.y_start = np.zeros(self.start_rows.shape[0])
         # the substep: its base reads q after the start's correction, q + G_f change
         k2 = 2 * sim.ring.n_modes
         base_q = kernel.base[:, :k2]
@@ -249,6 +259,7 @@ class _FastStep:
         self.contact_row = self.checks.stop
         self.t = np.asfortranarray(np.vstack([np.atleast_2d(x) for x in rows]))
         self.base_q = np.asfortranarray(base_q)
+        self.g_f = np.asfortranarray(g_f)
         decayed = (g_f[0::2] + 1j * g_f[1::2]) * kernel.decay[:, None]
         self.u = np.asfortranarray(np.hstack([_gain_pairs(decayed), kernel.gain]))
         self.decay = kernel.decay
@@ -264,6 +275,39 @@ class _FastStep:
             int(on[0]), int(on[0] - 1), float(x[on[0]]), float(x[on[0] - 1] - x[on[0]]),
             int(on[-1]), int(on[-1] + 1), float(x[on[-1]]), float(x[on[-1] + 1] - x[on[-1]]))
 
+    def start(self, sim: ContactSimulator, z: float, vz: float) -> bool:
+        """ContactSimulator._start as one product, for the inputs given at the current time
+        (the road already read into the state); False, with nothing changed, when the
+        active set would change."""
+        nz = sim.n_zone
+        state = sim._state
+        state[5 * nz + 5], state[5 * nz + 6] = z, vz
+        y = self.y_start
+        dgemv(1.0, self.start_rows, sim._rw, 0.0, y, 0, 1, 0, 1, 0, 1)
+        if self.check:
+            np.greater(y[self.start_checks], 0.0, out=self.start_signs)
+            if self.start_signs.tobytes() != self.start_pattern:
+                return False
+        dgemv(1.0, self.g_f, y[self.start_change], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
+        state[:self.new_state] = y[:self.new_state]
+        sim._values = self._outputs(sim, float(y[-1]))
+        return True
+
+    def _outputs(self, sim: ContactSimulator, contact_fz: float) -> tuple[float, ...]:
+        nz = sim.n_zone
+        ring = sim.static_ring + sim._state[5 * nz + 2:5 * nz + 5]
+        edges = self.edges
+        if edges is None:
+            length = sim.contact_length()
+        else:  # _edges with the nodes known: the same interpolation, in floats
+            pen = sim._s_pen
+            a, b, xa, dxa, c, d, xc, dxc = edges
+            pa, pb, pc, pd = float(pen[a]), float(pen[b]), float(pen[c]), float(pen[d])
+            front = xa + (min(pa / (pa - pb), 1.0) if pa > pb else 0.0) * dxa
+            rear = xc + (min(pc / (pc - pd), 1.0) if pc > pd else 0.0) * dxc
+            length = front - rear
+        return float(ring[0]), float(ring[1]), contact_fz, float(ring[2]), length
+
     def advance(self, sim: ContactSimulator, z: float, vz: float) -> bool:
         nz = sim.n_zone
         state, rw = sim._state, sim._rw
@@ -278,19 +322,7 @@ class _FastStep:
         sim._q *= self.decay
         dgemv(1.0, self.u, y[self.q_rows], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
         state[:self.new_state] = y[:self.new_state]
-        ring = sim.static_ring + state[5 * nz + 2:5 * nz + 5]
-        edges = self.edges
-        if edges is None:
-            length = sim.contact_length()
-        else:  # _edges with the nodes known: the same interpolation, in floats
-            pen = sim._s_pen
-            a, b, xa, dxa, c, d, xc, dxc = edges
-            pa, pb, pc, pd = float(pen[a]), float(pen[b]), float(pen[c]), float(pen[d])
-            front = xa + (min(pa / (pa - pb), 1.0) if pa > pb else 0.0) * dxa
-            rear = xc + (min(pc / (pc - pd), 1.0) if pc > pd else 0.0) * dxc
-            length = front - rear
-        sim._values = (float(ring[0]), float(ring[1]), float(y[self.contact_row]),
-                       float(ring[2]), length)
+        sim._values = self._outputs(sim, float(y[self.contact_row]))
         return True
 
 
@@ -513,9 +545,7 @@ class ContactSimulator:
         self._values = self._outputs()
         return self._values
 
-    def _fast_step(self, kernel: _Kernel, z: float, vz: float) -> bool:
-        """The step as one linear map, when the active set stays what it was (see
-        _FastStep); False, with nothing changed, when it does not."""
+    def _fast_map(self, kernel: _Kernel) -> _FastStep:
         active = self.static_active if self.linear else self.active
         key = (kernel.h, active.tobytes())
         fast = self._fast.get(key)
@@ -524,7 +554,12 @@ class ContactSimulator:
             if len(self._fast) >= _FAST_CACHE_SIZE:
                 self._fast.pop(next(iter(self._fast)))
             self._fast[key] = fast
-        if not fast.advance(self, z, vz):
+        return fast
+
+    def _fast_step(self, kernel: _Kernel, z: float, vz: float) -> bool:
+        """The step as one linear map, when the active set stays what it was (see
+        _FastStep); False, with nothing changed, when it does not."""
+        if not self._fast_map(kernel).advance(self, z, vz):
             self._fast_run = 0
             return False
         return True
@@ -533,10 +568,17 @@ class ContactSimulator:
                      ) -> tuple[float, ...]:
         """Total outputs at ``time`` for inputs given at ``time``; the state keeps the
         re-evaluated forces, which the next step starts from."""
-        self._check(1.0, (rim_z, rim_vz, road_z, road_vz))
+        if (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M \
+                or abs(road_z) > MAX_DISPLACEMENT_M or abs(rim_vz) > MAX_VELOCITY_M_S \
+                or abs(road_vz) > MAX_VELOCITY_M_S:
+            self._check(1.0, (rim_z, rim_vz, road_z, road_vz))
         heights, slopes = self._road_h, self._road_v
         # recorded like a step's own sample: the step at this point replaces it
         self.road.read(self.time, road_z, road_vz, self._last_step_s, self._s_road)
+        last = self._last
+        if last is not None and self._fast_run >= _FAST_AFTER:
+            if self._fast_map(last).start(self, rim_z, rim_vz):
+                return self._values
         self._start(rim_z, rim_vz, heights, slopes)
         self._values = self._outputs()
         return self._values

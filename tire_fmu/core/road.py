@@ -103,6 +103,7 @@ class RoadReader:
         self._line: _DelayLine | None = None
         self._line_h = math.nan
         self._uniform_run: int | None = None
+        self._last_read: tuple | None = None  # (now, z, vz, h) of the last read
 
     # -- the history as a state ----------------------------------------------------------
     def history(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -142,7 +143,8 @@ class RoadReader:
     # -- reading ---------------------------------------------------------------------------
     def read(self, now: float, z: float, vz: float, h: float, out: np.ndarray) -> None:
         """Record the sample of communication point ``now`` (replacing one already there) and
-        write the road under each node at ``now`` into ``out`` = [heights, slopes].
+        write the road under each node at ``now`` into ``out`` = [heights, slopes], the
+        caller's one buffer (the same read again leaves it as the last read wrote it).
 
         ``h`` is the step about to be taken: once the samples are h apart over the whole
         reach of the windows, a delay line with fixed weights takes over (the rule depends on
@@ -153,6 +155,10 @@ class RoadReader:
             out[:n] = z
             out[n:] = vz
             return
+        read = (now, z, vz, h)
+        if read == self._last_read:  # the same point again (outputs read, then the step)
+            return
+        self._last_read = read
         line = self._line
         if line is not None and abs(h - self._line_h) <= SAME_POINT_EPS * (abs(now) + h):
             line.push(now, z, vz)
