@@ -9,7 +9,7 @@
        from fmpy's FMI headers (one input, one output, a doStep that copies), skipped
        without a C compiler.
    The rounds of (a), (b) and (c) alternate, so load on the machine hits all of them alike.
-   Target: (a) <= 1.5 x (b).
+   Aims: (a) <= 2 x (b) (issue 10), <= 1.3 x (b) (issue 13).
 2. Initialisation time of TireModal (instantiate -> exitInitializationMode) at N = 100, 400.
 3. Real-time factor at 10 kHz (step cost / 100 us) and its inverse.
 
@@ -257,8 +257,8 @@ def main(argv=None) -> None:
     if native is None:
         print("   (c) skipped: no C compiler found")
     ratio = costs["(a) TireModal"] / floor
-    verdict = "meets" if ratio <= 1.5 else "MISSES"
-    print(f"   (a) / (b) = {ratio:.2f}: {verdict} the target <= 1.5")
+    verdict = "meets" if ratio <= 2.0 else "MISSES"
+    print(f"   (a) / (b) = {ratio:.2f}: {verdict} the aim <= 2 (issue 10; issue 13 asks 1.3)")
     print("\n2. Initialisation, instantiate -> exitInitializationMode "
           f"(median of {args.init_repeats})")
     for n, seconds in inits.items():
