@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Sequence
 
 from ..core import ParameterError
-from .common import CliError, Output, to_jsonable
+from .common import CLI_NAMES, CLI_UNSET, CliError, Output, to_jsonable
 
 COMMAND_MODULES = ("ring", "rolling", "reduce", "fmu")
 
@@ -59,7 +59,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ParameterError, CliError, OSError) as error:
         if args.debug:
             raise
-        message = str(error).replace("\n", " ")
+        message = (error.message(CLI_NAMES, CLI_UNSET) if isinstance(error, ParameterError)
+                   else str(error)).replace("\n", " ")
         print(f"tire-fmu {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -37,7 +37,13 @@ from .contact import (
     road_delays_s,
 )
 from .discretisation import Grid, RingOperators
-from .parameters import OperatingPoint, ParameterError, TireParameters
+from .parameters import (
+    OperatingPoint,
+    ParameterError,
+    Problem,
+    TireParameters,
+    conditioning_problems,
+)
 from .rotation import RollingTerms, rolling_terms
 
 #: Fraction of the critical speed above which building a model warns.
@@ -221,13 +227,10 @@ def patch_for_load(tire: TireParameters, grid: Grid, structure, load_n: float, s
     max_length = tire.max_patch_length_m
     _, longest = _patch_state(tire, grid, structure, max_length, speed_m_s)
     if load_n > longest.load_n:
-        raise ParameterError(
-            [
-                f"load_n = {load_n:g} N: must be in [0, {longest.load_n:.6g}] N for this tire; "
-                f"the longest credible patch ({max_length:.3g} m, "
-                f"deflection {longest.deflection_m * 1e3:.3g} mm) carries {longest.load_n:.6g} N"
-            ]
-        )
+        raise ParameterError([Problem(
+            "load_n", load_n, "N", f"in [0, {longest.load_n:.6g}] N",
+            f"for this tire: the longest credible patch ({max_length:.3g} m, deflection "
+            f"{longest.deflection_m * 1e3:.3g} mm) carries {longest.load_n:.6g} N")])
 
     def excess(length):
         return _patch_state(tire, grid, structure, length, speed_m_s)[1].load_n - load_n
@@ -247,17 +250,17 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
 
     tire = tire or TireParameters()
     op = op or OperatingPoint()
+    problems = conditioning_problems(tire, op.n_elements)
+    if problems:
+        raise ParameterError(problems)
     grid = Grid(op.n_elements, tire.R)
     speed = float(op.speed_m_s)
     critical = critical_speed(tire, op.n_elements).speed_m_s
     if speed >= critical and not op.allow_supercritical:
-        raise ParameterError(
-            [
-                f"speed_m_s = {speed:g} m/s: must be below the critical (standing-wave) speed "
-                f"{critical:.4g} m/s of this mesh (n_elements = {op.n_elements}); a finer mesh "
-                "lowers it, sidewall_shear > 0 raises it, allow_supercritical runs anyway"
-            ]
-        )
+        raise ParameterError([Problem(
+            "speed_m_s", speed, "m/s", f"below the critical (standing-wave) speed {critical:.4g} "
+            "m/s of this mesh", f"n_elements = {op.n_elements}; a finer mesh lowers it, "
+            "sidewall_shear > 0 raises it, allow_supercritical runs anyway")])
     if CRITICAL_SPEED_WARNING_FRACTION * critical <= speed < critical:
         warnings.warn(
             f"speed {speed:g} m/s is {100 * speed / critical:.0f} % of the critical speed "

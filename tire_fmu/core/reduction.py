@@ -65,34 +65,37 @@ class ReductionSettings:
     error_points: int = 400
 
     def __post_init__(self) -> None:
+        from .parameters import ParameterError, Problem
+
         problems = []
         if self.method not in METHODS:
-            problems.append(f"method = {self.method!r}: must be one of {METHODS}")
+            problems.append(Problem("method", self.method, "", f"one of {', '.join(METHODS)}"))
         if self.f_max_hz is not None and not (
-            isinstance(self.f_max_hz, (int, float)) and 0 < self.f_max_hz <= 1e7
+            _is_number(self.f_max_hz) and 0 < self.f_max_hz <= 1e7
         ):
-            problems.append(f"f_max_hz = {self.f_max_hz!r}: must be in (0, 1e7] Hz, or None "
-                            "for no frequency cut")
-        if not (0 <= self.contribution_threshold < 1):
-            problems.append(
-                f"contribution_threshold = {self.contribution_threshold!r}: must be in [0, 1)"
-            )
+            problems.append(Problem("f_max_hz", self.f_max_hz, "Hz", "in (0, 1e7] Hz",
+                                    "the highest natural frequency kept", unset=True))
+        if not (_is_number(self.contribution_threshold)
+                and 0 <= self.contribution_threshold < 1):
+            problems.append(Problem("contribution_threshold", self.contribution_threshold, "",
+                                    "in [0, 1)"))
         for name in ("n_modes", "n_states"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int)
                                       or not 1 <= value <= 100_000):
-                problems.append(f"{name} = {value!r}: must be an integer in [1, 100000] or None")
-        low, high = self.error_band_hz
-        if not 0 <= low < high:
-            problems.append(f"error_band_hz = {self.error_band_hz!r}: must be (low, high) Hz "
-                            "with 0 <= low < high")
-        if not 0 < self.target_error < 1:
-            problems.append(f"target_error = {self.target_error!r}: must be in (0, 1)")
-        if not 10 <= self.error_points <= 100_000:
-            problems.append(f"error_points = {self.error_points!r}: must be in [10, 100000]")
+                problems.append(Problem(name, value, "", "an integer in [1, 100000]",
+                                        unset=True))
+        band = self.error_band_hz
+        if not (isinstance(band, (tuple, list)) and len(band) == 2 and all(map(_is_number, band))
+                and 0 <= band[0] < band[1]):
+            problems.append(Problem("error_band_hz", band, "Hz",
+                                    "(low, high) with 0 <= low < high"))
+        if not (_is_number(self.target_error) and 0 < self.target_error < 1):
+            problems.append(Problem("target_error", self.target_error, "", "in (0, 1)"))
+        if not (isinstance(self.error_points, int) and 10 <= self.error_points <= 100_000):
+            problems.append(Problem("error_points", self.error_points, "",
+                                    "an integer in [10, 100000]"))
         if problems:
-            from .parameters import ParameterError
-
             raise ParameterError(problems)
 
     def above_f_max(self, eigenvalues: np.ndarray) -> np.ndarray:
@@ -180,6 +183,11 @@ class ReducedModel:
 
 
 
+def _is_number(value) -> bool:
+    return (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, bool) and bool(np.isfinite(value)))
+
+
 def modal_decomposition(io: InputOutputModel) -> ModalForm:
     """Every mode of the full first-order model, one member per conjugate pair.
 
@@ -188,11 +196,56 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     """
     model = io.model
     if model.speed_m_s == 0.0:
-        return diagonalise_proportional(
+        decomp = diagonalise_proportional(
             model.stiffness, model.mass.diagonal(), model.tire.alpha, model.tire.beta,
             io.b_disp, io.b_vel, io.out_disp, io.out_vel,
         )
-    return diagonalise(io.a.toarray(), io.b, io.c)
+    else:
+        decomp = diagonalise(io.a.toarray(), io.b, io.c)
+    check_resolved(decomp.eigenvalues, model)
+    return decomp
+
+
+#: The fastest eigenvalue of a model over its slowest may be at most this: the slowest modes'
+#: relative error grows as the rounding unit times this ratio (about 2e-6 at the limit), and
+#: near 1e14 they are lost altogether and the outputs turn to nan.
+MAX_EIGENVALUE_SPREAD = 1e10
+
+
+def check_resolved(eigenvalues: np.ndarray, model: TireModel) -> None:
+    """Raise ParameterError unless double precision resolves every mode of ``model``.
+
+    The problem names the mass whose light node, against its springs, makes the fastest
+    modes: in the model these go as the stiffness-to-mass ratios, and with stiffness-
+    proportional damping as beta times them.
+    """
+    from .parameters import TIRE_FIELDS, ParameterError, Problem
+
+    TIRE_UNITS = {name: spec.unit for name, spec in TIRE_FIELDS.items()}  # noqa: N806
+    magnitude = np.abs(eigenvalues)
+    if magnitude.size == 0:
+        return
+    slow, fast = float(magnitude.min()), float(magnitude.max())
+    if np.all(np.isfinite(magnitude)) and fast <= MAX_EIGENVALUE_SPREAD * slow:
+        return
+    tire = model.tire
+    step = 2 * np.pi / model.n_elements  # the mesh's shortest wavelength spans two nodes
+    ratios = {  # (field to change, which way, the fast modes): stiffness over mass, 1/s^2
+        ("m_s", "larger", "the sidewall masses on k_r1 + k_r2"):
+            (tire.k_r1 + tire.k_r2) / tire.m_s,
+        ("rhoA", "larger", "the tread nodes on k_r1 + k_cw"): (tire.k_r1 + tire.k_cw) / tire.rhoA,
+        ("EI", "smaller", "the tread's bending at the mesh's shortest wavelength (fewer "
+                          "n_elements lengthen it)"):
+            tire.EI * 16 / (step * tire.R) ** 4 / tire.rhoA,
+    }
+    (field, way, what), ratio = max(ratios.items(), key=lambda item: item[1])
+    spread = f"{fast / slow:.2g}" if slow > 0 and np.isfinite(fast) else "beyond 1e16"
+    raise ParameterError([Problem(
+        field, getattr(tire, field), TIRE_UNITS[field],
+        f"{way} here, or beta smaller: the model's eigenvalues span {spread} (fastest over "
+        f"slowest) and may span at most {MAX_EIGENVALUE_SPREAD:g}",
+        f"beyond that double precision loses the slowest modes; the fastest here are {what}, "
+        f"stiffness over mass {ratio:.3g} 1/s^2, with beta = {tire.beta:g} s")])
 
 
 def relative_contributions(decomp: ModalForm, io: InputOutputModel,
@@ -384,11 +437,10 @@ def _select_modes(decomp: ModalForm, io, settings: ReductionSettings, full):
     cut = np.abs(shares[:, above, :].sum(axis=1))
     if cut.size and cut.max() > settings.contribution_threshold:
         warnings.warn(
-            f"f_max_hz = {settings.f_max_hz:g} Hz drops modes that alone leave a relative FRF "
-            f"error up to {cut.max():.3g} over {settings.error_band_hz[0]:g}-"
+            f"the frequency cut at {settings.f_max_hz:g} Hz drops modes that alone leave a "
+            f"relative FRF error up to {cut.max():.3g} over {settings.error_band_hz[0]:g}-"
             f"{settings.error_band_hz[1]:g} Hz (budget {settings.contribution_threshold:g}); "
-            "raise f_max_hz or leave it unset (the stiff contact-patch modes near 1 kHz matter "
-            "most)",
+            "raise the cut or remove it (the stiff contact-patch modes near 1 kHz matter most)",
             ReductionWarning,
             stacklevel=3,
         )

@@ -1,0 +1,77 @@
+"""What a mesh costs to build and reduce, up to the largest one the parameters allow.
+
+Each case runs in a fresh process (so its peak memory is its own): ``build_model`` at the
+default load, then ``reduce`` (the default modal truncation, no error report), then one step.
+It prints seconds and peak resident memory per case beside the N = 100 case of the same run,
+at rest and rolling at ``--speed`` (with ``allow_supercritical``: fine meshes have critical
+speeds of a few m/s, and the rolling model's dense eigenproblem is what costs). The largest
+mesh is ``tire_fmu.core.parameters.MAX_ELEMENTS``.
+
+Run:  python3 benchmarks/bench_mesh_size.py [--meshes 100 400 1000] [--speed 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def one_case(n_elements: int, speed_m_s: float) -> dict:
+    import warnings
+
+    from tire_fmu.core import build_model, validate
+    from tire_fmu.core.reduction import ReductionSettings, reduce
+    from tire_fmu.core.simulation import TireSimulator
+
+    warnings.simplefilter("ignore")
+    started = time.perf_counter()
+    model = build_model(*validate({}, {"n_elements": n_elements, "speed_m_s": speed_m_s,
+                                       "allow_supercritical": True}))
+    built = time.perf_counter()
+    reduced = reduce(model, ReductionSettings(), report=False)
+    TireSimulator(reduced).step(1e-4, 0.0, 0.0, 1e-3, 0.0)
+    done = time.perf_counter()
+    return {"build_s": built - started, "reduce_s": done - built, "states": reduced.n_states,
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def main() -> None:
+    from tire_fmu.core.parameters import MAX_ELEMENTS
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--meshes", type=int, nargs="+", default=[100, 400, MAX_ELEMENTS])
+    parser.add_argument("--speed", type=float, default=10.0, help="rolling case, m/s")
+    parser.add_argument("--case", nargs=2, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.case:
+        print(json.dumps(one_case(int(args.case[0]), float(args.case[1]))))
+        return
+    env = dict(os.environ, OPENBLAS_NUM_THREADS=os.environ.get("OPENBLAS_NUM_THREADS", "1"),
+               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    meshes = sorted(set(args.meshes) | {100})
+    print(f"build + reduce + one step, a fresh process per case (MAX_ELEMENTS = {MAX_ELEMENTS})")
+    print(f"{'N':>6} {'speed m/s':>9} {'states':>6} {'seconds':>8} {'x N=100':>8} "
+          f"{'peak MB':>8} {'x N=100':>8}")
+    for speed in (0.0, args.speed):
+        reference = None
+        for n in meshes:
+            done = subprocess.run([sys.executable, __file__, "--case", str(n), str(speed)],
+                                  capture_output=True, text=True, env=env, check=True)
+            case = json.loads(done.stdout.strip().splitlines()[-1])
+            seconds = case["build_s"] + case["reduce_s"]
+            reference = reference or (seconds, case["peak_mb"])
+            print(f"{n:>6} {speed:>9g} {case['states']:>6} {seconds:>8.1f} "
+                  f"{seconds / reference[0]:>8.1f} {case['peak_mb']:>8.0f} "
+                  f"{case['peak_mb'] / reference[1]:>8.1f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
