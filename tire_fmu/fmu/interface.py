@@ -19,6 +19,15 @@ from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES
 TIME_ABS_TOLERANCE_S = 1e-12
 TIME_REL_TOLERANCE = 1e-9
 
+#: The four inputs (m, m/s) together may reach this in magnitude: far outside the linear
+#: model, but every output stays finite however long a run lasts.
+INPUT_LIMIT = 1e6
+
+#: The core's names for the inputs where the FMU variables differ, and the value that means
+#: "no limit" (the core's None), for rendering the core's parameter problems.
+FMU_NAMES = {"load_n": "load", "speed_m_s": "speed", "f_max_hz": "f_max"}
+FMU_UNSET = "0"
+
 CAPABILITIES = {
     "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
     "canGetAndSetFMUstate": True,  # the full modal state, not pythonfmu's scalars only
