@@ -72,12 +72,15 @@ def value_text(value: Any, unit: str = "") -> str:
     """A value as a message shows it: numbers in the shortest exact form, with their unit."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
         return repr(value)
-    number = float(value)
-    if not math.isfinite(number):
-        return repr(number)
-    text = f"{number:g}"
-    if float(text) != number:
-        text = repr(int(value)) if isinstance(value, (int, np.integer)) else repr(number)
+    if isinstance(value, (int, np.integer)):
+        text = str(int(value))
+    else:
+        number = float(value)
+        if not math.isfinite(number):
+            return repr(number)
+        text = f"{number:g}"
+        if float(text) != number:
+            text = repr(number)
     return f"{text} {unit}" if unit else text
 
 

@@ -11,7 +11,13 @@ from dataclasses import dataclass, fields, replace
 from xml.etree import ElementTree
 
 from ..core.io_model import OUTPUT_UNITS
-from ..core.parameters import DEFAULT_LOAD_N, TIRE_FIELDS, TireParameters
+from ..core.parameters import (
+    DEFAULT_LOAD_N,
+    MAX_ELEMENTS,
+    MIN_ELEMENTS,
+    TIRE_FIELDS,
+    TireParameters,
+)
 from ..core.reduction import ReductionSettings
 from ..core.simulation import INPUT_NAMES, OUTPUT_NAMES
 
@@ -109,7 +115,8 @@ def _parameters() -> list[FmuVariable]:
                     "forward speed (spin = speed / R); below the mesh's critical speed unless "
                     "allow_supercritical", "--speed"),
         FmuVariable("n_elements", "Integer", "parameter", 100, "",
-                    "finite-difference nodes around the ring", "--elements"),
+                    f"finite-difference nodes around the ring; allowed [{MIN_ELEMENTS}, "
+                    f"{MAX_ELEMENTS}]", "--elements"),
         FmuVariable("f_max", "Real", "parameter", settings.f_max_hz or 0.0, "Hz",
                     "highest natural frequency of the modes the reduction keeps (0 = no cut: "
                     "the reduction's error budget decides)", "--f-max"),
