@@ -257,7 +257,8 @@ STEP_CASES = {  # case: (t, h, inputs, what the message says)
     "late time": (2e-3, 1e-3, None, "t = 0.002 s: must be the last communication point"),
     "nan time": (math.nan, 1e-3, None, "t = nan s: must be the last communication point"),
     "inf time": (math.inf, 1e-3, None, "t = inf s: must be the last"),
-    "zero h": (1e-3, 0.0, None, "step size h = 0.0 s: must be finite and > 0"),
+    "zero h": (1e-3, 0.0, None, "step size h = 0.0 s: must be in (0, 1e+06] s"),
+    "huge h": (1e-3, 1e300, None, "step size h = 1e+300 s: must be in (0, 1e+06] s"),
     "negative h": (1e-3, -1e-3, None, "step size h = -0.001 s"),
     "nan h": (1e-3, math.nan, None, "step size h = nan s"),
     "nan input": (1e-3, 1e-3, (1e-3, math.nan, 0, 0), "rim_vz = nan"),
@@ -480,6 +481,10 @@ def _bad_states():
         "a word for a number": (_with(state, values=tuple(["x"] + values[1:])),
                                 "rim_z = 'x': must be a number"),
         "too few values": (_with(state, values=tuple(values[:5])), "5 values"),
+        "an integer C cannot hold": (
+            _with(state, values=tuple(10**30 if i == vr(new_slave(), "n_elements") else x
+                                      for i, x in enumerate(values))),
+            "n_elements = 1000000000000000000000000000000: must be an integer of 32 bits"),
         "nan output": (_with(state, values=tuple(values[:4] + [math.nan] + values[5:])),
                        "rim_Fz = nan: an output must be finite"),
         "nan modal state": (_with(state, simulator=dataclasses.replace(state.simulator,

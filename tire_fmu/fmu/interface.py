@@ -28,6 +28,9 @@ TIME_REL_TOLERANCE = 1e-9
 #: The four inputs (m, m/s) together may reach this in magnitude: far outside the linear
 #: model, but every output stays finite however long a run lasts.
 INPUT_LIMIT = 1e6
+#: The longest communication step (s), about 11 days: the exact step's coefficients stay
+#: finite far beyond it, but not for any h (1e300 s overflows them).
+MAX_STEP_S = 1e6
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.

@@ -52,6 +52,7 @@ from tire_fmu.fmu.interface import (
     IN_CONTACT,
     INPUT_LIMIT,
     INPUTS,
+    MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
     TIME_REL_TOLERANCE,
@@ -253,6 +254,10 @@ class TireModal(Fmi2Slave):
                     current_time, step_size,
                     f"t = {current_time!r} s: must be the last communication point t = {now!r} "
                     "s (roll back with fmi2SetFMUstate to step from an earlier time)")
+        if not 0.0 < step_size <= MAX_STEP_S:  # false for nan too
+            return self._refuse_step(current_time, step_size,
+                                     f"step size h = {step_size!r} s: must be in (0, "
+                                     f"{MAX_STEP_S:g}] s")
         # the inputs are value references 0-3 (INPUTS); one test for all four, false for nan
         if not (abs(values[0]) + abs(values[1]) + abs(values[2]) + abs(values[3])
                 <= INPUT_LIMIT):
@@ -521,7 +526,7 @@ class TireModal(Fmi2Slave):
         self._phase, self._why_not_running = state.phase, state.why_not_running
         self._start_time = state.start_time
         self._contact_warning_armed = state.contact_warning_armed
-        self._stale = state.stale
+        self._stale = state.stale and simulator is not None  # nothing to feed through else
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
@@ -632,8 +637,8 @@ def _state_value_problem(v: FmuVariable, value) -> str | None:
         return None if isinstance(value, bool) else f"{v.name} = {value!r}: must be a Boolean"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return f"{v.name} = {value!r}: must be a number"
-    if v.type == "Integer" and not isinstance(value, int):
-        return f"{v.name} = {value!r}: must be an integer"
+    if v.type == "Integer" and not (isinstance(value, int) and -2**31 <= value < 2**31):
+        return f"{v.name} = {value!r}: must be an integer of 32 bits (fmi2Integer)"
     if v.causality == "output" and not math.isfinite(value):
         return f"{v.name} = {value!r}: an output must be finite"
     return None  # inputs and parameters are checked when they are used, as when set
