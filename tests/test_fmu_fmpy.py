@@ -626,6 +626,69 @@ def test_a_process_that_loaded_the_fmu_exits_without_touching_freed_memory(fmu_p
     assert done.stdout.strip() == "11"
 
 
+_C_HOST = r"""
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                   fmi2String m, ...) {
+    va_list a; va_start(a, m); fprintf(stderr, "[%d] ", s); vfprintf(stderr, m, a);
+    fputc('\n', stderr); va_end(a);
+}
+#define F(name) name##TYPE *name = (name##TYPE *)dlsym(h, #name)
+int main(int argc, char **argv) {  /* binary, GUID, resource URI, n_elements' reference */
+    void *h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!h) { fprintf(stderr, "%s\n", dlerror()); return 2; }
+    F(fmi2Instantiate); F(fmi2SetupExperiment); F(fmi2EnterInitializationMode);
+    F(fmi2ExitInitializationMode); F(fmi2DoStep); F(fmi2Terminate); F(fmi2FreeInstance);
+    F(fmi2SetInteger);
+    fmi2CallbackFunctions cb = {logger, 0, 0, 0, 0};
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, argv[2], argv[3], &cb, 0, 1);
+    if (!c) return 3;
+    fmi2ValueReference n = (fmi2ValueReference)atoi(argv[4]);
+    fmi2Integer forty = 40;
+    int status = fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0) | fmi2EnterInitializationMode(c)
+                 | fmi2SetInteger(c, &n, 1, &forty) | fmi2ExitInitializationMode(c);
+    for (int i = 0; i < 10; i++) status |= fmi2DoStep(c, i * 1e-3, 1e-3, 1);
+    status |= fmi2Terminate(c);
+    fmi2FreeInstance(c);
+    printf("statuses %d\n", status);
+    return 0;
+}
+"""
+
+
+def test_a_c_host_that_lets_the_fmu_start_python_exits_cleanly(fmu_path, unpacked, tmp_path):
+    """A C host (the C fmusim) with libpython loaded: the wrapper starts Python and finalizes
+    it at exit from its static destructor, after the destructors of numpy's and scipy's
+    libraries had run (they were loaded later, and exit handlers run last-in first-out):
+    the old binary crashed in Py_FinalizeEx 9 runs in 10 here. The guard finalizes first."""
+    import sysconfig
+
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    library = Path(sysconfig.get_config_var("LIBDIR") or "",
+                   sysconfig.get_config_var("INSTSONAME") or "")
+    if compiler is None or ".so" not in library.name or not library.is_file():
+        pytest.skip("needs a C compiler and a shared libpython")
+    (tmp_path / "host.c").write_text(_C_HOST)
+    headers = Path(fmpy.__file__).parent / "c-code"
+    subprocess.run([compiler, "-O1", "-I", str(headers), "-o", str(tmp_path / "host"),
+                    str(tmp_path / "host.c"), "-ldl"], check=True)
+    description, folder = unpacked
+    n_elements = next(v.valueReference for v in description.modelVariables
+                      if v.name == "n_elements")
+    env = {**os.environ, "LD_PRELOAD": str(library), "PYTHONHOME": sys.base_prefix}
+    binary = Path(folder) / "binaries" / "linux64" / "TireModal.so"
+    for _ in range(5):
+        done = subprocess.run([str(tmp_path / "host"), str(binary), description.guid,
+                               (Path(folder) / "resources").as_uri(), str(n_elements)],
+                              capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
+        assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+        assert done.stdout.strip() == "statuses 0", done.stderr[-2000:]
+
+
 def test_processes_that_load_the_fmu_exit_cleanly_every_time(fmu_path):
     """The same probe as it runs, several times over: no abort, no segfault at exit."""
     codes = []
