@@ -195,14 +195,24 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     the same modes several times faster; rolling needs the general (dense LAPACK) one.
     """
     model = io.model
-    if model.speed_m_s == 0.0:
-        decomp = diagonalise_proportional(
-            model.stiffness, model.mass.diagonal(), model.tire.alpha, model.tire.beta,
-            io.b_disp, io.b_vel, io.out_disp, io.out_vel,
-        )
-    else:
-        decomp = diagonalise(io.a.toarray(), io.b, io.c)
+    # a mode of zero frequency, or one exactly critically damped, divides by zero: checked
+    # below, with a message, rather than warned about here
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if model.speed_m_s == 0.0:
+            decomp = diagonalise_proportional(
+                model.stiffness, model.mass.diagonal(), model.tire.alpha, model.tire.beta,
+                io.b_disp, io.b_vel, io.out_disp, io.out_vel,
+            )
+        else:
+            decomp = diagonalise(io.a.toarray(), io.b, io.c)
     check_resolved(decomp.eigenvalues, model)
+    if not (np.all(np.isfinite(decomp.b)) and np.all(np.isfinite(decomp.c))):
+        from .parameters import ParameterError, Problem
+
+        raise ParameterError([Problem(
+            "beta", model.tire.beta, "s", "another value (or alpha another)",
+            "a mode is critically damped to the last bit, and its two eigenvalues coincide: "
+            "the modal form does not exist")])
     return decomp
 
 
