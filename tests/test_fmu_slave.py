@@ -17,7 +17,7 @@ from pythonfmu.enums import Fmi2Status
 from tire_fmu.core import DEFAULT_LOAD_N, build_model, validate
 from tire_fmu.core.reduction import ReductionSettings, reduce
 from tire_fmu.core.simulation import INPUT_NAMES, OUTPUT_NAMES, TireSimulator
-from tire_fmu.fmu.interface import INPUT_LIMIT
+from tire_fmu.fmu.interface import INPUT_LIMIT, MAX_DELAY_STEPS
 from tire_fmu.fmu.slave import Phase, TireModal, _Snapshot, fmi_message
 
 N = 40  # elements: enough for every check here, cheap to reduce
@@ -284,6 +284,18 @@ def test_bad_steps_are_refused_with_a_message_and_change_nothing(case):
     assert_unchanged(before, observable(slave))
     set_inputs(slave, rim_z=1e-3)  # the host fixes its call and retries: accepted
     assert slave.do_step(1e-3, 1e-3) is True
+
+
+def test_a_step_too_short_for_the_road_history_at_a_crawl_is_refused():
+    # at 1 mm/s the road takes minutes to cross the patch: 1e-4 s steps would need millions
+    # of samples of road history (a denormal speed crashed the step before: inf delays)
+    slave = initialised(speed=1e-3)
+    reach = float(slave._simulator.road_delays_s.max())
+    assert slave.do_step(0.0, 1e-4) is False
+    (error,) = messages(slave, Fmi2Status.error)
+    assert "step size h = 0.0001 s: must be at least" in error and "steps of its history" in error
+    h = 1.01 * reach / MAX_DELAY_STEPS
+    assert slave.do_step(0.0, h) is True and slave.do_step(h, h) is True
 
 
 def test_inputs_up_to_the_limit_keep_every_output_finite():

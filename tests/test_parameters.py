@@ -81,6 +81,14 @@ def test_load_beyond_the_longest_credible_patch_is_refused(tire):
     assert longest.patch.load_n > 1e5  # a truck tire carries its rated load comfortably
 
 
+@pytest.mark.parametrize("speed", [5e-324, 1e-9, 0.00099])
+def test_a_crawl_slower_than_rolling_is_refused(speed):
+    with pytest.raises(ParameterError, match="must be 0 or at least 0.001 m/s"):
+        OperatingPoint(speed_m_s=speed)
+    OperatingPoint(speed_m_s=0.0)
+    OperatingPoint(speed_m_s=1e-3)
+
+
 def test_stencil_needs_eight_nodes():
     with pytest.raises(ParameterError, match="n_elements = 7"):
         OperatingPoint(n_elements=7)

@@ -28,6 +28,10 @@ GRAVITY_M_S2 = 9.80665
 QUARTER_CAR_MASS_KG = 2500.0 + 320.0
 DEFAULT_LOAD_N = QUARTER_CAR_MASS_KG * GRAVITY_M_S2  # the quarter car's weight, ~27.7 kN
 
+#: The slowest speed that rolls (m/s): below it the tire is at rest to rounding, and the road
+#: would reach the back of the patch after days (a time-domain run keeps that much history).
+MIN_ROLLING_SPEED_M_S = 1e-3
+
 #: Longest contact patch the linear ring model is trusted with, as a fraction of the
 #: circumference. Beyond ~45° of wrap the small-deflection ring and the flat-road chord
 #: geometry used to relate load and patch length both stop being credible.
@@ -303,6 +307,11 @@ def operating_point_problems(
             continue
         if not math.isfinite(number) or number < 0:
             problems.append(Problem(name, number, unit, f"a finite number >= 0 {unit}"))
+        elif name == "speed_m_s" and 0 < number < MIN_ROLLING_SPEED_M_S:
+            problems.append(Problem(
+                name, number, unit, f"0 or at least {MIN_ROLLING_SPEED_M_S:g} {unit}",
+                "slower is at rest to rounding, and the road would take days to cross the "
+                "patch"))
         elif name == "patch_length_m" and max_patch is not None and number > max_patch:
             problems.append(Problem(
                 name, number, unit, f"in [0, {max_patch:.4g}] m",

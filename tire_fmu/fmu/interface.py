@@ -31,6 +31,9 @@ INPUT_LIMIT = 1e6
 #: The longest communication step (s), about 11 days: the exact step's coefficients stay
 #: finite far beyond it, but not for any h (1e300 s overflows them).
 MAX_STEP_S = 1e6
+#: At speed the FMU keeps the road's history back to the patch's last node, one sample per
+#: step, and reads it through a delay line of that many steps: at most this many.
+MAX_DELAY_STEPS = 100_000
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.

@@ -52,6 +52,7 @@ from tire_fmu.fmu.interface import (
     IN_CONTACT,
     INPUT_LIMIT,
     INPUTS,
+    MAX_DELAY_STEPS,
     MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
@@ -157,6 +158,7 @@ class TireModal(Fmi2Slave):
         self._start_time = 0.0
         self._simulator: TireSimulator | None = None
         self._built_for: tuple | None = None  # parameter values the simulator was built with
+        self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True
         # Inputs set since the outputs were last computed: the next read recomputes the
         # direct feedthrough with them (see TireSimulator.outputs_with).
@@ -254,10 +256,11 @@ class TireModal(Fmi2Slave):
                     current_time, step_size,
                     f"t = {current_time!r} s: must be the last communication point t = {now!r} "
                     "s (roll back with fmi2SetFMUstate to step from an earlier time)")
-        if not 0.0 < step_size <= MAX_STEP_S:  # false for nan too
-            return self._refuse_step(current_time, step_size,
-                                     f"step size h = {step_size!r} s: must be in (0, "
-                                     f"{MAX_STEP_S:g}] s")
+        if step_size != self._checked_h:  # false for nan too: checked, and refused
+            problem = self._step_size_problem(step_size)
+            if problem:
+                return self._refuse_step(current_time, step_size, problem)
+            self._checked_h = step_size
         # the inputs are value references 0-3 (INPUTS); one test for all four, false for nan
         if not (abs(values[0]) + abs(values[1]) + abs(values[2]) + abs(values[3])
                 <= INPUT_LIMIT):
@@ -286,6 +289,18 @@ class TireModal(Fmi2Slave):
         elif not self._contact_warning_armed:
             self._contact_warning_armed = True
         return True
+
+    def _step_size_problem(self, h: float) -> str | None:
+        if not 0.0 < h <= MAX_STEP_S:  # false for nan too
+            return f"step size h = {h!r} s: must be in (0, {MAX_STEP_S:g}] s"
+        delays = self._simulator.road_delays_s
+        reach = float(delays.max()) if delays.size else 0.0
+        if not reach / h <= MAX_DELAY_STEPS:
+            return (f"step size h = {h!r} s: must be at least {reach / MAX_DELAY_STEPS:.3g} s "
+                    f"at this speed: the road reaches the patch's last node {reach:.3g} s after "
+                    f"its leading edge, and the FMU keeps at most {MAX_DELAY_STEPS} steps of "
+                    "its history")
+        return None
 
     def _refuse_step(self, t: float, h: float, why: str) -> bool:
         return self._refuse(f"fmi2DoStep(t = {t!r} s, h = {h!r} s)", why)
@@ -344,6 +359,7 @@ class TireModal(Fmi2Slave):
         for text in said:
             self.log(text, Fmi2Status.warning)
         self._simulator, self._built_for = simulator, parameters
+        self._checked_h = math.nan
         self._phase, self._why_not_running = Phase.RUNNING, ""
         self._contact_warning_armed = True
         self._show(simulator.output_dict(), simulator.in_contact)
@@ -522,6 +538,7 @@ class TireModal(Fmi2Slave):
                 self._refuse(call, str(error))
                 return
         self._simulator, self._built_for = simulator, built_for
+        self._checked_h = math.nan
         self._values[:] = state.values
         self._phase, self._why_not_running = state.phase, state.why_not_running
         self._start_time = state.start_time
