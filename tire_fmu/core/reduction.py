@@ -284,7 +284,9 @@ def relative_contributions(decomp: ModalForm, io: InputOutputModel,
             forced[name] = ((decomp.b @ r) * dyn, (np.conj(decomp.b) @ r) * dyn_partner)
         own, partner = forced[name]
         c = decomp.c[row][:, None]
-        rows[k] = 0.5 * (c * own + np.conj(c) * partner) / np.abs(h_full)[None, :]
+        # where the full response is exactly zero a relative contribution means nothing
+        scale = np.where(np.abs(h_full) > 0.0, np.abs(h_full), np.inf)
+        rows[k] = 0.5 * (c * own + np.conj(c) * partner) / scale[None, :]
     return rows
 
 
