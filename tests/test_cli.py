@@ -234,7 +234,7 @@ BAD_INPUTS = [
      ["--elements-list = '20,abc'", "--nmax = 0"]),
     (["critical-speed", "--elements", "4", "--tire", "EI=-1"], ["--elements = 4", "EI = -1"]),
     (["analytic", "--nmax", "-1", "--inflation-pressure", "-3"],
-     ["--nmax = -1", "inflation_pressure = -3"]),
+     ["--nmax = -1", "--inflation-pressure = -3"]),
     (["modes", "--max-frequency", "-1"], ["--max-frequency = -1"]),
     (["speed-sweep", "--max-speed", "60"], ["--max-speed = 60", "critical speed 42.67"]),
     (["dispersion", "--speed", "50", "--patch-length", "0.204"],

@@ -76,7 +76,7 @@ def test_bad_reduction_settings_are_all_reported_on_one_line(capsys):
     err = capsys.readouterr().err
     assert code == 2
     assert err.count("\n") == 1
-    for fragment in ("contribution_threshold = 2", "f_max_hz = -5", "n_modes = 0"):
+    for fragment in ("--threshold = 2", "--f-max = -5", "--n-modes = 0"):
         assert fragment in err
 
 

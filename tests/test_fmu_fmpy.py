@@ -1,10 +1,13 @@
 """TireModal.fmu built once per session and run through fmpy: validation, equality with the
 core's stepping kernel, physics seen through the FMU, refusals with status and message (in
-this process and in a subprocess), state rollback, several instances, reset."""
+this process and, where the failure used to be a crash, in a subprocess with a timeout),
+state rollback, several instances, reset, and a clean exit of the processes that load it."""
 
 import gc
 import json
 import math
+import os
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -25,6 +28,8 @@ from fmpy.fmi2 import (  # noqa: E402
     fmi2CallbackFreeMemoryTYPE,
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
+    fmi2LastSuccessfulTime,
+    fmi2Terminated,
 )
 from fmpy.validation import validate_fmu  # noqa: E402
 
@@ -43,11 +48,13 @@ from tire_fmu.core.contact_dynamics import (  # noqa: E402
 from tire_fmu.core.frequency_response import ringing_modes, sine_response  # noqa: E402
 from tire_fmu.core.io_model import build_io_model  # noqa: E402
 from tire_fmu.fmu.builder import SLAVE_MODULE, build_fmu  # noqa: E402
+from vehicle_demo.cosim import printed  # noqa: E402
 
 pytestmark = pytest.mark.fmu
 
 N = 40  # elements: accuracy does not matter here, build time does
-DISCARD = 2
+ERROR = 3
+TIMEOUT_S = 180
 
 
 @pytest.fixture(scope="session")
@@ -61,8 +68,10 @@ def unpacked(fmu_path):
 
 
 class Host:
-    """An fmpy FMU2Slave with a logger that keeps (status, message), initialised with the
-    given parameters (set with the function of their FMI type)."""
+    """An fmpy FMU2Slave with a logger that keeps (status, message) as printf shows them,
+    initialised with the given parameters (set with the function of their FMI type).
+    (fmpy's C proxy that formats messages keeps one logger per process, so with several
+    hosts in one process the formatting is done here; the fresh-process tests use it.)"""
 
     def __init__(self, unpacked, name="tire", initialise=True, **parameters):
         description, folder = unpacked
@@ -81,15 +90,16 @@ class Host:
             self.initialise(**parameters)
 
     def _log(self, environment, instance, status, category, message):
-        self.messages.append((status, message.decode()))
+        self.messages.append((status, printed(message)))
 
     def initialise(self, start_time=0.0, **parameters):
+        """Returns the status of fmi2ExitInitializationMode."""
         parameters.setdefault("n_elements", N)
         self.fmu.setupExperiment(startTime=start_time)
         self.fmu.enterInitializationMode()
         self.set(**parameters)
-        self.fmu.exitInitializationMode()
         self.time = start_time
+        return status_of(self.fmu.exitInitializationMode)
 
     def set(self, **values):
         for name, value in values.items():
@@ -113,8 +123,21 @@ class Host:
         return found
 
     def close(self):
-        self.fmu.terminate()
+        status_of(self.fmu.terminate)  # refused in the error state, which is fine here
         self.fmu.freeInstance()
+
+
+def status_of(function, *args):
+    """The FMI status of a call through fmpy (which raises for worse than warning)."""
+    try:
+        function(*args)
+    except FMICallException as error:
+        return error.status
+    finally:
+        # pythonfmu releases a slave whose method raised but keeps using it: after a garbage
+        # collection the next call would crash this process. The slave never raises.
+        gc.collect()
+    return 0
 
 
 @pytest.fixture
@@ -285,40 +308,35 @@ def test_static_stiffness_through_the_fmu_is_the_models(host):
 
 # -- refusals: status, message, and a host that carries on ----------------------------------
 
-def _refused(tire, function, *args):
-    with pytest.raises(FMICallException) as caught:
-        function(*args)
-    # pythonfmu releases a slave whose method raised but keeps using it: after a garbage
-    # collection the next call would crash this process. The slave never raises.
-    gc.collect()
-    return caught.value.status
-
-
-def test_rejected_parameters_log_every_problem_and_steps_are_discarded(host):
-    tire = host(R=-1.0, n_elements=3, load=math.nan)  # exitInitializationMode: fmi2OK
-    problems = [m for m in tire.taken(status=3) if "parameter problem" in m]
+def test_rejected_parameters_are_an_error_at_initialisation_that_names_each(host):
+    tire = host(initialise=False)
+    assert tire.initialise(R=-1.0, n_elements=3, load=math.nan) == ERROR
+    problems = [m for m in tire.taken(status=ERROR) if "parameter problem" in m]
     assert len(problems) == 3
-    assert any("R = -1" in p for p in problems) and any("n_elements = 3" in p for p in problems)
+    assert any("R = -1 m" in p for p in problems) and any("n_elements = 3" in p for p in problems)
     assert any("load = nan" in p for p in problems)
-    assert _refused(tire, tire.fmu.doStep, 0.0, 1e-3) == DISCARD
-    (message,) = tire.taken(status=DISCARD)
-    assert "rejected" in message and "n_elements = 3" in message
+    assert status_of(tire.fmu.doStep, 0.0, 1e-3) == ERROR
+    (message,) = tire.taken(status=ERROR)
+    assert "fmi2DoStep refused" in message and "n_elements = 3" in message
 
 
 def test_a_speed_at_the_critical_speed_is_rejected(host):
-    tire = host(speed=1000.0)
-    assert any("critical (standing-wave) speed" in m for m in tire.taken(status=3))
-    assert _refused(tire, tire.fmu.doStep, 0.0, 1e-3) == DISCARD
+    tire = host(initialise=False)
+    assert tire.initialise(speed=1000.0) == ERROR
+    assert any("critical (standing-wave) speed" in m for m in tire.taken(status=ERROR))
+    assert status_of(tire.fmu.doStep, 0.0, 1e-3) == ERROR
 
 
 @pytest.mark.parametrize("case,message", [
     ("nan input", "rim_z = nan m: must be in"),
     ("inf input", "road_vz = inf m/s: must be in"),
-    ("zero h", "step size h = 0.0 s: must be finite and > 0"),
-    ("negative h", "step size h = -0.001 s: must be finite and > 0"),
-    ("wrong time", "the last communication point is t = 0.001 s"),
+    ("zero h", "step size h = 0.0 s: must be in (0, 1e+06] s"),
+    ("negative h", "step size h = -0.001 s: must be in (0, 1e+06] s"),
+    ("huge h", "step size h = 1e+300 s: must be in (0, 1e+06] s"),
+    ("wrong time", "t = 0.5 s: must be the last communication point t = 0.001 s"),
+    ("nan time", "t = nan s: must be the last communication point"),
 ])
-def test_bad_steps_are_discarded_with_their_message_and_the_host_retries(host, case, message):
+def test_bad_steps_are_errors_with_their_message_and_the_host_retries(host, case, message):
     tire = host()
     expected = tire.step(1e-3, rim_z=1e-3)
     t, h = 1e-3, 1e-3
@@ -330,83 +348,371 @@ def test_bad_steps_are_discarded_with_their_message_and_the_host_retries(host, c
         h = 0.0
     elif case == "negative h":
         h = -1e-3
+    elif case == "huge h":
+        h = 1e300
     else:
-        t = 0.5
+        t = math.nan if case == "nan time" else 0.5
     tire.taken()
-    assert _refused(tire, tire.fmu.doStep, t, h) == DISCARD
-    (logged,) = tire.taken(status=DISCARD)
-    assert message in logged and "state unchanged" in logged
-    assert tire.get(*OUTPUT_NAMES) == expected  # nothing moved
+    assert status_of(tire.fmu.doStep, t, h) == ERROR
+    (logged,) = tire.taken(status=ERROR)
+    assert message in logged and logged.endswith("nothing changed")
+    # the last good point stays the last successful time, and the FMU does not ask to stop
+    assert tire.fmu.getRealStatus(fmi2LastSuccessfulTime) == 1e-3
+    assert tire.fmu.getBooleanStatus(fmi2Terminated) is False
+    if case.endswith("input"):  # the outputs cannot follow those inputs: an error too
+        assert status_of(tire.get, *OUTPUT_NAMES) == ERROR
+        tire.set(rim_z=1e-3, rim_vz=0.0, road_z=0.0, road_vz=0.0)  # the step's inputs again
+        assert_equal_to_core(tire.get(*OUTPUT_NAMES), expected)
+    else:
+        assert tire.get(*OUTPUT_NAMES) == expected  # nothing moved
     tire.step(1e-3, rim_z=1e-3)  # fixed and retried: accepted
+
+
+def test_a_nan_sample_in_simulate_fmus_input_stops_the_run_with_an_error_naming_it(fmu_path):
+    """It used to return half the rows silently: pythonfmu reports terminated after any
+    refused step, and fmpy then ends the run as if it were complete."""
+    h = 1e-3
+    t = np.arange(101) * h
+    table = np.zeros(t.size, dtype=[("time", float)] + [(n, float) for n in INPUT_NAMES])
+    table["time"] = t
+    table["road_z"][50] = math.nan
+    logged = []
+    with pytest.raises(FMICallException) as caught:
+        simulate_fmu(str(fmu_path), start_values={"n_elements": N}, input=table,
+                     output=list(OUTPUT_NAMES), output_interval=h, stop_time=t[-1],
+                     logger=lambda *args: logged.append((args[2], args[4].decode())))
+    assert caught.value.status == ERROR
+    # logging off: errors reach the host all the same
+    [refusal] = [m for status, m in logged if status == ERROR]
+    assert "road_z = nan" in refusal and "fmi2DoStep" in refusal
+
+
+def test_a_second_initialisation_exit_is_an_error_and_changes_nothing(host):
+    tire = host()
+    for _ in range(3):
+        tire.step(1e-3, rim_z=1e-3)
+    before = tire.get(*OUTPUT_NAMES)
+    tire.taken()
+    assert status_of(tire.fmu.exitInitializationMode) == ERROR
+    assert "the FMU is running" in tire.taken(status=ERROR)[0]
+    assert tire.get(*OUTPUT_NAMES) == before
+    assert status_of(tire.fmu.doStep, tire.time, 1e-3) == 0  # still at t = 3 ms
+    tire.fmu.terminate()
+    assert status_of(tire.fmu.exitInitializationMode) == ERROR
+    assert status_of(tire.fmu.doStep, tire.time + 1e-3, 1e-3) == ERROR  # still terminated
+
+
+def test_non_finite_start_times_are_refused(host):
+    tire = host(initialise=False)
+    assert status_of(tire.fmu.setupExperiment, None, math.nan) == ERROR
+    assert status_of(tire.fmu.setupExperiment, None, math.inf) == ERROR
+    assert any("startTime = inf s: must be finite" in m for m in tire.taken(status=ERROR))
+    assert tire.initialise(start_time=0.0) == 0
 
 
 def test_parameters_cannot_change_after_initialisation(host):
     tire = host()
-    tire.set(load=1.0)  # fmi2OK (pythonfmu cannot refuse a set) but ignored and logged
+    assert status_of(lambda: tire.set(load=1.0)) == ERROR
     assert tire.get("load") == [pytest.approx(DEFAULT_LOAD_N)]
-    assert any("fixed after initialisation" in m for m in tire.taken(status=3))
+    assert any("fixed after initialisation" in m for m in tire.taken(status=ERROR))
+
+
+def test_bad_state_bytes_are_an_error_and_the_instance_runs_on(host):
+    tire = host()
+    tire.step(1e-3, rim_z=1e-3)
+    good = tire.fmu.serializeFMUstate(tire.fmu.getFMUstate())
+    after = tire.step(1e-3, rim_z=1e-3)
+    for data in (good + b"x", good[:-1], b"%s%s%s%s%s%s%s%s%s%s"):
+        state = tire.fmu.deSerializeFMUstate(data)
+        tire.taken()
+        assert status_of(tire.fmu.setFMUstate, state) == ERROR
+        assert "fmi2SetFMUstate refused" in tire.taken(status=ERROR)[0]
+        tire.fmu.freeFMUstate(state)
+        assert tire.get(*OUTPUT_NAMES) == after
+    assert tire.fmu.getRealStatus(fmi2LastSuccessfulTime) == 2e-3
+
+
+def _run_script(script, *args, env=None):
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(script), *map(str, args)],
+                          capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
+    assert done.returncode == 0, (done.returncode, done.stderr[-3000:])
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+_FRESH_HOST = """
+    import gc, json, math, sys
+    from ctypes import byref, c_char, c_void_p
+    from fmpy import extract, read_model_description
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.logging import addLoggerProxy
+    path = sys.argv[1]
+    md = read_model_description(path)
+    folder = sys.argv[2] if len(sys.argv) > 2 else extract(path)
+    refs = {v.name: v.valueReference for v in md.modelVariables}
+    log = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, name, status, category, msg: log.append((status, msg.decode())))
+    addLoggerProxy(byref(callbacks))  # formats the message as a C host would
+    statuses = {}
+
+    def attempt(label, function, *args):
+        try:
+            function(*args)
+            statuses[label] = 0
+        except FMICallException as error:
+            statuses[label] = error.status
+        gc.collect()  # a released slave would crash the next call
+
+    def new(logging_on=True):
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, instanceName="probe",
+                        modelIdentifier=md.coSimulation.modelIdentifier)
+        fmu.instantiate(callbacks=callbacks, loggingOn=logging_on)
+        return fmu
+"""
 
 
 def test_bad_cases_in_a_fresh_process_leave_it_alive(fmu_path):
     """Only fmpy is imported, so the slave also has to find its core in resources/."""
-    script = textwrap.dedent('''
-        import gc, json, math, sys
-        from fmpy import extract, read_model_description
-        from fmpy.fmi1 import FMICallException
-        from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-        path = sys.argv[1]
-        md = read_model_description(path)
-        folder = extract(path)
-        refs = {v.name: v.valueReference for v in md.modelVariables}
-        log = []
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(
-            lambda env, name, status, category, msg: log.append((status, msg.decode())))
-        statuses = {}
-
-        def attempt(label, function, *args):
-            try:
-                function(*args)
-                statuses[label] = 0
-            except FMICallException as error:
-                statuses[label] = error.status
-            gc.collect()  # a released slave would crash the next call
-
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, instanceName="bad",
-                        modelIdentifier=md.coSimulation.modelIdentifier)
-        fmu.instantiate(callbacks=callbacks, loggingOn=True)
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        fmu.setReal([refs["R"], refs["speed"]], [-1.0, math.inf])
-        attempt("exit", fmu.exitInitializationMode)
-        attempt("step", fmu.doStep, 0.0, 1e-3)
-        attempt("state", fmu.setFMUstate, fmu.deSerializeFMUstate(b"not a state"))
-        attempt("reset", fmu.reset)
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        fmu.setInteger([refs["n_elements"]], [40])
-        attempt("exit again", fmu.exitInitializationMode)
-        fmu.setReal([refs["rim_z"]], [math.nan])
-        attempt("nan", fmu.doStep, 0.0, 1e-3)
-        fmu.setReal([refs["rim_z"]], [1e-3])
-        attempt("good", fmu.doStep, 0.0, 1e-3)
-        fmu.terminate()
-        fmu.freeInstance()
-        print(json.dumps({"statuses": statuses, "log": log, "alive": True}))
-    ''')
-    done = subprocess.run([sys.executable, "-c", script, str(fmu_path)], capture_output=True,
-                          text=True, timeout=120)
-    assert done.returncode == 0, done.stderr
-    report = json.loads(done.stdout.strip().splitlines()[-1])
-    assert report["alive"]
-    assert report["statuses"] == {"exit": 0, "step": DISCARD, "state": 0, "reset": 0,
-                                  "exit again": 0, "nan": DISCARD, "good": 0}
+    report = _run_script(_FRESH_HOST + """
+    fmu = new()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([refs["R"], refs["speed"]], [-1.0, math.inf])
+    attempt("exit", fmu.exitInitializationMode)
+    attempt("step", fmu.doStep, 0.0, 1e-3)
+    attempt("state", fmu.setFMUstate, fmu.deSerializeFMUstate(b"not a state"))
+    attempt("foreign state", fmu.setFMUstate, c_void_p(12345))
+    attempt("reset", fmu.reset)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setInteger([refs["n_elements"]], [40])
+    attempt("exit again", fmu.exitInitializationMode)
+    fmu.setReal([refs["rim_z"]], [math.nan])
+    attempt("nan", fmu.doStep, 0.0, 1e-3)
+    fmu.setReal([refs["rim_z"]], [1e-3])
+    attempt("good", fmu.doStep, 0.0, 1e-3)
+    state = fmu.getFMUstate()
+    attempt("small buffer", fmu.fmi2SerializeFMUstate, fmu.component, state,
+            (c_char * 1)(), 1)
+    attempt("free", fmu.freeFMUstate, state)
+    attempt("free again", fmu.freeFMUstate, state)
+    fmu.terminate()
+    fmu.freeInstance()
+    print(json.dumps({"statuses": statuses, "log": log}))
+    """, fmu_path)
+    assert report["statuses"] == {
+        "exit": ERROR, "step": ERROR, "state": ERROR, "foreign state": ERROR, "reset": 0,
+        "exit again": 0, "nan": ERROR, "good": 0, "small buffer": ERROR, "free": 0,
+        "free again": 0}
     log = [message for _, message in report["log"]]
     assert any("R = -1" in m for m in log) and any("speed = inf" in m for m in log)
-    assert any("fmi2SetFMUstate refused" in m for m in log)
+    assert any("fmi2SetFMUstate refused: they do not start with" in m for m in log)
+    assert any("the state was not made by this FMU" in m for m in log)
     assert any("rim_z = nan m: must be in" in m for m in log)
+    assert any("the buffer holds 1 bytes and the state needs" in m for m in log)
     ready = [m for m in log if "TireModal ready" in m]
     assert ready and "/resources/tire_fmu/__init__.py" in ready[0]  # the shipped core
+
+
+def _state_with_load(text):
+    """Serialized state bytes, checksum and all, whose load is ``text``: crafted, not made."""
+    import dataclasses
+
+    from tire_fmu.fmu.slave import TireModal
+
+    slave = TireModal(instance_name="crafted", resources=".", visible=False)
+    state = slave._get_fmu_state()
+    values = list(state.values)
+    values[slave._index["load"]] = text
+    return TireModal._fmu_state_to_bytes(dataclasses.replace(state, values=tuple(values)))
+
+
+@pytest.mark.parametrize("data, quoted", [
+    (b"%s%s%s%s%s%s%s%s%s%s", "they start with b'%s%s%s%s%s%s%s%s%s%s'"),
+    (b"abc%d%d%d#r1#%n", "they start with b'abc%d%d%d#r1#%n'"),
+    (_state_with_load("%s%s%s%s%s%s%s%s%s%s"), "load = '%s%s%s%s%s%s%s%s%s%s': must be a"),
+    (_state_with_load("abc%d%d%d #r7#"), "load = 'abc%d%d%d #r7#': must be a number")])
+def test_printf_directives_in_what_the_fmu_logs_reach_the_host_as_text(fmu_path, tmp_path,
+                                                                      data, quoted):
+    """A state whose header held "%s%s..." as the load crashed the host (SIGSEGV): the
+    slave's messages, which quote it, went to the host as printf formats."""
+    (tmp_path / "state").write_bytes(data)
+    report = _run_script(_FRESH_HOST + """
+    fmu = new()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    with open(sys.argv[3], "rb") as file:
+        attempt("state", fmu.setFMUstate, fmu.deSerializeFMUstate(file.read()))
+    fmu.terminate()
+    fmu.freeInstance()
+    print(json.dumps({"statuses": statuses, "log": log}))
+    """, fmu_path, extract(str(fmu_path)), tmp_path / "state")
+    assert report["statuses"] == {"state": ERROR}
+    [refusal] = [m for s, m in report["log"] if "fmi2SetFMUstate" in m]
+    # the text as it is, not as printf reads it; fmpy leaves FMI's escape "##" (a "#") alone
+    assert quoted.replace("#", "##") in refusal
+
+
+@pytest.mark.parametrize("folder", ["a%b", "c%25d", "é x", "100% sure"])
+@pytest.mark.parametrize("logging_on", [True, False])
+def test_an_fmu_unpacked_where_the_path_holds_escapes_runs(fmu_path, tmp_path, folder,
+                                                           logging_on):
+    """pythonfmu's wrapper decodes only %20 in the resource URI: any other escaped character
+    ('%' itself, non-ASCII) left it without its slave, and it called NULL (SIGSEGV)."""
+    target = tmp_path / folder / "fmu"
+    with zipfile.ZipFile(fmu_path) as archive:
+        archive.extractall(target)
+    report = _run_script(_FRESH_HOST + """
+    fmu = new(logging_on=sys.argv[3] == "1")
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setInteger([refs["n_elements"]], [40])
+    attempt("exit", fmu.exitInitializationMode)
+    attempt("step", fmu.doStep, 0.0, 1e-3)
+    fmu.terminate()
+    fmu.freeInstance()
+    print(json.dumps({"statuses": statuses, "log": log}))
+    """, fmu_path, target, int(logging_on))
+    assert report["statuses"] == {"exit": 0, "step": 0}
+    if logging_on:
+        [ready] = [m for _, m in report["log"] if "TireModal ready" in m]
+        assert f"{target}/resources/tire_fmu/__init__.py" in ready
+
+
+def test_a_folder_the_wrapper_would_misread_is_refused_with_a_message(fmu_path, tmp_path):
+    target = tmp_path / "x%20y" / "fmu"
+    with zipfile.ZipFile(fmu_path) as archive:
+        archive.extractall(target)
+    report = _run_script(_FRESH_HOST + """
+    try:
+        new()
+        made = True
+    except Exception as error:  # fmpy: "Failed to instantiate model"
+        made = False
+    print(json.dumps({"made": made, "log": log}))
+    """, fmu_path, target)
+    assert report["made"] is False
+    assert any("contains '%20'" in m for _, m in report["log"])
+
+
+# -- the process that loaded the FMU exits cleanly ------------------------------------------
+
+_EXIT_PROBE = """
+    import sys
+    from fmpy import simulate_fmu
+    result = simulate_fmu(sys.argv[1], start_values={"n_elements": 40}, stop_time=0.01,
+                          output_interval=1e-3)
+    print(len(result))
+"""
+
+
+def test_a_process_that_loaded_the_fmu_exits_without_touching_freed_memory(fmu_path,
+                                                                          tmp_path):
+    """pythonfmu's wrapper frees its interpreter guard in a static destructor at exit, then
+    its ELF destructor writes into the freed block (valgrind: invalid read in
+    finalizePythonInterpreter under _dl_fini); that corrupted the heap and sometimes aborted
+    the process ("corrupted double-linked list"). Whether glibc notices depends on the heap,
+    so here free() keeps every block and fills it with the 32-bit word 1: a use after free
+    then calls through a garbage pointer and crashes every time."""
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    if compiler is None:
+        pytest.skip("no C compiler for the free() that keeps its blocks")
+    source = tmp_path / "keep_freed.c"
+    source.write_text(textwrap.dedent("""
+        #define _GNU_SOURCE
+        #include <malloc.h>
+        #include <stdint.h>
+        void free(void *p) {
+            if (p == NULL) return;
+            uint32_t *w = p;
+            for (size_t i = 0; i < malloc_usable_size(p) / sizeof *w; i++) w[i] = 1;
+        }
+    """))
+    library = tmp_path / "keep_freed.so"
+    subprocess.run([compiler, "-shared", "-fPIC", "-O2", "-o", str(library), str(source)],
+                   check=True)
+    env = {**os.environ, "LD_PRELOAD": str(library)}
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(_EXIT_PROBE), str(fmu_path)],
+                          capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    assert done.stdout.strip() == "11"
+
+
+_C_HOST = r"""
+#include <dlfcn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String n, fmi2Status s, fmi2String c,
+                   fmi2String m, ...) {
+    va_list a; va_start(a, m); fprintf(stderr, "[%d] ", s); vfprintf(stderr, m, a);
+    fputc('\n', stderr); va_end(a);
+}
+#define F(name) name##TYPE *name = (name##TYPE *)dlsym(h, #name)
+int main(int argc, char **argv) {  /* binary, GUID, resource URI, n_elements' reference */
+    void *h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!h) { fprintf(stderr, "%s\n", dlerror()); return 2; }
+    F(fmi2Instantiate); F(fmi2SetupExperiment); F(fmi2EnterInitializationMode);
+    F(fmi2ExitInitializationMode); F(fmi2DoStep); F(fmi2Terminate); F(fmi2FreeInstance);
+    F(fmi2SetInteger);
+    fmi2CallbackFunctions cb = {logger, 0, 0, 0, 0};
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, argv[2], argv[3], &cb, 0, 1);
+    if (!c) return 3;
+    fmi2ValueReference n = (fmi2ValueReference)atoi(argv[4]);
+    fmi2Integer forty = 40;
+    int status = fmi2SetupExperiment(c, 0, 0, 0.0, 0, 0) | fmi2EnterInitializationMode(c)
+                 | fmi2SetInteger(c, &n, 1, &forty) | fmi2ExitInitializationMode(c);
+    for (int i = 0; i < 10; i++) status |= fmi2DoStep(c, i * 1e-3, 1e-3, 1);
+    status |= fmi2Terminate(c);
+    fmi2FreeInstance(c);
+    printf("statuses %d\n", status);
+    return 0;
+}
+"""
+
+
+def test_a_c_host_that_lets_the_fmu_start_python_exits_cleanly(fmu_path, unpacked, tmp_path):
+    """A C host (the C fmusim) with libpython loaded: the wrapper starts Python and finalizes
+    it at exit from its static destructor, after the destructors of numpy's and scipy's
+    libraries had run (they were loaded later, and exit handlers run last-in first-out):
+    the old binary crashed in Py_FinalizeEx 9 runs in 10 here. The guard finalizes first."""
+    import sysconfig
+
+    compiler = shutil.which("gcc") or shutil.which("cc")
+    library = Path(sysconfig.get_config_var("LIBDIR") or "",
+                   sysconfig.get_config_var("INSTSONAME") or "")
+    if compiler is None or ".so" not in library.name or not library.is_file():
+        pytest.skip("needs a C compiler and a shared libpython")
+    (tmp_path / "host.c").write_text(_C_HOST)
+    headers = Path(fmpy.__file__).parent / "c-code"
+    subprocess.run([compiler, "-O1", "-I", str(headers), "-o", str(tmp_path / "host"),
+                    str(tmp_path / "host.c"), "-ldl"], check=True)
+    description, folder = unpacked
+    n_elements = next(v.valueReference for v in description.modelVariables
+                      if v.name == "n_elements")
+    env = {**os.environ, "LD_PRELOAD": str(library), "PYTHONHOME": sys.base_prefix}
+    binary = Path(folder) / "binaries" / "linux64" / "TireModal.so"
+    for _ in range(5):
+        done = subprocess.run([str(tmp_path / "host"), str(binary), description.guid,
+                               (Path(folder) / "resources").as_uri(), str(n_elements)],
+                              capture_output=True, text=True, timeout=TIMEOUT_S, env=env)
+        assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+        assert done.stdout.strip() == "statuses 0", done.stderr[-2000:]
+
+
+def test_processes_that_load_the_fmu_exit_cleanly_every_time(fmu_path):
+    """The same probe as it runs, several times over: no abort, no segfault at exit."""
+    codes = []
+    for _ in range(6):
+        done = subprocess.run([sys.executable, "-c", textwrap.dedent(_EXIT_PROBE),
+                               str(fmu_path)], capture_output=True, text=True,
+                              timeout=TIMEOUT_S)
+        codes.append((done.returncode, done.stderr[-300:]))
+    assert all(code == 0 for code, _ in codes), codes
 
 
 # -- state, instances, reset ----------------------------------------------------------------
@@ -502,3 +808,18 @@ def test_small_amplitude_sines_follow_the_linearised_loaded_model(host, speed):
             expected = io.frequency_response(source, [f_hz])[[0, 2], 0]
             error = np.abs(np.abs(measured) / np.abs(expected) - 1)
             assert error.max() < 0.01, (source, f_hz, error)
+
+
+def test_without_a_c_compiler_the_fmu_still_builds_on_pythonfmus_wrapper(tmp_path, monkeypatch):
+    """The guard needs a C compiler; without one the build warns and ships pythonfmu's own
+    wrapper (the statuses of docs/fmu.md's win64 note). Not loaded here: that wrapper is the
+    one whose interpreter finalisation can abort the process at exit (issue 12)."""
+    from tire_fmu.fmu.builder import GuardMissingWarning
+
+    monkeypatch.setenv("CC", "no-such-compiler")
+    with pytest.warns(GuardMissingWarning, match="no-such-compiler"):
+        path = build_fmu(tmp_path)
+    with zipfile.ZipFile(path) as archive:
+        binaries = [n for n in archive.namelist() if n.startswith("binaries/linux64/")]
+    assert binaries == ["binaries/linux64/TireModal.so"]
+    assert validate_fmu(str(path)) == []

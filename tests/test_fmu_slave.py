@@ -2,9 +2,11 @@
 
 The slave is driven the way pythonfmu's C wrapper drives it: constructed with the wrapper's
 keyword arguments, then its lifecycle methods, with value references; what it logs is read
-from its log queue. Results are compared with the core's simulator built directly.
+from its log queue (as printf formats, the way the host gets them, turned back into text).
+Results are compared with the core's simulator built directly.
 """
 
+import dataclasses
 import math
 from xml.etree import ElementTree
 
@@ -15,11 +17,14 @@ from pythonfmu.enums import Fmi2Status
 from tire_fmu.core import DEFAULT_LOAD_N, build_model, validate
 from tire_fmu.core.contact_dynamics import (
     INPUT_NAMES,
+    MAX_DISPLACEMENT_M,
+    MAX_VELOCITY_M_S,
     OUTPUT_NAMES,
     ContactSimulator,
     build_contact_model,
 )
-from tire_fmu.fmu.slave import TireModal
+from tire_fmu.fmu.interface import MAX_DELAY_STEPS
+from tire_fmu.fmu.slave import Phase, TireModal, _Snapshot, fmi_message
 
 N = 40  # elements: enough for every check here, cheap to reduce
 
@@ -32,8 +37,13 @@ def vr(slave, name):
     return slave._index[name]
 
 
+def printed(format_text):
+    """What a host's printf makes of a message the slave logged."""
+    return format_text.replace("%%", "%").replace("##", "#")
+
+
 def messages(slave, status=None):
-    found = [m.msg for m in slave.log_queue if status is None or m.status == status]
+    found = [printed(m.msg) for m in slave.log_queue if status is None or m.status == status]
     slave.log_queue.clear()
     return found
 
@@ -65,11 +75,36 @@ def outputs(slave):
     return slave.get_real([vr(slave, n) for n in OUTPUT_NAMES])
 
 
+def observable(slave):
+    """Everything a host can see of the slave, and the simulator's state."""
+    state = slave._simulator.get_state() if slave._simulator is not None else None
+    arrays = None if state is None else [
+        getattr(state, f.name) for f in dataclasses.fields(state)]
+    return list(slave._values), slave._phase, slave._start_time, arrays
+
+
+def _same(a, b):
+    return a == b or (isinstance(a, float) and isinstance(b, float) and math.isnan(a)
+                      and math.isnan(b))
+
+
+def assert_unchanged(before, after):
+    values, phase, start, arrays = before
+    assert len(after[0]) == len(values) and all(map(_same, values, after[0]))
+    assert after[1:3] == (phase, start)
+    if arrays is None:
+        assert after[3] is None
+    else:
+        assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(arrays, after[3]))
+
+
 @pytest.fixture(scope="module")
 def running():
     """One initialised slave at the defaults (N = 40) with its core twin."""
     return initialised(), core_simulator()
 
+
+# -- construction and variables ------------------------------------------------------------
 
 def test_construction_is_cheap_and_builds_nothing():
     slave = new_slave()
@@ -77,6 +112,9 @@ def test_construction_is_cheap_and_builds_nothing():
     assert slave.get_real([vr(slave, "rim_Fz")]) == [pytest.approx(DEFAULT_LOAD_N)]
     slave.set_real([vr(slave, "load")], [20_000.0])  # before initialisation: echoed
     assert slave.get_real([vr(slave, "rim_Fz"), vr(slave, "contact_Fz")]) == [20_000.0] * 2
+    slave.set_real([vr(slave, "load")], [math.nan])  # accepted, refused at initialisation,
+    assert slave.get_real([vr(slave, "rim_Fz")]) == [20_000.0]  # and never echoed
+    assert not slave.log_queue  # nothing is logged before a call that pythonfmu drains
 
 
 def test_every_variable_has_unit_description_and_legal_attributes():
@@ -118,7 +156,7 @@ def test_steps_equal_the_core_simulator(running):
     rng = np.random.default_rng(3)
     h = 1e-4
     for _ in range(300):
-        t = slave._running.time
+        t = slave._simulator.time
         u = rng.normal(scale=[1e-3, 1e-2, 1e-3, 1e-2])
         set_inputs(slave, *u)
         assert slave.do_step(t, h) is True
@@ -126,30 +164,54 @@ def test_steps_equal_the_core_simulator(running):
         np.testing.assert_allclose(outputs(slave), expected, rtol=1e-12,
                                    atol=1e-12 * DEFAULT_LOAD_N)
     assert slave.get_boolean([vr(slave, "in_contact")]) == [True]
-    ready = [m for m in slave.log_queue if "ready" in m.msg]
-    assert ready and f"N = {N}" in ready[0].msg
+    ready = [m for m in messages(slave) if "ready" in m]
+    assert ready and f"N = {N}" in ready[0]
 
 
-def test_rejected_parameters_are_all_logged_and_every_step_is_discarded():
+# -- messages --------------------------------------------------------------------------------
+
+def test_messages_are_formats_that_print_the_text():
+    assert fmi_message("86 % of #r3# at 100%s") == "86 %% of ##r3## at 100%%s"
+    critical = build_model(*validate({}, {"n_elements": N})).critical_speed_m_s
+    near = initialised(speed=0.85 * critical)
+    [warning] = [m.msg for m in near.log_queue if m.status == Fmi2Status.warning]
+    assert "85 %% of the critical speed" in warning  # printf shows "85 % of"
+    assert "%" not in warning.replace("%%", "")
+
+
+# -- parameters ------------------------------------------------------------------------------
+
+def test_rejected_parameters_are_all_logged_and_every_step_is_refused():
     slave = initialised(R=-1.0, n_elements=3, beta=math.nan, n_modes=-2, load=-5.0)
     errors = messages(slave, Fmi2Status.error)
     text = "\n".join(errors)
-    for fragment in ("R = -1", "n_elements = 3", "beta = nan", "n_modes = -2", "load = -5"):
+    for fragment in ("R = -1 m", "n_elements = 3", "beta = nan", "n_modes = -2", "load = -5 N"):
         assert fragment in text, fragment
     assert sum("parameter problem" in e for e in errors) == 5
     assert "load_n" not in text and "or None" not in text  # in the FMU's own words
+    assert "fmi2ExitInitializationMode refused" in errors[-1]
+    assert slave._phase == Phase.ERROR
     for _ in range(2):
         assert slave.do_step(0.0, 1e-3) is False
-        (refusal,) = messages(slave, Fmi2Status.discard)
-        assert "rejected" in refusal and "R = -1" in refusal
+        (refusal,) = messages(slave, Fmi2Status.error)
+        assert "fmi2DoStep refused" in refusal and "R = -1" in refusal
 
 
 def test_a_load_the_model_cannot_carry_is_reported_with_the_other_problems():
     slave = initialised(load=1e7, f_max=-1.0)  # the load check needs the assembled model
     problems = [m for m in messages(slave, Fmi2Status.error) if "parameter problem" in m]
     assert len(problems) == 2
-    assert "f_max = -1" in problems[0] and "or 0 for no frequency cut" in problems[0]
+    assert "f_max = -1 Hz" in problems[0] and "or 0 for no limit" in problems[0]
     assert "load = 1e+07 N" in problems[1] and "end of the contact zone" in problems[1]
+    assert slave.do_step(0.0, 1e-3) is False
+
+
+def test_masses_the_arithmetic_cannot_resolve_are_refused_not_run_to_nan():
+    # inside the field's range, but the sidewall's own frequency is 1e13 Hz: the slowest
+    # modes are lost in rounding, which gave nan outputs with status OK before
+    slave = initialised(m_s=1e-20)
+    [problem] = [m for m in messages(slave, Fmi2Status.error) if "parameter problem" in m]
+    assert "m_s = 1e-20 kg/m: must be larger" in problem and "eigenvalues span" in problem
     assert slave.do_step(0.0, 1e-3) is False
 
 
@@ -163,36 +225,106 @@ def test_critical_speed_is_refused_unless_allowed_and_its_approach_warned():
     assert near.do_step(0.0, 1e-4) is True
 
 
-@pytest.mark.parametrize("case", ["early time", "late time", "zero h", "negative h", "nan h",
-                                  "nan input", "inf input"])
-def test_bad_steps_are_discarded_with_a_message_and_change_nothing(case):
+def test_parameters_are_fixed_after_initialisation_and_a_set_is_all_or_nothing(running):
+    slave, _ = running
+    load, n = vr(slave, "load"), vr(slave, "n_elements")
+    messages(slave)
+    rim_z = slave.get_real([vr(slave, "rim_z")])
+    slave.set_real([load], [1.0])
+    slave.set_integer([n], [50])
+    slave.set_real([vr(slave, "rim_z"), load], [1e-3, 1.0])  # an input with a parameter
+    assert slave.get_real([load]) == [pytest.approx(DEFAULT_LOAD_N)]
+    assert slave.get_integer([n]) == [N]
+    assert slave.get_real([vr(slave, "rim_z")]) == rim_z  # the whole call was refused
+    errors = messages(slave, Fmi2Status.error)
+    assert len(errors) == 3 and all("fixed after initialisation" in e for e in errors)
+    assert "load = 1 N" in errors[0] and "n_elements = 50" in errors[1]
+
+
+def test_bad_references_and_types_are_logged_never_raised(running):
+    slave, _ = running
+    messages(slave)
+    assert slave.get_real([9999]) == [0.0]
+    assert slave.get_integer([vr(slave, "rim_z")]) == [0]  # a Real read as an Integer
+    slave.set_real([9999], [1.0])
+    slave.set_real([vr(slave, "n_elements")], [3.0])  # an Integer set as a Real
+    slave.set_real([vr(slave, "rim_Fz")], [0.0])  # an output
+    assert slave.get_string([0]) == [""]
+    slave.set_string([0], ["x"])
+    errors = messages(slave, Fmi2Status.error)
+    assert len(errors) == 7
+    assert "value reference 9999" in errors[0] and "does not exist" in errors[0]
+    assert "rim_Fz = 0 N: it is an output" in errors[4]
+    assert slave.get_integer([vr(slave, "n_elements")]) == [N]
+
+
+# -- steps -----------------------------------------------------------------------------------
+
+STEP_CASES = {  # case: (t, h, inputs, what the message says)
+    "early time": (0.0, 1e-3, None, "t = 0.0 s: must be the last communication point"),
+    "late time": (2e-3, 1e-3, None, "t = 0.002 s: must be the last communication point"),
+    "nan time": (math.nan, 1e-3, None, "t = nan s: must be the last communication point"),
+    "inf time": (math.inf, 1e-3, None, "t = inf s: must be the last"),
+    "zero h": (1e-3, 0.0, None, "step size h = 0.0 s: must be in (0, 1e+06] s"),
+    "huge h": (1e-3, 1e300, None, "step size h = 1e+300 s: must be in (0, 1e+06] s"),
+    "negative h": (1e-3, -1e-3, None, "step size h = -0.001 s"),
+    "nan h": (1e-3, math.nan, None, "step size h = nan s"),
+    "nan input": (1e-3, 1e-3, (1e-3, math.nan, 0, 0), "rim_vz = nan m/s: must be in"),
+    "inf input": (1e-3, 1e-3, (1e-3, 0, math.inf, 0), "road_z = inf m: must be in"),
+    "huge input": (1e-3, 1e-3, (1e-3, 0, 0, 1e300), "road_vz = 1e+300 m/s: must be in"),
+}
+
+
+@pytest.mark.parametrize("case", STEP_CASES)
+def test_bad_steps_are_refused_with_a_message_and_change_nothing(case):
     slave = initialised()
     set_inputs(slave, rim_z=1e-3)
     assert slave.do_step(0.0, 1e-3)
-    before = outputs(slave), slave._simulator.get_state()
-    t, h = 1e-3, 1e-3
-    expected = {"early time": "last communication point", "late time": "last communication",
-                "zero h": "step size h = 0.0 s", "negative h": "step size h = -0.001 s",
-                "nan h": "step size h = nan s", "nan input": "rim_vz = nan m/s: must be in",
-                "inf input": "road_z = inf m: must be in"}[case]
-    if case == "early time":
-        t = 0.0
-    elif case == "late time":
-        t = 2e-3
-    elif case.endswith(" h"):
-        h = {"zero h": 0.0, "negative h": -1e-3, "nan h": math.nan}[case]
-    else:
-        set_inputs(slave, rim_z=1e-3, rim_vz=math.nan if case == "nan input" else 0.0,
-                   road_z=math.inf if case == "inf input" else 0.0)
+    t, h, inputs, expected = STEP_CASES[case]
+    if inputs:
+        set_inputs(slave, *inputs)
     messages(slave)
+    before = observable(slave)
     assert slave.do_step(t, h) is False
-    (message,) = messages(slave, Fmi2Status.discard)
-    assert expected in message and "state unchanged" in message
-    after = slave._simulator.get_state()
-    assert outputs(slave) == before[0]
-    assert after.time == before[1].time and np.array_equal(after.q, before[1].q)
+    (message,) = messages(slave, Fmi2Status.error)
+    assert message.startswith("fmi2DoStep(t = ") and expected in message
+    assert message.endswith("nothing changed")
+    assert_unchanged(before, observable(slave))
     set_inputs(slave, rim_z=1e-3)  # the host fixes its call and retries: accepted
     assert slave.do_step(1e-3, 1e-3) is True
+
+
+def test_a_step_too_short_for_the_road_history_at_a_crawl_is_refused():
+    # at 1 mm/s the road takes minutes to cross the patch: 1e-4 s steps would need millions
+    # of samples of road history (a denormal speed crashed the step before: inf delays)
+    slave = initialised(speed=1e-3)
+    reach = slave._simulator.contact.windows.horizon_s
+    assert slave.do_step(0.0, 1e-4) is False
+    (error,) = messages(slave, Fmi2Status.error)
+    assert "step size h = 0.0001 s: must be at least" in error and "steps of its history" in error
+    h = 1.01 * reach / MAX_DELAY_STEPS
+    assert slave.do_step(0.0, h) is True and slave.do_step(h, h) is True
+
+
+def test_inputs_up_to_the_limit_keep_every_output_finite():
+    slave = initialised()
+    set_inputs(slave, MAX_DISPLACEMENT_M, -MAX_VELOCITY_M_S, -MAX_DISPLACEMENT_M,
+               MAX_VELOCITY_M_S)
+    for k in range(200):
+        assert slave.do_step(k * 1e-3, 1e-3)
+        assert all(math.isfinite(y) for y in outputs(slave))
+
+
+def test_outputs_read_after_non_finite_inputs_are_the_last_steps_with_an_error():
+    slave = initialised()
+    set_inputs(slave, rim_z=1e-3)
+    assert slave.do_step(0.0, 1e-3)
+    last = outputs(slave)
+    messages(slave)
+    set_inputs(slave, rim_z=math.nan)
+    assert outputs(slave) == last
+    (error,) = messages(slave, Fmi2Status.error)
+    assert "rim_z = nan" in error and "those of the last step" in error
 
 
 def test_a_communication_point_within_rounding_is_accepted_and_becomes_the_clock():
@@ -238,35 +370,66 @@ def test_a_footprint_reaching_the_zone_end_is_warned_once():
     assert len(warnings) == 1 and "end of the contact zone" in warnings[0]
 
 
-def test_parameters_are_fixed_after_initialisation(running):
-    slave, _ = running
-    load = vr(slave, "load")
-    slave.set_real([load], [1.0])
-    slave.set_integer([vr(slave, "n_elements")], [50])
-    assert slave.get_real([load]) == [pytest.approx(DEFAULT_LOAD_N)]
-    assert slave.get_integer([vr(slave, "n_elements")]) == [N]
-    errors = messages(slave, Fmi2Status.error)
-    assert len(errors) == 2 and all("fixed after initialisation" in e for e in errors)
+# -- the FMI state machine -------------------------------------------------------------------
 
-
-def test_bad_references_and_types_are_logged_never_raised(running):
-    slave, _ = running
-    assert math.isnan(slave.get_real([9999])[0])
-    slave.set_real([9999], [1.0])
-    slave.set_real([vr(slave, "n_elements")], [3.0])  # an Integer set as a Real
-    slave.set_real([vr(slave, "rim_Fz")], [0.0])  # an output
-    assert slave.get_string([0]) == [""]
-    slave.set_string([0], ["x"])
-    assert len(messages(slave, Fmi2Status.error)) == 6
-    assert slave.get_integer([vr(slave, "n_elements")]) == [N]
-
-
-def test_terminate_stops_stepping():
+def test_a_second_exit_from_initialisation_is_refused_running_or_terminated():
     slave = initialised()
+    set_inputs(slave, rim_z=1e-3)
+    for k in range(3):
+        assert slave.do_step(k * 1e-3, 1e-3)
+    simulator = slave._simulator
+    messages(slave)
+    before = observable(slave)
+    slave.exit_initialization_mode()  # used to rebuild, reset the time and keep running
+    (error,) = messages(slave, Fmi2Status.error)
+    assert "fmi2ExitInitializationMode refused: the FMU is running" in error
+    assert slave._simulator is simulator
+    assert_unchanged(before, observable(slave))
     slave.terminate()
-    assert slave.do_step(0.0, 1e-3) is False
-    assert "terminated" in messages(slave, Fmi2Status.discard)[0]
+    slave.exit_initialization_mode()  # used to un-terminate
+    assert "the FMU is terminated" in messages(slave, Fmi2Status.error)[0]
+    assert slave._phase == Phase.TERMINATED
+    assert slave.do_step(3e-3, 1e-3) is False
+    assert "fmi2DoStep refused: the FMU is terminated" in messages(slave, Fmi2Status.error)[0]
 
+
+@pytest.mark.parametrize("call, phase_text", [
+    ("do_step", "instantiated"), ("exit_initialization_mode", "instantiated"),
+    ("terminate", "instantiated")])
+def test_calls_out_of_order_are_refused_before_initialisation(call, phase_text):
+    slave = new_slave()
+    result = getattr(slave, call)(*((0.0, 1e-3) if call == "do_step" else ()))
+    assert result in (None, False)
+    (error,) = messages(slave, Fmi2Status.error)
+    assert f"the FMU is {phase_text}" in error and slave._phase == Phase.INSTANTIATED
+
+
+def test_setup_and_initialisation_mode_only_once_and_in_order():
+    slave = new_slave()
+    slave.setup_experiment(0.0)
+    slave.enter_initialization_mode()
+    slave.setup_experiment(1.0)
+    slave.enter_initialization_mode()
+    errors = messages(slave, Fmi2Status.error)
+    assert len(errors) == 2 and all("in initialisation mode" in e for e in errors)
+    assert slave._start_time == 0.0
+
+
+@pytest.mark.parametrize("args, fragment", [
+    ((math.nan,), "startTime = nan s: must be finite"),
+    ((math.inf,), "startTime = inf s"),
+    ((0.0, -1.0), "stopTime = -1.0 s: must be finite and >= startTime"),
+    ((0.0, math.nan), "stopTime = nan s"),
+    ((0.0, None, -1e-6), "tolerance = -1e-06")])
+def test_a_non_finite_start_time_or_bad_stop_time_is_refused(args, fragment):
+    slave = new_slave()
+    slave.setup_experiment(*args)
+    (error,) = messages(slave, Fmi2Status.error)
+    assert error.startswith("fmi2SetupExperiment refused") and fragment in error
+    assert slave._start_time == 0.0 and slave._phase == Phase.INSTANTIATED
+
+
+# -- FMU state -------------------------------------------------------------------------------
 
 def _run(slave, inputs, h=1e-3):
     out = []
@@ -287,14 +450,25 @@ def test_state_rollback_and_serialisation_reproduce_steps_exactly():
     slave._set_fmu_state(state)
     assert _run(slave, future) == first
     data = TireModal._fmu_state_to_bytes(state)
-    assert data == TireModal._fmu_state_to_bytes(TireModal._fmu_state_from_bytes(data))
-    slave._set_fmu_state(TireModal._fmu_state_from_bytes(data))
+    again = TireModal._fmu_state_from_bytes(data)
+    assert isinstance(again, _Snapshot) and again.values == state.values
+    slave._set_fmu_state(again)
     assert _run(slave, future) == first
     # into a fresh instance that was never initialised: the state brings its model along
     fresh = new_slave("fresh")
     fresh._set_fmu_state(TireModal._fmu_state_from_bytes(data))
     assert _run(fresh, future) == first
     assert not messages(fresh, Fmi2Status.error)
+
+
+def test_inputs_set_after_a_step_feed_through_after_a_rollback_too():
+    slave = initialised()
+    _run(slave, [(1e-3, 0, 0, 0)] * 3)
+    set_inputs(slave, 1e-3, 0.0, 0.0, 0.5)  # the road velocity acts at once (the damper)
+    state = slave._get_fmu_state()
+    expected = outputs(slave)
+    slave._set_fmu_state(state)
+    assert outputs(slave) == expected
 
 
 def test_a_state_of_other_parameters_rebuilds_its_model():
@@ -308,18 +482,84 @@ def test_a_state_of_other_parameters_rebuilds_its_model():
     assert _run(heavy, [(0, 0, 0, 0)] * 3) == expected
 
 
-@pytest.mark.parametrize("data", [b"", b"garbage", b'{"format": "other"}\n',
-                                  b'{"format": "tire_fmu.fmu-state/1", "values": [1]}\n'])
-def test_bad_state_bytes_are_refused_at_set_and_stepping_stops(data):
+def _valid_state():
     slave = initialised()
+    _run(slave, [(1e-3, 0, 0, 0)] * 3)
+    return slave._get_fmu_state()
+
+
+def _with(state, **changes):
+    return TireModal._fmu_state_to_bytes(dataclasses.replace(state, **changes))
+
+
+def _bad_states():
+    """Serialized states that must be refused, each with what the refusal says."""
+    state = _valid_state()
+    good = TireModal._fmu_state_to_bytes(state)
+    values = list(state.values)
+    flipped = bytearray(good)
+    flipped[-20] ^= 1
+    nan_q = state.simulator.q.copy()
+    nan_q[0] = complex(math.nan, 0)
+    named = {
+        "empty": (b"", "not a TireModal state"),
+        "garbage": (b"garbage", "not a TireModal state"),
+        "printf formats": (b"%s%s%s%s%s%s%s%s%s%s", "not a TireModal state"),
+        "version 1": (b'{"format": "tire_fmu.fmu-state/1", "values": [1]}\n', "this version"),
+        "trailing bytes": (good + b"\x00extra", "checksum does not match"),
+        "cut short": (good[:-100], "checksum does not match"),
+        "one bit flipped": (bytes(flipped), "checksum does not match"),
+        "no simulator part": (_with(state, simulator=None),
+                              "'running' needs a simulator state"),
+        "a word for a number": (_with(state, values=tuple(["x"] + values[1:])),
+                                "rim_z = 'x': must be a number"),
+        "too few values": (_with(state, values=tuple(values[:5])), "5 values"),
+        "an integer C cannot hold": (
+            _with(state, values=tuple(10**30 if i == vr(new_slave(), "n_elements") else x
+                                      for i, x in enumerate(values))),
+            "n_elements = 1000000000000000000000000000000: must be an integer of 32 bits"),
+        "nan output": (_with(state, values=tuple(values[:4] + [math.nan] + values[5:])),
+                       "rim_Fz = nan: an output must be finite"),
+        "nan modal state": (_with(state, simulator=dataclasses.replace(state.simulator,
+                                                                       q=nan_q)),
+                            "contact state has non-finite values in q"),
+        "nan time": (_with(state, simulator=dataclasses.replace(state.simulator,
+                                                                time=math.nan)),
+                     "contact state has time = nan"),
+        "unknown phase": (_with(state, phase="flying"), "phase = 'flying'"),
+    }
+    return named
+
+
+BAD_STATES = list(_bad_states())
+
+
+@pytest.mark.parametrize("case", BAD_STATES)
+def test_bad_state_bytes_are_refused_and_leave_the_instance_unchanged(case):
+    data, fragment = _bad_states()[case]
+    slave = initialised()
+    _run(slave, [(2e-3, 0, 0, 0)] * 2)
+    messages(slave)
+    before = observable(slave)
     state = TireModal._fmu_state_from_bytes(data)  # never raises
     slave._set_fmu_state(state)
     (error,) = messages(slave, Fmi2Status.error)
-    assert "fmi2SetFMUstate refused" in error
-    assert slave.do_step(0.0, 1e-3) is False
-    assert "could not be restored" in messages(slave, Fmi2Status.discard)[0]
-    slave._set_fmu_state(initialised()._get_fmu_state())  # a valid state heals it
-    assert slave.do_step(0.0, 1e-3) is True
+    assert error.startswith("fmi2SetFMUstate refused: ") and fragment in error, error
+    assert_unchanged(before, observable(slave))
+    assert slave.do_step(2e-3, 1e-3) is True  # it runs on where it was
+
+
+def test_a_state_whose_parameters_do_not_build_is_refused_unchanged():
+    state = _valid_state()
+    values = list(state.values)
+    values[vr(new_slave(), "m_s")] = 1e-20
+    slave = initialised(load=20_000.0)
+    messages(slave)
+    before = observable(slave)
+    slave._set_fmu_state(TireModal._fmu_state_from_bytes(_with(state, values=tuple(values))))
+    (error,) = messages(slave, Fmi2Status.error)
+    assert "its parameters do not build a model: m_s = 1e-20 kg/m" in error
+    assert_unchanged(before, observable(slave))
 
 
 def test_instances_are_independent():

@@ -29,6 +29,7 @@ from tire_fmu.core.contact import zone_problems
 from tire_fmu.core.discretisation import Grid
 from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.parameters import (
+    MAX_ELEMENTS,
     TIRE_FIELDS,
     OperatingPoint,
     ParameterError,
@@ -74,23 +75,24 @@ def _core_problem(make) -> str:
 
 @pytest.mark.parametrize("make, key, args", [
     (lambda: TireParameters(R=5.0), "FIELD_RANGE",
-     ("R", 5.0, "m", "(0.1, 3] m", "tread (belt) radius")),
+     ("R", "5 m", "(0.1, 3] m", "tread (belt) radius")),
     (lambda: TireParameters(beta=math.nan), "FIELD_NOT_FINITE",
      ("beta", "nan", "[0, 0.1] s", "stiffness-proportional damping coefficient")),
     (lambda: TireParameters(sidewall_pressure_exponent=4.0), "FIELD_RANGE",
-     ("sidewall_pressure_exponent", 4.0, "", "[0, 3]",
+     ("sidewall_pressure_exponent", "4", "[0, 3]",
       TIRE_FIELDS["sidewall_pressure_exponent"].description)),
     (lambda: TireParameters(inflation_pressure=0.0, sidewall_pressure_exponent=1.5),
      "PRESSURE_LAW", (1.5,)),
-    (lambda: OperatingPoint(n_elements=4), "ELEMENTS_RANGE", (4, 8, 20000)),
-    (lambda: OperatingPoint(load_n=-2.5), "NOT_NONNEGATIVE", ("load", "-2.5", "N")),
+    (lambda: OperatingPoint(n_elements=4), "ELEMENTS_RANGE", (4, 8, MAX_ELEMENTS)),
+    (lambda: OperatingPoint(load_n=-2.5), "NOT_NONNEGATIVE", ("load", "-2.5 N", "N")),
     (lambda: OperatingPoint(speed_m_s=math.inf), "NOT_NONNEGATIVE", ("speed", "inf", "m/s")),
-    (lambda: RingTruncation(f_max_hz=-1.0), "F_MAX_RANGE", ("-1.0", 1e7)),
+    (lambda: OperatingPoint(speed_m_s=1e-4), "MIN_ROLLING_SPEED", ("0.0001 m/s", 1e-3)),
+    (lambda: RingTruncation(f_max_hz=-1.0), "F_MAX_RANGE", ("-1 Hz", 1e7)),
     (lambda: RingTruncation(n_modes=-3), "N_MODES_RANGE", (-3, 100000)),
     (lambda: (_ for _ in ()).throw(ParameterError(zone_problems(Grid(100, 0.65), 5.0))),
-     "ZONE_RANGE", ("5.0", 2 * 0.65 * math.tan(math.pi / 3))),
+     "ZONE_RANGE", ("5 m", 2 * 0.65 * math.tan(math.pi / 3))),
     (lambda: (_ for _ in ()).throw(ParameterError(zone_problems(Grid(100, 0.65), 0.05))),
-     "ZONE_TOO_SHORT", (0.05, 100, 2 * 0.65 * math.tan(2 * math.pi / 100))),
+     "ZONE_TOO_SHORT", ("0.05 m", 2 * 0.65 * math.tan(2 * math.pi / 100), 100)),
 ])
 def test_spec_templates_are_the_core_messages(make, key, args):
     """Each printf template of the spec, filled in as the C fills it, is the core's message in
@@ -226,6 +228,10 @@ def _problems(fmu: Opened, parameters: dict) -> tuple[int, list[str], list[str]]
     {"contact_zone_length": 5.0},
     {"contact_zone_length": 0.05},
     {"f_max": 1e8, "n_modes": 200000, "static_correction": False},
+    {"f_max": -1.0, "load": 1e7},  # a refused truncation: the model still finds the load's
+    {"speed": 1e-4},
+    {"k_r1": 1e-3},  # conditioning: the support is too weak for k_cw
+    {"EI": 1e8, "n_elements": 1000},  # conditioning: the bending is too stiff on this mesh
 ])
 def test_parameter_problems_are_the_python_fmus(native, python, parameters):
     """Bad parameters: fmi2Error from fmi2ExitInitializationMode, every problem logged, the
@@ -234,6 +240,18 @@ def test_parameter_problems_are_the_python_fmus(native, python, parameters):
     _, python_lines, _ = _problems(python, parameters)
     assert status == 3
     assert native_lines and native_lines == python_lines
+
+
+@pytest.mark.parametrize("m_s", [1e-20, 1e-5])
+def test_a_ring_the_native_solver_cannot_resolve_is_an_error_naming_the_field(native, m_s):
+    """Sidewall masses far below the tread's: the Python FMU refuses 1e-20 kg/m (double
+    precision cannot resolve the modes) and runs 1e-5; the native FMU's quartic solver fails
+    on both, and says so with the field to change instead of running to nan."""
+    status, lines, _ = _problems(native, {"m_s": m_s})
+    assert status == 3
+    [line] = lines
+    assert "could not compute the free ring's modes" in line
+    assert "the sidewall masses on k_r1 + k_r2" in line and "m_s larger" in line
 
 
 def test_speed_near_critical_warns_with_the_core_message(native):

@@ -105,7 +105,7 @@ def test_full_frequency_response_second_order_equals_state_space(small_models):
 def test_static_correction_makes_the_dc_gain_exact(rest_model):
     # a harsh frequency cut, so that much is dropped; reduce warns that it costs accuracy
     settings = ReductionSettings(f_max_hz=150.0, contribution_threshold=0.0)
-    with pytest.warns(ReductionWarning, match="f_max_hz = 150 Hz drops modes"):
+    with pytest.warns(ReductionWarning, match="frequency cut at 150 Hz drops modes"):
         corrected = reduce(rest_model, settings)
     with pytest.warns(ReductionWarning):
         plain = reduce(rest_model, ReductionSettings(f_max_hz=150.0, contribution_threshold=0.0,
@@ -220,6 +220,74 @@ def test_npz_round_trip_is_bit_exact_and_rejects_tampering(small_models, tmp_pat
         assert "metadata.npy" in archive.namelist()
     meta = json.loads(str(np.load(path)["metadata"]))
     assert meta["model"]["operating_point"]["speed_m_s"] == 15.0
+
+
+def _forged(path, tmp_path, edit, arrays=None):
+    """The export at ``path`` with its metadata edited by ``edit`` and its arrays replaced
+    by ``arrays``, every checksum recomputed: a file made to look right."""
+    from tire_fmu.model_files import _checksum, _metadata_checksum
+
+    with np.load(path) as archive:
+        contents = {name: archive[name] for name in archive.files}
+    meta = json.loads(str(contents.pop("metadata")))
+    del meta["checksums"]
+    edit(meta)
+    contents.update(arrays or {})
+    checksums = {name: _checksum(array) for name, array in contents.items()}
+    checksums["metadata"] = _metadata_checksum(meta)
+    forged = tmp_path / "forged.npz"
+    np.savez(forged, metadata=np.array(json.dumps({**meta, "checksums": checksums})),
+             **contents)
+    return forged
+
+
+def test_npz_metadata_is_under_the_checksum_too(small_models, tmp_path):
+    path = save_npz(reduce(small_models[0.0], report=False), tmp_path / "tire.npz")
+    with np.load(path) as archive:
+        contents = {name: archive[name] for name in archive.files}
+    meta = json.loads(str(contents["metadata"]))
+    meta["static_outputs"]["rim_Fz"] = 1e6  # loaded silently before: rim_Fz off by 972 kN
+    contents["metadata"] = np.array(json.dumps(meta))
+    np.savez(tmp_path / "tampered.npz", **contents)
+    with pytest.raises(ModelFileError, match="the metadata does not match its checksum"):
+        load_npz(tmp_path / "tampered.npz")
+
+
+def _delete(key):
+    return lambda meta: meta.pop(key)
+
+
+def _assign(key, value):
+    return lambda meta: meta.__setitem__(key, value)
+
+
+@pytest.mark.parametrize("edit, arrays, message", [
+    (_delete("settings"), None, "metadata 'settings' is NoneType, must be dict"),
+    (_assign("static_outputs", "x"), None, "metadata 'static_outputs' is str"),
+    (lambda m: m["static_outputs"].pop("rim_Fz"), None, "static_outputs"),
+    (lambda m: m["static_outputs"].__setitem__("rim_Fz", "heavy"), None, "static_outputs"),
+    (_assign("outputs", ["rim_Fz"]), None, "outputs ['rim_Fz']"),
+    (_assign("report", 3), None, "metadata 'report' is int"),
+    (lambda m: m["settings"].__setitem__("f_max_hz", "high"), None, "settings or report"),
+    (lambda m: m.__setitem__("format", "tire_fmu.reduced-model/1"), None, "export it again"),
+    (lambda m: None, {"d": np.zeros((4, 3))}, "'d' has 3 along 'm'"),
+    (lambda m: None, {"b": np.zeros((3, 3))}, "array 'b' is float64"),
+])
+def test_forged_npz_parts_are_refused_naming_what_is_wrong(small_models, tmp_path, edit,
+                                                          arrays, message):
+    path = save_npz(reduce(small_models[0.0], report=False), tmp_path / "tire.npz")
+    with pytest.raises(ModelFileError) as caught:
+        load_npz(_forged(path, tmp_path, edit, arrays))
+    assert message in str(caught.value)
+
+
+def test_non_finite_arrays_are_refused(small_models, tmp_path):
+    reduced = reduce(small_models[0.0], report=False)
+    path = save_npz(reduced, tmp_path / "tire.npz")
+    d = reduced.d.copy()
+    d[0, 0] = np.nan
+    with pytest.raises(ModelFileError, match="'d' holds values that are not finite"):
+        load_npz(_forged(path, tmp_path, lambda m: None, {"d": d}))
 
 
 def test_mat_round_trip_is_bit_exact(small_models, tmp_path):

@@ -11,9 +11,10 @@ __version__ = "0.1.0"
 #: and tab completion see them without importing the core
 __all__ = [
     "AnalyticModes", "CriticalSpeed", "DEFAULT_LOAD_N", "Dispersion", "ModalResult", "Mode",
-    "OperatingPoint", "ParameterError", "SupercriticalSpeedWarning", "TIRE_FIELDS",
+    "OperatingPoint", "ParameterError", "Problem", "SupercriticalSpeedWarning", "TIRE_FIELDS",
     "TireModel", "TireParameters", "analytic_modes", "build_model", "complex_modes",
-    "critical_speed", "dispersion_relation", "modal_analysis", "real_modes", "undeformed",
+    "critical_speed", "dispersion_relation", "modal_analysis", "real_modes", "render",
+    "undeformed",
     "validate",
 ]
 

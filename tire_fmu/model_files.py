@@ -5,9 +5,11 @@ the FMUs: this module turns a :class:`~tire_fmu.core.reduction.ReducedModel` int
 back.
 
 ``.npz`` holds the diagonal modal form as plain arrays plus a JSON metadata string (tire data,
-operating point, settings, error report, names, units) with a SHA-256 checksum of every array,
-so a tampered or truncated file is refused with a message saying what is wrong. Loading gives
-back a :class:`ReducedModel` equal bit for bit.
+operating point, settings, error report, names, units) with a SHA-256 checksum of every array
+and of the metadata itself, so a tampered or truncated file is refused with a message saying
+what is wrong; so is one whose parts are missing, of the wrong type or shape, or not finite
+(every problem at once, as :class:`ModelFileError`). Loading gives back a
+:class:`ReducedModel` equal bit for bit.
 
 ``.mat`` holds the real block form ready for MATLAB's ``ss(A, B, C, D)``: the inputs are
 [r; ṙ] (displacements, then velocities), so B = [B_r, 0] and D = [D_r, E].
@@ -17,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import zipfile
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -26,10 +29,16 @@ import numpy as np
 from .core.contact import RoadWindows
 from .core.io_model import OUTPUT_UNITS
 from .core.io_model import OUTPUTS as OUTPUT_NAMES
+from .core.parameters import ParameterError
 from .core.reduction import ErrorReport, ReducedModel, ReductionRecord, ReductionSettings
 
 FORMAT = "tire_fmu.reduced-model/2"
 ARRAYS = ("eigenvalues", "b", "c", "d", "e", "road_window_early_s", "road_window_late_s")
+#: dtype kind of each array ("c" complex, "f" real) and its shape in terms of k modes,
+#: m inputs (the rim and g road groups), g road groups and p outputs
+_ARRAY_SHAPES = {"eigenvalues": ("c", "k"), "b": ("c", "km"), "c": ("c", "pk"),
+                 "d": ("f", "pm"), "e": ("f", "pm"), "road_window_early_s": ("f", "g"),
+                 "road_window_late_s": ("f", "g")}
 
 
 class ModelFileError(ValueError):
@@ -70,20 +79,28 @@ def metadata(reduced: ReducedModel) -> dict:
     }
 
 
+def _metadata_checksum(meta: dict) -> str:
+    """SHA-256 of the metadata as JSON with sorted keys (which JSON reads back exactly)."""
+    text = json.dumps(meta, allow_nan=True, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def save_npz(reduced: ReducedModel, path) -> Path:
     path = Path(path)
     arrays = {name: np.asarray(getattr(reduced, name)) for name in ARRAYS[:5]}
     arrays["road_window_early_s"] = np.asarray(reduced.road_windows.early_s)
     arrays["road_window_late_s"] = np.asarray(reduced.road_windows.late_s)
-    meta = metadata(reduced)
-    meta["checksums"] = {name: _checksum(array) for name, array in arrays.items()}
-    text = json.dumps(meta, allow_nan=True, sort_keys=True)
+    meta = json.loads(json.dumps(metadata(reduced), allow_nan=True))  # as it will read back
+    checksums = {name: _checksum(array) for name, array in arrays.items()}
+    checksums["metadata"] = _metadata_checksum(meta)
+    text = json.dumps({**meta, "checksums": checksums}, allow_nan=True, sort_keys=True)
     with path.open("wb") as handle:
         np.savez(handle, metadata=np.array(text), **arrays)
     return path
 
 
 def load_npz(path) -> ReducedModel:
+    """The reduced model saved by :func:`save_npz`; ModelFileError names everything wrong."""
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as archive:
@@ -97,21 +114,39 @@ def load_npz(path) -> ReducedModel:
         meta = json.loads(str(contents["metadata"]))
     except json.JSONDecodeError as error:
         raise ModelFileError(f"{path}: metadata is not valid JSON ({error})") from error
+    if not isinstance(meta, dict):
+        raise ModelFileError(f"{path}: metadata is {type(meta).__name__}, not a JSON object")
     if meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path}: format {meta.get('format')!r}, expected {FORMAT!r}")
-    checksums = meta.get("checksums", {})
-    for name in ARRAYS:
-        if checksums.get(name) != _checksum(contents[name]):
-            raise ModelFileError(
-                f"{path}: array {name!r} does not match its checksum; the file was changed "
-                "after export"
-            )
-    known = {f.name for f in fields(ReductionSettings)}
-    settings_values = {k: v for k, v in meta["settings"].items() if k in known}
-    settings_values["error_band_hz"] = tuple(settings_values["error_band_hz"])
-    report = meta.get("report")
-    if report is not None:
-        report = ErrorReport(**{**report, "band_hz": tuple(report["band_hz"])})
+        raise ModelFileError(f"{path}: format {meta.get('format')!r}, expected {FORMAT!r}"
+                             + ("; export it again" if str(meta.get("format", "")).startswith(
+                                 "tire_fmu.reduced-model/") else ""))
+    checksums = meta.pop("checksums", None)
+    if not isinstance(checksums, dict):
+        raise ModelFileError(f"{path}: the metadata has no checksums")
+    changed = [f"array {name!r}" for name in ARRAYS
+               if checksums.get(name) != _checksum(contents[name])]
+    if checksums.get("metadata") != _metadata_checksum(meta):
+        changed.append("the metadata")
+    if changed:
+        verb = "does not match its checksum" if len(changed) == 1 else \
+            "do not match their checksums"
+        raise ModelFileError(f"{path}: {' and '.join(changed)} {verb}; the file was changed "
+                             "after export")
+    problems = _contents_problems(meta, contents)
+    if problems:
+        raise ModelFileError(f"{path}: not a consistent model file: " + "; ".join(problems))
+    try:
+        known = {f.name for f in fields(ReductionSettings)}
+        settings_values = {k: v for k, v in meta["settings"].items() if k in known}
+        settings_values["error_band_hz"] = tuple(settings_values["error_band_hz"])
+        settings = ReductionSettings(**settings_values)
+        report = meta["report"]
+        if report is not None:
+            report = ErrorReport(**{**report, "band_hz": tuple(report["band_hz"])})
+        metadata_record = ReductionRecord.from_dict(meta["model"]) if meta.get("model") else None
+        front_m = float(meta["road_front_m"])
+    except (ParameterError, TypeError, KeyError, ValueError, AttributeError) as error:
+        raise ModelFileError(f"{path}: its settings or report cannot be read ({error})") from error
     return ReducedModel(
         eigenvalues=contents["eigenvalues"],
         b=contents["b"],
@@ -119,13 +154,65 @@ def load_npz(path) -> ReducedModel:
         d=contents["d"],
         e=contents["e"],
         road_windows=RoadWindows(contents["road_window_early_s"],
-                                 contents["road_window_late_s"], float(meta["road_front_m"])),
+                                 contents["road_window_late_s"], front_m),
         static_outputs={k: float(v) for k, v in meta["static_outputs"].items()},
-        settings=ReductionSettings(**settings_values),
-        metadata=ReductionRecord.from_dict(meta["model"]) if meta.get("model") else None,
+        settings=settings,
+        metadata=metadata_record,
         report=report,
         output_names=tuple(meta["outputs"]),
     )
+
+
+def _contents_problems(meta: dict, contents: dict) -> list[str]:
+    """Every part that is missing, of the wrong type or shape, or not finite."""
+    problems = []
+    kinds = {"outputs": list, "static_outputs": dict, "settings": dict,
+             "road_window_early_s": list, "road_window_late_s": list}
+    for key, kind in kinds.items():
+        if not isinstance(meta.get(key), kind):
+            problems.append(f"metadata {key!r} is {type(meta.get(key)).__name__}, must be "
+                            f"{kind.__name__}")
+    for key in ("report", "model"):
+        if not (meta.get(key) is None or isinstance(meta[key], dict)):
+            problems.append(f"metadata {key!r} is {type(meta[key]).__name__}, must be "
+                            "an object or null")
+    front = meta.get("road_front_m")
+    if not (isinstance(front, (int, float)) and not isinstance(front, bool)
+            and math.isfinite(front)):
+        problems.append(f"metadata 'road_front_m' is {front!r}, must be a finite number")
+    if problems:
+        return problems
+    outputs = meta["outputs"]
+    if outputs != list(OUTPUT_NAMES):
+        problems.append(f"outputs {outputs!r}: must be {list(OUTPUT_NAMES)}")
+    statics = meta["static_outputs"]
+    if sorted(statics) != sorted(OUTPUT_NAMES) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in statics.values()):
+        problems.append(f"static_outputs {statics!r}: must give a finite number for each of "
+                        f"{list(OUTPUT_NAMES)}")
+    sizes = {}
+    for name, (kind, axes) in _ARRAY_SHAPES.items():
+        array = contents[name]
+        if array.dtype.kind != kind or array.ndim != len(axes):
+            problems.append(f"array {name!r} is {array.dtype} with {array.ndim} dimension(s), "
+                            f"must be {'complex' if kind == 'c' else 'real'} with {len(axes)}")
+            continue
+        if not np.all(np.isfinite(array)):
+            problems.append(f"array {name!r} holds values that are not finite")
+        for axis, size in zip(axes, array.shape):
+            if sizes.setdefault(axis, (size, name))[0] != size:
+                problems.append(f"array {name!r} has {size} along {axis!r} where "
+                                f"{sizes[axis][1]!r} has {sizes[axis][0]}")
+    if "p" in sizes and sizes["p"][0] != len(OUTPUT_NAMES):
+        problems.append(f"{sizes['p'][0]} outputs in the arrays, {len(OUTPUT_NAMES)} named")
+    if "g" in sizes and "m" in sizes and sizes["m"][0] != sizes["g"][0] + 1:
+        problems.append(f"{sizes['m'][0]} inputs in the arrays for {sizes['g'][0]} road "
+                        "windows: must be one more (the rim)")
+    for name in ("road_window_early_s", "road_window_late_s"):
+        if meta[name] != contents[name].tolist():
+            problems.append(f"metadata {name!r} differs from the array")
+    return problems
 
 
 def state_space_matrices(reduced: ReducedModel) -> dict[str, np.ndarray]:

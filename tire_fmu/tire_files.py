@@ -35,7 +35,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from .core.parameters import TIRE_FIELDS, TireParameters, tire_problems
+from .core.parameters import TIRE_FIELDS, TireParameters, render, tire_problems
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -159,7 +159,7 @@ def _parameters(document: dict) -> tuple[dict[str, float], list[str]]:
         values[name] = float(value)
     for name in sorted(set(units) - set(parameters)):
         problems.append(f"units.{name}: no parameters.{name} to go with it")
-    problems += tire_problems(values)
+    problems += [render(problem) for problem in tire_problems(values)]
     return values, problems
 
 

@@ -75,6 +75,17 @@ def _extracted(path: Path) -> str:
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
 
+def printed(message: bytes | None) -> str:
+    """An FMI log message as printf shows it without arguments: FMI messages are formats
+    ("%%" for "%"). fmpy's C proxy that formats them keeps one logger per process, so a
+    master with two FMUs, each with its own logger, formats here instead."""
+    text = message.decode("utf-8", "replace") if message else ""
+    try:
+        return text % ()
+    except (TypeError, ValueError):  # a conversion without its argument: show it as it is
+        return text
+
+
 def _raw(fmu, name: str):
     """The bare ctypes function fmi2<name>, returning its status: fmpy's wrapper checks and
     logs every call, which costs about a microsecond a call in a loop of seven calls a step;
@@ -124,7 +135,7 @@ class FmuInstance:
 
         def logger(component, instance, status, category, message):
             label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-            self.log.append((label, message.decode("utf-8", "replace") if message else ""))
+            self.log.append((label, printed(message)))
 
         callbacks = fmi2CallbackFunctions()
         callbacks.logger = fmi2CallbackLoggerTYPE(logger)

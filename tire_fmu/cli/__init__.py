@@ -94,7 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from threadpoolctl import threadpool_limits
 
     from ..core.parameters import ParameterError
-    from .common import CliError, Output, check_plot_option, to_jsonable
+    from .common import CLI_NAMES, CLI_UNSET, CliError, Output, check_plot_option, to_jsonable
 
     threads = _default_blas_threads() if args.blas_threads is None else args.blas_threads
     try:
@@ -108,7 +108,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ParameterError, CliError, OSError) as error:
         if args.debug:
             raise
-        message = str(error).replace("\n", " ")
+        message = (error.message(CLI_NAMES, CLI_UNSET) if isinstance(error, ParameterError)
+                   else str(error)).replace("\n", " ")
         print(f"tire-fmu {args.command}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

@@ -18,8 +18,23 @@ from ..core.parameters import (
     MAX_ELEMENTS,
     MAX_PATCH_FRACTION,
     MIN_ELEMENTS,
+    render,
     tire_problems,
 )
+
+#: The options that set the core's inputs, for its problems to name them (tire data keep
+#: their names: they are set with --tire NAME=VALUE).
+CLI_NAMES = {
+    "load_n": "--load", "patch_length_m": "--patch-length", "speed_m_s": "--speed",
+    "n_elements": "--elements", "inflation_pressure": "--inflation-pressure",
+    "allow_supercritical": "--allow-supercritical", "f_max_hz": "--f-max",
+    "n_modes": "--n-modes", "n_states": "--n-states", "contribution_threshold": "--threshold",
+    "target_error": "--target-error", "error_band_hz": "--band", "method": "--method",
+    "nmax": "--nmax", "input": "--input", "output": "--output",
+    "contact_zone_length_m": "--zone-length",
+}
+#: how "no limit" reads on the command line
+CLI_UNSET = "left out"
 
 
 class CliError(Exception):
@@ -283,7 +298,7 @@ def checked_tire(args: argparse.Namespace, problems: Sequence[str | None] = (),
     """The tire from --tire/--inflation-pressure. Raises once with the option problems given,
     the tire's own, and those ``tire_checks(tire)`` finds for a valid tire."""
     values = parse_tire_overrides(args)
-    own = tire_problems(values)
+    own = [render(problem, CLI_NAMES, CLI_UNSET) for problem in tire_problems(values)]
     tire = None if own else TireParameters(**values)
     found = list(problems) + own
     if tire is not None and tire_checks is not None:

@@ -22,7 +22,9 @@ from .parameters import (
     TIRE_FIELDS,
     OperatingPoint,
     ParameterError,
+    Problem,
     TireParameters,
+    render,
     validate,
 )
 from .standing_waves import CriticalSpeed, critical_speed
@@ -36,6 +38,7 @@ __all__ = [
     "Mode",
     "OperatingPoint",
     "ParameterError",
+    "Problem",
     "SupercriticalSpeedWarning",
     "TIRE_FIELDS",
     "TireModel",
@@ -47,6 +50,7 @@ __all__ = [
     "dispersion_relation",
     "modal_analysis",
     "real_modes",
+    "render",
     "undeformed",
     "validate",
 ]

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .discretisation import Grid
+from .parameters import Problem, render
 
 #: Default length of road under the contact zone (m): wide enough for the largest credible
 #: footprint and for a 40 mm cleat to be met before it reaches the footprint.
@@ -133,7 +134,7 @@ def contact_zone(grid: Grid, k_cw: float, beta: float,
                        length_m=float(zone_length_m))
 
 
-def zone_problems(grid: Grid, zone_length_m) -> list[str]:
+def zone_problems(grid: Grid, zone_length_m) -> list[Problem]:
     """Why a zone length cannot make a usable zone on this mesh (empty when it can)."""
     try:
         length = float(zone_length_m)
@@ -141,14 +142,15 @@ def zone_problems(grid: Grid, zone_length_m) -> list[str]:
         length = math.nan
     limit = 2 * grid.radius_m * math.tan(MAX_ZONE_HALF_ANGLE)
     if not (math.isfinite(length) and 0 < length <= limit):
-        return [f"contact_zone_length_m = {zone_length_m!r} m: must be in (0, {limit:.4g}] m "
-                "(at most 60 degrees of the ring either side of the contact centre)"]
+        return [Problem("contact_zone_length_m", zone_length_m, "m", f"in (0, {limit:.4g}] m",
+                        "at most 60 degrees of the ring either side of the contact centre")]
     half_angle = math.atan(0.5 * length / grid.radius_m)
     if half_angle < grid.dtheta:
         need = 2 * grid.radius_m * math.tan(grid.dtheta)
-        return [f"contact_zone_length_m = {length:g} m holds only the centre node of a mesh of "
-                f"{grid.n_elements} elements: must be at least {need:.4g} m (one node either "
-                "side), or refine the mesh"]
+        return [Problem("contact_zone_length_m", length, "m",
+                        f"at least {need:.4g} m (one node either side), or refine the mesh",
+                        f"it holds only the centre node of a mesh of {grid.n_elements} "
+                        "elements")]
     return []
 
 
@@ -232,7 +234,13 @@ class Footprint:
 
 
 class FootprintError(ValueError):
-    """A static contact state the model cannot reach (load beyond the credible range)."""
+    """A static contact state the model cannot reach (load beyond the credible range);
+    ``problem`` says which input to change, and to what."""
+
+    def __init__(self, message: str, problem: Problem | None = None):
+        super().__init__(message)
+        self.problem = problem or Problem("load_n", math.nan, "N", "a load the model reaches",
+                                          message)
 
 
 @dataclass(frozen=True, eq=False)
@@ -521,10 +529,11 @@ def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
                   "contact_zone_length_m)" if limit.touches_zone_edge() else
                   f"its footprint reaches {max_length_m:.4g} m, beyond which the linear ring "
                   "is not credible")
-        raise FootprintError(
-            f"load_n = {load_n:g} N: must be in [0, {limit.load_n:.6g}] N for this tire and "
-            f"mesh; at {limit.load_n:.6g} N (deflection {limit.deflection_m * 1e3:.3g} mm) "
-            + reason)
+        problem = Problem("load_n", load_n, "N",
+                          f"in [0, {limit.load_n:.6g}] N for this tire and mesh; at "
+                          f"{limit.load_n:.6g} N (deflection {limit.deflection_m * 1e3:.3g} mm) "
+                          + reason)
+        raise FootprintError(render(problem), problem)
     return _footprint_patch(zone, compliance, path.at_load(load_n), speed_m_s)
 
 

@@ -42,7 +42,7 @@ from scipy.linalg.blas import dgemv
 
 from .contact import ContactPatch, RoadWindows, _edges, contact_force
 from .free_ring import FreeRingModel, RingTruncation, free_ring_model
-from .model import TireModel, build_model
+from .model import TireModel, build_model, check_resolved
 from .parameters import OperatingPoint, TireParameters
 from .road import SAME_POINT_EPS, RoadReader
 from .stepping import phi_functions
@@ -83,14 +83,14 @@ class ContactSettings:
     max_substep_s: float = MAX_SUBSTEP_S
 
     def __post_init__(self) -> None:
+        from .parameters import ParameterError, Problem
+
         problems = []
         if self.law not in LAWS:
-            problems.append(f"law = {self.law!r}: must be one of {LAWS}")
+            problems.append(Problem("law", self.law, "", f"one of {', '.join(LAWS)}"))
         if not (isinstance(self.max_substep_s, (int, float)) and 0 < self.max_substep_s <= 1.0):
-            problems.append(f"max_substep_s = {self.max_substep_s!r} s: must be in (0, 1] s")
+            problems.append(Problem("max_substep_s", self.max_substep_s, "s", "in (0, 1] s"))
         if problems:
-            from .parameters import ParameterError
-
             raise ParameterError(problems)
 
 
@@ -132,6 +132,8 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
     model = build_model(tire, op)
     ring = free_ring_model(tire, model.grid, model.spin_rad_s, model.patch.zone.nodes,
                            truncation)
+    # the free ring's rigid rotation (eigenvalue 0 exactly) is no mode to resolve
+    check_resolved(ring.eigenvalues[ring.eigenvalues != 0], model)
     contact_rad_s = math.sqrt(tire.k_cw / tire.rhoA)
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
     return ContactModel(model=model, ring=ring, settings=settings, substep_s=substep)

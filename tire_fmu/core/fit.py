@@ -28,7 +28,14 @@ import scipy.optimize as so
 import scipy.stats as st
 
 from .dispersion import body_frequencies
-from .parameters import TIRE_FIELDS, OperatingPoint, ParameterError, TireParameters
+from .parameters import (
+    MAX_ELEMENTS,
+    MIN_ELEMENTS,
+    TIRE_FIELDS,
+    OperatingPoint,
+    ParameterError,
+    TireParameters,
+)
 
 BRANCHES = ("in", "out")
 #: Singular values below this fraction of the largest mark directions the data cannot see.
@@ -250,8 +257,9 @@ def fit_problems(modes: Sequence[MeasuredMode], free: Sequence[str], start: Tire
                             "needs a start value > 0")
     if len(set(free)) != len(free):
         problems.append(f"free parameters {list(free)}: each may be named once")
-    if n_elements is not None and not 8 <= n_elements <= 20_000:
-        problems.append(f"n_elements = {n_elements}: must be in [8, 20000] (or None: analytic)")
+    if n_elements is not None and not MIN_ELEMENTS <= n_elements <= MAX_ELEMENTS:
+        problems.append(f"n_elements = {n_elements}: must be in [{MIN_ELEMENTS}, "
+                        f"{MAX_ELEMENTS}] (or None: analytic)")
     seen: dict[tuple[int, str], str] = {}
     for m in modes:
         if m.branch not in BRANCHES:

@@ -38,7 +38,7 @@ from .discretisation import Grid
 from .discretisation import symbols as fdm_symbols
 from .dispersion import per_order_matrices
 from .modal_form import ModalForm, diagonalise
-from .parameters import TireParameters
+from .parameters import Problem, TireParameters
 
 RIM_OUTPUTS = ("rim_Fz", "rim_Fx", "deflection")
 
@@ -65,18 +65,18 @@ F_MAX_LIMIT_HZ = 1e7
 N_MODES_LIMIT = 100_000
 
 
-def truncation_problems(f_max_hz, n_modes) -> list[str]:
+def truncation_problems(f_max_hz, n_modes) -> list[Problem]:
     """Why a truncation setting cannot be used (empty when it can)."""
     problems = []
     if f_max_hz is not None and not (
         isinstance(f_max_hz, (int, float)) and 0 < f_max_hz <= F_MAX_LIMIT_HZ
     ):
-        problems.append(f"f_max_hz = {f_max_hz!r}: must be in (0, {F_MAX_LIMIT_HZ:g}] Hz, or "
-                        "None for no frequency cut")
+        problems.append(Problem("f_max_hz", f_max_hz, "Hz", f"in (0, {F_MAX_LIMIT_HZ:g}] Hz",
+                                unset=True))
     if n_modes is not None and (isinstance(n_modes, bool) or not isinstance(n_modes, int)
                                 or not 1 <= n_modes <= N_MODES_LIMIT):
-        problems.append(f"n_modes = {n_modes!r}: must be an integer in [1, {N_MODES_LIMIT}] or "
-                        "None")
+        problems.append(Problem("n_modes", n_modes, "", f"an integer in [1, {N_MODES_LIMIT}]",
+                                unset=True))
     return problems
 
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from .io_model import OUTPUT_UNITS, OUTPUTS, PHYSICAL_INPUTS, build_io_model
 from .model import TireModel
+from .parameters import ParameterError, Problem
 from .reduction import ReducedModel
 
 
@@ -51,12 +52,10 @@ class FrequencyResponse:
 def _check(input_name: str, output_name: str) -> int:
     problems = []
     if input_name not in PHYSICAL_INPUTS:
-        problems.append(f"input = {input_name!r}: must be one of {PHYSICAL_INPUTS}")
+        problems.append(Problem("input", input_name, "", f"one of {', '.join(PHYSICAL_INPUTS)}"))
     if output_name not in OUTPUTS:
-        problems.append(f"output = {output_name!r}: must be one of {OUTPUTS}")
+        problems.append(Problem("output", output_name, "", f"one of {', '.join(OUTPUTS)}"))
     if problems:
-        from .parameters import ParameterError
-
         raise ParameterError(problems)
     return OUTPUTS.index(output_name)
 
@@ -66,10 +65,9 @@ def full_frequency_response(model: TireModel, input_name: str, output_name: str,
     """Exact FRF of the unreduced model."""
     row = _check(input_name, output_name)
     if input_name == "road" and not model.patch.in_contact:
-        from .parameters import ParameterError
-
-        raise ParameterError(["input = 'road' needs a contact patch: give a load or a patch "
-                              "length > 0"])
+        raise ParameterError([Problem("input", input_name, "", "'rim' for an undeformed tire",
+                                      "the road input needs a contact patch: give a load or "
+                                      "a patch length > 0")])
     freqs = np.asarray(freqs_hz, dtype=float)
     response = build_io_model(model).frequency_response(input_name, freqs)[row]
     return FrequencyResponse(freqs, response, input_name, output_name, "full model")

@@ -46,7 +46,14 @@ from .contact import (
 )
 from .discretisation import Grid, RingOperators
 from .free_ring import ring_static_gain, zone_compliance
-from .parameters import OperatingPoint, ParameterError, TireParameters
+from .parameters import (
+    TIRE_FIELDS,
+    OperatingPoint,
+    ParameterError,
+    Problem,
+    TireParameters,
+    conditioning_problems,
+)
 from .rotation import RollingTerms, rolling_terms
 
 #: Fraction of the critical speed above which building a model warns.
@@ -216,7 +223,7 @@ def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> Conta
         return computed_patch(zone, compliance, float(op.requested_load_n), op.speed_m_s,
                               tire.max_patch_length_m)
     except FootprintError as error:
-        raise ParameterError([str(error)]) from error
+        raise ParameterError([error.problem]) from error
 
 
 def footprint_for_deflection(model: TireModel, deflection_m: float) -> ContactPatch:
@@ -239,17 +246,17 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
 
     tire = tire or TireParameters()
     op = op or OperatingPoint()
+    problems = conditioning_problems(tire, op.n_elements)
+    if problems:
+        raise ParameterError(problems)
     grid = Grid(op.n_elements, tire.R)
     speed = float(op.speed_m_s)
     critical = critical_speed(tire, op.n_elements).speed_m_s
     if speed >= critical and not op.allow_supercritical:
-        raise ParameterError(
-            [
-                f"speed_m_s = {speed:g} m/s: must be below the critical (standing-wave) speed "
-                f"{critical:.4g} m/s of this mesh (n_elements = {op.n_elements}); a finer mesh "
-                "lowers it, sidewall_shear > 0 raises it, allow_supercritical runs anyway"
-            ]
-        )
+        raise ParameterError([Problem(
+            "speed_m_s", speed, "m/s", f"below the critical (standing-wave) speed {critical:.4g} "
+            f"m/s of this mesh (n_elements = {op.n_elements}); a finer mesh lowers it, "
+            "sidewall_shear > 0 raises it, allow_supercritical runs anyway")])
     if CRITICAL_SPEED_WARNING_FRACTION * critical <= speed < critical:
         warnings.warn(
             f"speed {speed:g} m/s is {100 * speed / critical:.0f} % of the critical speed "
@@ -281,3 +288,52 @@ def undeformed(model: TireModel) -> TireModel:
                    forces_n=np.zeros_like(patch.forces_n), centre_compression_m=0.0)
     return replace(model, contact_stiffness=_on_tread(model.grid, free.node_indices,
                                                       np.zeros(0)), patch=free)
+
+
+#: The fastest eigenvalue of a model over its slowest may be at most this: the slowest modes'
+#: relative error grows as the rounding unit times this ratio (about 2e-6 at the limit), and
+#: near 1e14 they are lost altogether and the outputs turn to nan.
+MAX_EIGENVALUE_SPREAD = 1e10
+#: What the check says (printf, so the native FMU renders the same).
+RESOLVED_ALLOWED = ("%s here, or beta smaller: the model's eigenvalues span %s (fastest over "
+                    "slowest) and may span at most %g")
+RESOLVED_REASON = ("beyond that double precision loses the slowest modes; the fastest here "
+                   "are %s, stiffness over mass %.3g 1/s^2, with beta = %g s")
+RESOLVED_SPREAD = "%.2g"
+RESOLVED_SPREAD_UNBOUNDED = "beyond 1e16"
+#: (field to change, which way, what the fast modes are), in the order the check weighs them
+RESOLVED_CANDIDATES = (
+    ("m_s", "larger", "the sidewall masses on k_r1 + k_r2"),
+    ("rhoA", "larger", "the tread nodes on k_r1 + k_cw"),
+    ("EI", "smaller", "the tread's bending at the mesh's shortest wavelength (fewer "
+                      "n_elements lengthen it)"),
+)
+
+
+def check_resolved(eigenvalues: np.ndarray, model: TireModel) -> None:
+    """Raise ParameterError unless double precision resolves every mode of ``model``.
+
+    The problem names the mass whose light node, against its springs, makes the fastest
+    modes: in the model these go as the stiffness-to-mass ratios, and with stiffness-
+    proportional damping as beta times them.
+    """
+    TIRE_UNITS = {name: spec.unit for name, spec in TIRE_FIELDS.items()}  # noqa: N806
+    magnitude = np.abs(eigenvalues)
+    if magnitude.size == 0:
+        return
+    slow, fast = float(magnitude.min()), float(magnitude.max())
+    if np.all(np.isfinite(magnitude)) and fast <= MAX_EIGENVALUE_SPREAD * slow:
+        return
+    tire = model.tire
+    step = 2 * np.pi / model.n_elements  # the mesh's shortest wavelength spans two nodes
+    ratios = dict(zip(RESOLVED_CANDIDATES, (  # stiffness over mass, 1/s^2
+        (tire.k_r1 + tire.k_r2) / tire.m_s,
+        (tire.k_r1 + tire.k_cw) / tire.rhoA,
+        tire.EI * 16 / (step * tire.R) ** 4 / tire.rhoA)))
+    (field, way, what), ratio = max(ratios.items(), key=lambda item: item[1])
+    spread = RESOLVED_SPREAD % (fast / slow) if slow > 0 and np.isfinite(fast) else \
+        RESOLVED_SPREAD_UNBOUNDED
+    raise ParameterError([Problem(
+        field, getattr(tire, field), TIRE_UNITS[field],
+        RESOLVED_ALLOWED % (way, spread, MAX_EIGENVALUE_SPREAD),
+        RESOLVED_REASON % (what, ratio, tire.beta))])

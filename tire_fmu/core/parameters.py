@@ -8,12 +8,17 @@ carries ``value × R·δθ`` of each line quantity.
 One table (:data:`TIRE_FIELDS`) describes every tire field: symbol, unit, description and
 allowed range. Validation, the CLI help, the FMU variables and the docs all read it, so the
 ranges live in one place.
+
+Every problem found is a :class:`Problem` (which input, the value given, what is allowed,
+why). The CLI and the FMUs render it with :func:`render` in their own names for the inputs
+(``--load``, ``load``); the message patterns are printf formats defined here once, so a C
+runtime can render the same text.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from typing import Any
 
@@ -24,6 +29,10 @@ import numpy as np
 #: (a vehicle model, the FMU's host) sets the load its own wheel carries.
 DEFAULT_LOAD_N = 27_654.753
 
+#: The slowest speed that rolls (m/s): below it the tire is at rest to rounding, and the road
+#: would reach the back of the patch after days (a time-domain run keeps that much history).
+MIN_ROLLING_SPEED_M_S = 1e-3
+
 #: Longest contact patch the linear ring model is trusted with, as a fraction of the
 #: circumference. Beyond ~45° of wrap the small-deflection ring and the flat-road chord
 #: geometry used to relate load and patch length both stop being credible.
@@ -32,19 +41,82 @@ MAX_PATCH_FRACTION = 1.0 / 8.0
 #: The 5-point bending stencil needs distinct neighbours two nodes away on both sides, and the
 #: lowest ring orders (n <= 2) need a few nodes per wavelength to be meaningful.
 MIN_ELEMENTS = 8
-MAX_ELEMENTS = 20_000
+#: The loaded rolling tire's modes and its balanced reduction are dense, O(N^3) time and
+#: O(N^2) memory: at this limit seconds at rest and minutes and about 2 GB rolling on a 2-core
+#: machine (20000, the former limit, needed more than 23 GB; the modal analysis of
+#: benchmarks/bench_modal.py goes to it). benchmarks/bench_mesh_size.py prints what a mesh costs.
+MAX_ELEMENTS = 1_600
+ELEMENTS_REASON = (f"the 5-point bending stencil needs at least {MIN_ELEMENTS} nodes around the "
+                   f"ring; meshes above {MAX_ELEMENTS} cost too much time and memory to build")
+
+
+#: How a problem reads. printf patterns, so that a C runtime renders the same text: the
+#: input's name, its value (with unit), what is allowed; then the reason, if any.
+PROBLEM_TEMPLATE = "%s = %s: must be %s"
+#: appended to what is allowed when the input may also be left unset: the adapter's word for
+#: unset ("None" in Python, "0" in the FMUs)
+UNSET_TEMPLATE = "%s, or %s for no limit"
+REASON_TEMPLATE = "%s (%s)"
+#: several problems in one line
+PROBLEMS_TEMPLATE = "%d parameter problems: %s"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with one input: which (``field``, its core name), the value given,
+    what is allowed (``allowed`` reads after "must be", e.g. ``"in (0.1, 3] m"``) and why."""
+
+    field: str
+    value: Any
+    unit: str = ""
+    allowed: str = ""
+    reason: str = ""
+    unset: bool = False  # leaving the input unset (no limit) is allowed too
+
+
+def value_text(value: Any, unit: str = "") -> str:
+    """A value as a message shows it: numbers in the shortest exact form, with their unit."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.number)):
+        return repr(value)
+    if isinstance(value, (int, np.integer)):
+        text = str(int(value))
+    else:
+        number = float(value)
+        if not math.isfinite(number):
+            return repr(number)
+        text = f"{number:g}"
+        if float(text) != number:
+            text = repr(number)
+    return f"{text} {unit}" if unit else text
+
+
+def render(problem: Problem, names: Mapping[str, str] | None = None, unset: str = "None"
+           ) -> str:
+    """``problem`` in words, naming inputs by ``names`` (core name -> the adapter's name)."""
+    name = (names or {}).get(problem.field, problem.field)
+    allowed = UNSET_TEMPLATE % (problem.allowed, unset) if problem.unset else problem.allowed
+    text = PROBLEM_TEMPLATE % (name, value_text(problem.value, problem.unit), allowed)
+    return REASON_TEMPLATE % (text, problem.reason) if problem.reason else text
 
 
 class ParameterError(ValueError):
-    """Invalid tire data or operating point; ``problems`` lists every one found."""
+    """Invalid inputs; ``details`` lists every :class:`Problem` found, ``problems`` the same
+    rendered with the core's names."""
 
-    def __init__(self, problems: list[str]):
-        self.problems = list(problems)
-        if len(self.problems) == 1:
-            message = self.problems[0]
-        else:
-            message = f"{len(self.problems)} parameter problems: " + "; ".join(self.problems)
-        super().__init__(message)
+    def __init__(self, problems: Sequence[Problem]):
+        self.details = list(problems)
+        self.problems = self.render()
+        super().__init__(self.message())
+
+    def render(self, names: Mapping[str, str] | None = None, unset: str = "None") -> list[str]:
+        return [render(p, names, unset) for p in self.details]
+
+    def message(self, names: Mapping[str, str] | None = None, unset: str = "None") -> str:
+        """Every problem in one line."""
+        rendered = self.render(names, unset)
+        if len(rendered) == 1:
+            return rendered[0]
+        return PROBLEMS_TEMPLATE % (len(rendered), "; ".join(rendered))
 
 
 @dataclass(frozen=True)
@@ -58,17 +130,20 @@ class FieldSpec:
     high: float
     low_inclusive: bool = False
 
-    def problem(self, value: Any) -> str | None:
-        """Return a message naming the field, its value and the allowed range, or None."""
+    def problem(self, value: Any) -> Problem | None:
+        """What is wrong with ``value`` for this field, or None."""
         try:
             number = float(value)
         except (TypeError, ValueError):
-            return f"{self.name} = {value!r}: must be a number in {self.range_text()}"
+            return Problem(self.name, value, "", f"a number in {self.range_text()}",
+                           self.description)
         if not math.isfinite(number):
-            return f"{self.name} = {value!r}: must be finite, in {self.range_text()}"
+            return Problem(self.name, number, "", f"a finite number in {self.range_text()}",
+                           self.description)
         below = number < self.low if self.low_inclusive else number <= self.low
         if below or number > self.high:
-            return f"{self.name} = {number:g} {self.unit}: must be in {self.range_text()}"
+            return Problem(self.name, number, self.unit, f"in {self.range_text()}",
+                           self.description)
         return None
 
     def range_text(self) -> str:
@@ -123,31 +198,29 @@ TIRE_FIELDS: dict[str, FieldSpec] = {
 PRESSURE_SCALED_FIELDS = ("k_r1", "k_r2", "sidewall_shear")
 
 
-def tire_problems(values: Mapping[str, Any]) -> list[str]:
+def tire_problems(values: Mapping[str, Any]) -> list[Problem]:
     """Every problem with a set of tire data, checked field by field."""
-    problems = []
-    for name, spec in TIRE_FIELDS.items():
-        if name in values:
-            problem = spec.problem(values[name])
-            if problem:
-                problems.append(f"{problem} ({spec.description})")
-    unknown = sorted(set(values) - set(TIRE_FIELDS))
-    if unknown:
-        problems.append(f"unknown tire parameter(s) {unknown}; known: {sorted(TIRE_FIELDS)}")
+    problems = [problem for name, spec in TIRE_FIELDS.items() if name in values
+                for problem in [spec.problem(values[name])] if problem]
+    for name in sorted(set(values) - set(TIRE_FIELDS), key=str):
+        problems.append(Problem(str(name), values[name], "",
+                                f"one of the tire parameters {', '.join(TIRE_FIELDS)}",
+                                "unknown tire parameter"))
     if not problems:
         problems += _pressure_law_problems(values)
     return problems
 
 
-def _pressure_law_problems(values: Mapping[str, Any]) -> list[str]:
+def _pressure_law_problems(values: Mapping[str, Any]) -> list[Problem]:
     defaults = {f.name: f.default for f in fields(TireParameters)}
     exponent = float(values.get("sidewall_pressure_exponent",
                                 defaults["sidewall_pressure_exponent"]))
     pressure = float(values.get("inflation_pressure", defaults["inflation_pressure"]))
     if exponent > 0.0 and pressure == 0.0:
-        return [f"inflation_pressure = 0 Pa with sidewall_pressure_exponent = {exponent:g}: the "
-                "pressure law would leave the sidewall without stiffness; give a pressure > 0 "
-                "or set the exponent to 0"]
+        return [Problem("inflation_pressure", pressure, "Pa",
+                        "> 0 Pa, or sidewall_pressure_exponent = 0",
+                        f"with sidewall_pressure_exponent = {exponent:g} the pressure law would "
+                        "leave the sidewall without stiffness")]
     return []
 
 
@@ -272,32 +345,27 @@ _OP_UNITS = {"load_n": "N", "patch_length_m": "m", "speed_m_s": "m/s"}
 
 def operating_point_problems(
     values: Mapping[str, Any], tire: TireParameters | None = None
-) -> list[str]:
+) -> list[Problem]:
     """Problems with operating-point values on their own and, given ``tire``, for that tire."""
     problems = []
-    known = {f.name for f in fields(OperatingPoint)}
-    unknown = sorted(set(values) - known)
-    if unknown:
-        problems.append(f"unknown operating-point setting(s) {unknown}; known: {sorted(known)}")
+    known = [f.name for f in fields(OperatingPoint)]
+    for name in sorted(set(values) - set(known), key=str):
+        problems.append(Problem(str(name), values[name], "",
+                                f"one of the operating-point settings {', '.join(known)}",
+                                "unknown operating-point setting"))
     n = values.get("n_elements", 100)
     if isinstance(n, np.integer):
         n = int(n)
-    integral = isinstance(n, int) or (isinstance(n, (float, np.floating)) and float(n).is_integer())
-    if isinstance(n, bool) or not integral:
-        problems.append(
-            f"n_elements = {n!r}: must be an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]"
-        )
-    elif not MIN_ELEMENTS <= int(n) <= MAX_ELEMENTS:
-        problems.append(
-            f"n_elements = {n}: must be in [{MIN_ELEMENTS}, {MAX_ELEMENTS}] "
-            "(the 5-point bending stencil needs at least 8 nodes around the ring)"
-        )
+    integral = isinstance(n, int) or (isinstance(n, (float, np.floating))
+                                      and math.isfinite(n) and float(n).is_integer())
+    if isinstance(n, bool) or not integral or not MIN_ELEMENTS <= int(n) <= MAX_ELEMENTS:
+        problems.append(Problem("n_elements", n, "",
+                                f"an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]",
+                                ELEMENTS_REASON))
     load, patch = values.get("load_n"), values.get("patch_length_m")
     if load is not None and patch is not None:
-        problems.append(
-            f"load_n = {load!r} N and patch_length_m = {patch!r} m both given: "
-            "give one, the other is computed from it"
-        )
+        problems.append(Problem("patch_length_m", patch, "m", "unset when load_n is given",
+                                "the patch length is computed from the load"))
     max_patch = tire.max_patch_length_m if tire is not None else None
     for name, unit in _OP_UNITS.items():
         value = values.get(name)
@@ -306,16 +374,98 @@ def operating_point_problems(
         try:
             number = float(value)
         except (TypeError, ValueError):
-            number = math.nan
+            problems.append(Problem(name, value, "", f"a finite number >= 0 {unit}"))
+            continue
         if not math.isfinite(number) or number < 0:
-            problems.append(f"{name} = {value!r}: must be a finite number >= 0 {unit}")
+            problems.append(Problem(name, number, unit, f"a finite number >= 0 {unit}"))
+        elif name == "speed_m_s" and 0 < number < MIN_ROLLING_SPEED_M_S:
+            problems.append(Problem(
+                name, number, unit, f"0 or at least {MIN_ROLLING_SPEED_M_S:g} {unit}",
+                "slower is at rest to rounding, and the road would take days to cross the "
+                "patch"))
         elif name == "patch_length_m" and max_patch is not None and number > max_patch:
-            problems.append(
-                f"patch_length_m = {number:g} m: must be in [0, {max_patch:.4g}] m, at most "
-                f"{MAX_PATCH_FRACTION:g} of the circumference, beyond which the linear ring "
-                "is not credible"
-            )
+            problems.append(Problem(
+                name, number, unit, f"in [0, {max_patch:.4g}] m",
+                f"at most {MAX_PATCH_FRACTION:g} of the circumference, beyond which the linear "
+                "ring is not credible"))
     return problems
+
+
+#: The stiffest local term of the tire may exceed the ring's weakest support at most this many
+#: times: the static solution's relative error grows as the rounding unit times this ratio
+#: (about 2e-6 at the limit), and near 1e16 the factorisation breaks down. The masses are
+#: checked on the model's eigenvalues (tire_fmu.core.model.check_resolved).
+MAX_STIFFNESS_RATIO = 1e10
+#: What the conditioning check says (printf, so the native FMU renders the same): the reason;
+#: what is allowed for the stiff term's field; or for the weaker spring.
+CONDITIONING_REASON = ("the ring's support on k_r1 and k_r2 in series, %.3g N/m^2, may be at "
+                       "most %g times weaker than the stiffest term, %s (%.3g N/m^2), or double "
+                       "precision loses the static solution")
+CONDITIONING_STIFF_ALLOWED = ("at most %.3g %s with these springs on this mesh (fewer "
+                              "n_elements raise the bound)")
+CONDITIONING_WEAK_ALLOWED = "at least %.3g N/m^2 with these data"
+CONDITIONING_WEAK_LARGER = "larger, with the other spring above %.3g N/m^2"
+#: The stiff local terms the check weighs, in its order, by the field that sets each.
+STIFF_TERMS = {
+    "k_cw": "the tread on k_r1 and the contact stiffness k_cw",
+    "EI": "the tread's bending EI at the mesh's shortest wavelength",
+    "inflation_pressure": "the tread's inflation tension at the mesh's shortest wavelength",
+    "sidewall_shear": "the sidewall on k_r1 + k_r2 and its shear",
+}
+
+
+def conditioning_problems(tire: TireParameters, n_elements: int) -> list[Problem]:
+    """Whether double precision resolves the static response of ``tire`` on this mesh.
+
+    Local stiffnesses per metre of circumference, the FDM operators' largest symbols at the
+    node spacing ds: bending 16 EI/ds^4, tension 4 P/ds^2 (likewise the sidewall shear), the
+    springs as they are. The weakest support is the ring on k_r1 and k_r2 in series. The
+    problem names the side that is further from the default tire's (GL073A) on this mesh: an
+    upper bound for the stiff term, or a lower bound for the weaker spring.
+    """
+    ds = tire.R * 2.0 * math.pi / n_elements
+    limit = MAX_STIFFNESS_RATIO * tire.k_r1 * tire.k_r2 / (tire.k_r1 + tire.k_r2)
+    stiffest = max(_stiff_terms(tire, ds).items(), key=lambda item: item[1][0])
+    (field, what), (stiffness, bound) = stiffest
+    if stiffness <= limit:
+        return []
+    reference = TireParameters()
+    support = limit / MAX_STIFFNESS_RATIO
+    reference_support = reference.k_r1 * reference.k_r2 / (reference.k_r1 + reference.k_r2)
+    too_stiff = stiffness / _stiff_terms(reference, ds)[(field, what)][0]
+    reason = CONDITIONING_REASON % (support, MAX_STIFFNESS_RATIO, what, stiffness)
+    if too_stiff >= reference_support / support:
+        allowed = bound(limit)
+        if allowed is not None:
+            unit = TIRE_FIELDS[field].unit
+            return [Problem(field, getattr(tire, field), unit,
+                            CONDITIONING_STIFF_ALLOWED % (allowed, unit), reason)]
+    weak, other = ("k_r2", tire.k_r1) if tire.k_r2 <= tire.k_r1 else ("k_r1", tire.k_r2)
+    needed = stiffness / MAX_STIFFNESS_RATIO  # for the support in series
+    allowed = (CONDITIONING_WEAK_ALLOWED % (needed * other / (other - needed)) if other > needed
+               else CONDITIONING_WEAK_LARGER % needed)
+    return [Problem(weak, getattr(tire, weak), TIRE_FIELDS[weak].unit, allowed, reason)]
+
+
+def _stiff_terms(tire: TireParameters, ds: float) -> dict:
+    """(field, what) -> (local stiffness N/m^2, the field's value at which it reaches a limit,
+    or None when no value of the field alone would do)."""
+    def above(value):
+        return value if value > 0 else None
+
+    what = STIFF_TERMS
+    return {
+        ("k_cw", what["k_cw"]):
+            (tire.k_r1 + tire.k_cw, lambda limit: above(limit - tire.k_r1)),
+        ("EI", what["EI"]):
+            (16.0 * tire.EI / ds**4, lambda limit: limit * ds**4 / 16.0),
+        ("inflation_pressure", what["inflation_pressure"]):
+            (4.0 * tire.pretension_n / ds**2,
+             lambda limit: limit * ds**2 / (4.0 * tire.b * tire.R)),
+        ("sidewall_shear", what["sidewall_shear"]):
+            (tire.k_r1 + tire.k_r2 + 4.0 * tire.sidewall_shear / ds**2,
+             lambda limit: above((limit - tire.k_r1 - tire.k_r2) * ds**2 / 4.0)),
+    }
 
 
 def validate(

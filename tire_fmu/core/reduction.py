@@ -46,7 +46,7 @@ from .modal_form import (
     modal_frequency_response,
     real_block_form,
 )
-from .model import TireModel
+from .model import TireModel, check_resolved
 from .parameters import ParameterError, TireParameters
 
 METHODS = ("modal", "balanced")
@@ -71,31 +71,36 @@ class ReductionSettings:
     error_points: int = 400
 
     def __post_init__(self) -> None:
+        from .parameters import Problem
+
         problems = []
         if self.method not in METHODS:
-            problems.append(f"method = {self.method!r}: must be one of {METHODS}")
+            problems.append(Problem("method", self.method, "", f"one of {', '.join(METHODS)}"))
         if self.f_max_hz is not None and not (
-            isinstance(self.f_max_hz, (int, float)) and 0 < self.f_max_hz <= 1e7
+            _is_number(self.f_max_hz) and 0 < self.f_max_hz <= 1e7
         ):
-            problems.append(f"f_max_hz = {self.f_max_hz!r}: must be in (0, 1e7] Hz, or None "
-                            "for no frequency cut")
-        if not (0 <= self.contribution_threshold < 1):
-            problems.append(
-                f"contribution_threshold = {self.contribution_threshold!r}: must be in [0, 1)"
-            )
+            problems.append(Problem("f_max_hz", self.f_max_hz, "Hz", "in (0, 1e7] Hz",
+                                    "the highest natural frequency kept", unset=True))
+        if not (_is_number(self.contribution_threshold)
+                and 0 <= self.contribution_threshold < 1):
+            problems.append(Problem("contribution_threshold", self.contribution_threshold, "",
+                                    "in [0, 1)"))
         for name in ("n_modes", "n_states"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int)
                                       or not 1 <= value <= 100_000):
-                problems.append(f"{name} = {value!r}: must be an integer in [1, 100000] or None")
-        low, high = self.error_band_hz
-        if not 0 <= low < high:
-            problems.append(f"error_band_hz = {self.error_band_hz!r}: must be (low, high) Hz "
-                            "with 0 <= low < high")
-        if not 0 < self.target_error < 1:
-            problems.append(f"target_error = {self.target_error!r}: must be in (0, 1)")
-        if not 10 <= self.error_points <= 100_000:
-            problems.append(f"error_points = {self.error_points!r}: must be in [10, 100000]")
+                problems.append(Problem(name, value, "", "an integer in [1, 100000]",
+                                        unset=True))
+        band = self.error_band_hz
+        if not (isinstance(band, (tuple, list)) and len(band) == 2 and all(map(_is_number, band))
+                and 0 <= band[0] < band[1]):
+            problems.append(Problem("error_band_hz", band, "Hz",
+                                    "(low, high) with 0 <= low < high"))
+        if not (_is_number(self.target_error) and 0 < self.target_error < 1):
+            problems.append(Problem("target_error", self.target_error, "", "in (0, 1)"))
+        if not (isinstance(self.error_points, int) and 10 <= self.error_points <= 100_000):
+            problems.append(Problem("error_points", self.error_points, "",
+                                    "an integer in [10, 100000]"))
         if problems:
             raise ParameterError(problems)
 
@@ -252,6 +257,11 @@ class ReducedModel:
 UNCONTROLLABLE = 1e-12
 
 
+def _is_number(value) -> bool:
+    return (isinstance(value, (int, float, np.integer, np.floating))
+            and not isinstance(value, bool) and bool(np.isfinite(value)))
+
+
 def modal_decomposition(io: InputOutputModel) -> ModalForm:
     """The controllable modes of the full first-order model, one member per conjugate pair.
 
@@ -264,8 +274,27 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     needs the general (dense LAPACK) eigenproblem.
     """
     model = io.model
-    if model.speed_m_s != 0.0:
-        return diagonalise(io.a.toarray(), io.b, io.c)
+    # a mode of zero frequency, or one exactly critically damped, divides by zero: checked
+    # below, with a message, rather than warned about here
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if model.speed_m_s == 0.0:
+            decomp = _resting_decomposition(io)
+        else:
+            decomp = diagonalise(io.a.toarray(), io.b, io.c)
+    check_resolved(decomp.eigenvalues, model)
+    if not (np.all(np.isfinite(decomp.b)) and np.all(np.isfinite(decomp.c))):
+        from .parameters import ParameterError, Problem
+
+        raise ParameterError([Problem(
+            "beta", model.tire.beta, "s", "another value (or alpha another)",
+            "a mode is critically damped to the last bit, and its two eigenvalues coincide: "
+            "the modal form does not exist")])
+    return decomp
+
+
+def _resting_decomposition(io: InputOutputModel) -> ModalForm:
+    """The resting tire's modes, class by class of the mirror symmetry."""
+    model = io.model
     mass = model.mass.diagonal()
     bases = list(symmetry_bases(model.grid).values())
     stiffness = model.stiffness
@@ -321,7 +350,9 @@ def relative_contributions(decomp: ModalForm, io: InputOutputModel,
             forced[name] = ((decomp.b @ r) * dyn, (np.conj(decomp.b) @ r) * dyn_partner)
         own, partner = forced[name]
         c = decomp.c[row][:, None]
-        rows[k] = 0.5 * (c * own + np.conj(c) * partner) / np.abs(h_full)[None, :]
+        # where the full response is exactly zero a relative contribution means nothing
+        scale = np.where(np.abs(h_full) > 0.0, np.abs(h_full), np.inf)
+        rows[k] = 0.5 * (c * own + np.conj(c) * partner) / scale[None, :]
     return rows
 
 
@@ -537,11 +568,10 @@ def _select_modes(decomp: ModalForm, io, settings: ReductionSettings, full):
     cut = np.abs(shares[:, above, :].sum(axis=1))
     if cut.size and cut.max() > settings.contribution_threshold:
         warnings.warn(
-            f"f_max_hz = {settings.f_max_hz:g} Hz drops modes that alone leave a relative FRF "
-            f"error up to {cut.max():.3g} over {settings.error_band_hz[0]:g}-"
+            f"the frequency cut at {settings.f_max_hz:g} Hz drops modes that alone leave a "
+            f"relative FRF error up to {cut.max():.3g} over {settings.error_band_hz[0]:g}-"
             f"{settings.error_band_hz[1]:g} Hz (budget {settings.contribution_threshold:g}); "
-            "raise f_max_hz or leave it unset (the stiff contact-patch modes near 1 kHz matter "
-            "most)",
+            "raise the cut or remove it (the stiff contact-patch modes near 1 kHz matter most)",
             ReductionWarning,
             stacklevel=3,
         )

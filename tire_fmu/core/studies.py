@@ -19,7 +19,7 @@ from .complex_modal import complex_modes
 from .dispersion import Dispersion, body_frequencies, dispersion_relation
 from .modal import ANTISYMMETRIC, SYMMETRIC, ModalResult, real_modes
 from .model import SupercriticalSpeedWarning, build_model
-from .parameters import OperatingPoint, ParameterError, TireParameters
+from .parameters import OperatingPoint, ParameterError, Problem, TireParameters
 from .standing_waves import critical_speed
 
 Progress = Callable[[int, int], None]
@@ -37,11 +37,11 @@ PAPER_SPIN_RAD_S = 20.0 * np.pi
 PHASES = ("in", "out")
 
 
-def _rolling_setup(tire: TireParameters, damped: bool, nmax: int, problems: list[str]):
+def _rolling_setup(tire: TireParameters, damped: bool, nmax: int, problems: list[Problem]):
     """Check nmax, raise every problem found so far, and return the tire the rolling studies
     solve (undamped unless ``damped``) and the signed orders -nmax..nmax."""
     if nmax < 1:
-        problems.append(f"nmax = {nmax!r}: must be >= 1")
+        problems.append(Problem("nmax", nmax, "", "an integer >= 1"))
     if problems:
         raise ParameterError(problems)
     swept_tire = tire if damped else replace(tire, alpha=0.0, beta=0.0)
@@ -56,7 +56,8 @@ def _report(progress: Progress | None, done: int, total: int) -> None:
 def _orders(values: Iterable[int], name: str, low: int) -> np.ndarray:
     orders = np.atleast_1d(np.asarray(list(values), dtype=int))
     if orders.size == 0 or orders.min() < low:
-        raise ParameterError([f"{name} = {orders.tolist()}: must be non-empty integers >= {low}"])
+        raise ParameterError([Problem(name, orders.tolist(), "",
+                                      f"a non-empty list of integers >= {low}")])
     return orders
 
 
@@ -245,14 +246,12 @@ def patch_sweep(
     bad_phases = [p for p in phases if p not in PHASES]
     problems = []
     if lengths.size == 0 or not np.all(np.isfinite(lengths)):
-        problems.append(f"lengths_m = {lengths.tolist()}: must be finite numbers")
+        problems.append(Problem("lengths_m", lengths.tolist(), "m", "finite numbers"))
     elif lengths.min() < 0.0 or lengths.max() > tire.max_patch_length_m:
-        problems.append(
-            f"lengths_m from {lengths.min():g} to {lengths.max():g} m: must lie in "
-            f"[0, {tire.max_patch_length_m:.4g}] m for this tire"
-        )
+        problems.append(Problem("lengths_m", lengths.tolist(), "m",
+                                f"in [0, {tire.max_patch_length_m:.4g}] m", "for this tire"))
     if bad_phases or not phases:
-        problems.append(f"phases = {phases!r}: must be a non-empty subset of {PHASES}")
+        problems.append(Problem("phases", phases, "", f"a non-empty subset of {PHASES}"))
     if problems:
         raise ParameterError(problems)
 
@@ -375,19 +374,17 @@ def speed_sweep(
     critical = critical_speed(tire, n_elements).speed_m_s
     problems = []
     if speeds.size == 0 or not np.all(np.isfinite(speeds)) or speeds.min() < 0.0:
-        problems.append(f"speeds_m_s = {speeds.tolist()}: must be finite numbers >= 0 m/s")
+        problems.append(Problem("speeds_m_s", speeds.tolist(), "m/s",
+                                "finite numbers >= 0 m/s"))
     elif patch_length_m > 0.0 and speeds.max() >= critical and not allow_supercritical:
-        problems.append(
-            f"speeds_m_s up to {speeds.max():g} m/s: must stay below the critical speed "
-            f"{critical:.4g} m/s of this mesh (n_elements = {n_elements}); "
-            "allow_supercritical runs anyway"
-        )
+        problems.append(Problem(
+            "speeds_m_s", speeds.max(), "m/s", f"below the critical speed {critical:.4g} m/s "
+            "of this mesh", f"n_elements = {n_elements}; allow_supercritical runs anyway"))
     if not 0.0 <= patch_length_m <= tire.max_patch_length_m:
-        problems.append(
-            f"patch_length_m = {patch_length_m!r}: must be in [0, {tire.max_patch_length_m:.4g}] m"
-        )
+        problems.append(Problem("patch_length_m", patch_length_m, "m",
+                                f"in [0, {tire.max_patch_length_m:.4g}] m"))
     if not f_max_hz > 0.0:
-        problems.append(f"f_max_hz = {f_max_hz!r}: must be > 0 Hz")
+        problems.append(Problem("f_max_hz", f_max_hz, "Hz", "> 0 Hz"))
     swept_tire, orders = _rolling_setup(tire, damped, nmax, problems)
     curves = [dispersion_relation(swept_tire, orders, v / tire.R, n_elements) for v in speeds]
     loaded = None
@@ -460,7 +457,7 @@ def dispersion_at_speed(
     speed = paper_speed_m_s(tire) if speed_m_s is None else float(speed_m_s)
     problems = []
     if not np.isfinite(speed) or speed < 0.0:
-        problems.append(f"speed_m_s = {speed!r}: must be a finite number >= 0 m/s")
+        problems.append(Problem("speed_m_s", speed, "m/s", "a finite number >= 0 m/s"))
     swept_tire, orders = _rolling_setup(tire, damped, nmax, problems)
     loaded = None
     if patch_length_m > 0.0:

@@ -10,6 +10,13 @@ pythonfmu 0.7 writes no units, no ``UnitDefinitions`` and no ``ModelStructure/
 InitialUnknowns``; :func:`complete_model_description` adds them, and the build fails unless
 ``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does all of
 this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
+
+The Linux binary pythonfmu ships is its generic C++ wrapper, which crashes on a folder path
+with an escaped character, cannot return fmi2Error for a slave, reports every refused step as
+"terminated" and corrupts the heap at process exit. The build compiles ``pythonfmu_guard.c``
+(needs a C compiler) as the FMU's linux64 binary, in front of that wrapper, which it ships as
+``binaries/linux64/pythonfmu-export.so``; see that file for what it changes and why. The win64
+binary is pythonfmu's wrapper as it is (docs/fmu.md says what that host then gets).
 """
 
 from __future__ import annotations
@@ -17,10 +24,12 @@ from __future__ import annotations
 import json
 import re
 import shutil
+import subprocess
 import sys
 import tempfile
+import warnings
 import zipfile
-from importlib import metadata
+from importlib import metadata, resources
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -36,6 +45,17 @@ FALLBACK_REQUIREMENTS = ("numpy>=1.24", "scipy>=1.10")
 
 _PACKAGE_ROOT = Path(tire_fmu.__file__).parent
 _SLAVE_SOURCE = Path(__file__).with_name("slave.py")
+
+#: The FMU's linux64 binary: pythonfmu_guard.c, in front of pythonfmu's wrapper, shipped as
+GUARD_SOURCE = "pythonfmu_guard.c"
+WRAPPER_FILE = "pythonfmu-export.so"  # the name the guard loads, beside itself
+GUARD_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wall", "-Wextra",
+               # its exit handler must stay mapped, and its calls must stay its own
+               "-Wl,-z,nodelete", "-Wl,-Bsymbolic")
+
+
+class GuardMissingWarning(UserWarning):
+    """The FMU was built without pythonfmu_guard.c (no C compiler, or not on Linux)."""
 
 
 class FmuBuildError(RuntimeError):
@@ -101,7 +121,17 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                                             **capabilities))
         finally:
             _forget_build_imports(script)
-    complete_fmu(fmu, capabilities, units, real_starts)
+    with tempfile.TemporaryDirectory(prefix="pythonfmu_guard_") as staging:
+        try:
+            guard = compile_guard(Path(staging))
+        except FmuBuildError as error:
+            # still a working FMU, with pythonfmu's own wrapper and its failure modes
+            # (docs/fmu.md, "The win64 binary"): better than none
+            warnings.warn(f"{error}; the FMU's linux64 binary is pythonfmu's wrapper without "
+                          f"the guard (fmi2Error statuses, the exit fix), see docs/fmu.md",
+                          GuardMissingWarning, stacklevel=2)
+            guard = None
+        complete_fmu(fmu, capabilities, units, real_starts, guard)
     if validate:
         problems = validation_problems(fmu)
         if problems:
@@ -145,9 +175,37 @@ def _forget_build_imports(script: Path) -> None:
 
 # -- the model description -----------------------------------------------------------------
 
+def compile_guard(folder: Path) -> Path:
+    """``pythonfmu_guard.c`` compiled into ``folder`` (the FMI headers come from fmpy)."""
+    from ..native.builder import c_folder, toolchains
+
+    if not sys.platform.startswith("linux"):
+        raise FmuBuildError(f"the FMU's linux64 binary is compiled on Linux, and this is "
+                            f"{sys.platform}")
+    source = folder / GUARD_SOURCE
+    source.write_bytes(resources.files(__package__).joinpath(GUARD_SOURCE).read_bytes())
+    for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
+        (folder / header).write_bytes(c_folder().joinpath(header).read_bytes())
+    library = folder / "guard.so"
+    linux = toolchains()["linux64"]
+    if not linux.available():
+        raise FmuBuildError(f"building the FMU's linux64 binary needs a C compiler; "
+                            f"{linux.compiler} was not found (install gcc, or set CC)")
+    command = [linux.compiler, *linux.flags[:linux.flags.index("-shared")], *GUARD_FLAGS,
+               "-I", str(folder), "-o", str(library), str(source), "-ldl", "-lpthread"]
+    done = subprocess.run(command, capture_output=True, text=True)
+    if done.returncode != 0:
+        raise FmuBuildError(f"compiling {GUARD_SOURCE} failed ({' '.join(command)}):\n"
+                            + done.stderr.strip())
+    return library
+
+
 def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
-                 real_starts: dict[str, float] | None = None) -> None:
-    """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`."""
+                 real_starts: dict[str, float] | None = None, guard: Path | None = None
+                 ) -> None:
+    """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`;
+    with ``guard``, that library becomes the linux64 binary and pythonfmu's wrapper moves to
+    ``binaries/linux64/pythonfmu-export.so``."""
     fmu = Path(fmu)
     rewritten = fmu.with_suffix(".fmu.tmp")
     with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rewritten, "w",
@@ -156,6 +214,12 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
             data = source.read(item.filename)
             if item.filename == "modelDescription.xml":
                 data = complete_model_description(data, capabilities, units, real_starts)
+            elif guard is not None and re.fullmatch(r"binaries/linux64/[^/]+\.so",
+                                                    item.filename):
+                wrapper = zipfile.ZipInfo(f"binaries/linux64/{WRAPPER_FILE}", item.date_time)
+                wrapper.external_attr = item.external_attr
+                target.writestr(wrapper, data, compress_type=zipfile.ZIP_DEFLATED)
+                data = guard.read_bytes()
             target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
     rewritten.replace(fmu)
 

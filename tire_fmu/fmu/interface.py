@@ -13,7 +13,13 @@ from xml.etree import ElementTree
 from ..core.contact import DEFAULT_ZONE_LENGTH_M
 from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
 from ..core.io_model import OUTPUT_UNITS
-from ..core.parameters import DEFAULT_LOAD_N, TIRE_FIELDS, TireParameters
+from ..core.parameters import (
+    DEFAULT_LOAD_N,
+    MAX_ELEMENTS,
+    MIN_ELEMENTS,
+    TIRE_FIELDS,
+    TireParameters,
+)
 from ..core.reduction import ReductionSettings
 
 #: JSON file in an FMU's resources/ with the tire data its parameters start from (written by
@@ -36,6 +42,19 @@ def same_fixed_value(given: float, fixed: float) -> bool:
     :data:`FIXED_PARAMETER_REL_TOLERANCE` (exact for 0; never for nan)."""
     given, fixed = float(given), float(fixed)
     return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
+
+#: The longest communication step (s), about 11 days: the exact step's coefficients stay
+#: finite far beyond it, but not for any h (1e300 s overflows them).
+MAX_STEP_S = 1e6
+#: At speed the FMU keeps the road's history back to the patch's last node, one sample per
+#: step, and reads it through a delay line of that many steps: at most this many.
+MAX_DELAY_STEPS = 100_000
+
+#: The core's names for the inputs where the FMU variables differ, and the value that means
+#: "no limit" (the core's None), for rendering the core's parameter problems.
+FMU_NAMES = {"load_n": "load", "speed_m_s": "speed", "f_max_hz": "f_max",
+             "contact_zone_length_m": "contact_zone_length"}
+FMU_UNSET = "0"
 
 CAPABILITIES = {
     "canHandleVariableCommunicationStepSize": True,  # coefficients are cached per h
@@ -123,7 +142,8 @@ def _parameters() -> list[FmuVariable]:
                     "forward speed (spin = speed / R); below the mesh's critical speed unless "
                     "allow_supercritical", "--speed"),
         FmuVariable("n_elements", "Integer", "parameter", 100, "",
-                    "finite-difference nodes around the ring", "--elements"),
+                    f"finite-difference nodes around the ring; allowed [{MIN_ELEMENTS}, "
+                    f"{MAX_ELEMENTS}]", "--elements"),
         FmuVariable("f_max", "Real", "parameter", settings.f_max_hz or 0.0, "Hz",
                     "highest natural frequency of the modes the reduction keeps (0 = no cut: "
                     "the reduction's error budget decides)", "--f-max"),

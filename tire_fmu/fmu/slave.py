@@ -6,23 +6,25 @@ footprint for the load, the free ring's modes for the speed); ``do_step`` hands 
 to :class:`~tire_fmu.core.contact_dynamics.ContactSimulator`. No physics and no parameter
 ranges live here.
 
-How failures surface, given what pythonfmu 0.7 can express (see docs/fmu.md):
+How failures surface (docs/fmu.md has the table):
 
-- A Python exception that escapes becomes fmi2Fatal, and pythonfmu's C wrapper then releases
-  the Python instance while keeping its pointer, so the host may crash later. Nothing here
-  raises: every entry point catches and logs.
-- The wrapper returns fmi2Error only for C++ failures, never for a Python method, and every
-  hook except ``do_step`` returns fmi2OK. The one refusal a slave can make is ``do_step``
-  returning False: fmi2Discard. So rejected parameters are logged (each problem at status
-  error) when initialisation ends, and every ``doStep`` after that returns fmi2Discard with a
-  message saying why; a bad step (t off the last communication point, h <= 0, a non-finite
-  input) is refused the same way and leaves the state untouched, so the host may retry.
-- Messages reach the host only when it instantiates with ``loggingOn = true`` (pythonfmu's
-  logger filters every status on it).
+- Every call is checked against the FMI 2.0 co-simulation state machine (:data:`ALLOWED`), and
+  every value against what it may be. A refused call logs one message at status error that
+  names the call and the variable and value it refuses, and changes nothing.
+- The FMU's Linux binary (``pythonfmu_guard.c``, in front of pythonfmu's wrapper) returns
+  fmi2Error for a call during which the slave logged an error. pythonfmu's own wrapper (the
+  win64 binary) cannot: there only a refused ``do_step`` shows, as fmi2Discard.
+- Nothing raises: a Python exception that escapes becomes fmi2Fatal, and pythonfmu's wrapper
+  then releases the Python instance while keeping its pointer. Every entry point catches.
+- Messages are printf formats for the host (pythonfmu passes them as the format argument):
+  :func:`fmi_message` doubles ``%`` and FMI's escape ``#``. The slave never logs in
+  ``__init__``: pythonfmu delivers messages after each call, except after a reset's
+  constructor, and would deliver those to a freed logger when the instance is freed next.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
@@ -39,19 +41,20 @@ from tire_fmu.core.contact_dynamics import (
     ContactSettings,
     ContactSimulator,
     ContactState,
+    StateError,
     StepError,
     build_contact_model,
 )
 from tire_fmu.core.free_ring import RingTruncation
-from tire_fmu.core.parameters import (
-    TIRE_FIELDS,
-    ParameterError,
-    validate,
-)
+from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError, validate, value_text
 from tire_fmu.fmu.interface import (
     BAKED_PARAMETERS_FILE,
+    FMU_NAMES,
+    FMU_UNSET,
     IN_CONTACT,
     INPUTS,
+    MAX_DELAY_STEPS,
+    MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
     TIME_REL_TOLERANCE,
@@ -60,32 +63,70 @@ from tire_fmu.fmu.interface import (
 )
 from tire_fmu.fmu.spec import fmu_message
 
-_STATE_FORMAT = "tire_fmu.fmu-state/1"
-
-
 #: pythonfmu's variable class for each FMI type of the shared table
 _KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
+#: The variables' names, types and causalities (start values differ only by the tire data an
+#: FMU was built with, which the serialized states do not depend on).
+_TABLE = fmu_variables()
 
 
-class _Phase:
-    """Where the slave is in the FMI lifecycle, as far as it needs to know."""
+def fmi_message(text: str) -> str:
+    """``text`` as an FMI log message: a printf format (``%`` doubled) with FMI's variable
+    reference escape ``#`` doubled, so that the host shows exactly ``text``."""
+    return text.replace("%", "%%").replace("#", "##")
 
-    INSTANTIATED = "instantiated"  # parameters may change
-    INITIALISING = "initialisation mode"  # parameters may change
+
+class Phase:
+    """Where the slave is in the FMI 2.0 co-simulation state machine."""
+
+    INSTANTIATED = "instantiated"
+    INITIALISING = "initialisation mode"
     RUNNING = "running"
-    REJECTED = "rejected"  # the parameters were refused when initialisation ended
-    BROKEN = "broken"  # an FMU state could not be restored
     TERMINATED = "terminated"
+    ERROR = "error"  # the parameters were refused, or a step failed unexpectedly
+
+    ALL = (INSTANTIATED, INITIALISING, RUNNING, TERMINATED, ERROR)
+
+
+#: The calls each phase allows (FMI 2.0, section 4.3); getters and the FMU state functions
+#: are allowed in every phase. Which variable a set may change is decided per variable.
+ALLOWED = {
+    "fmi2SetupExperiment": {Phase.INSTANTIATED},
+    "fmi2EnterInitializationMode": {Phase.INSTANTIATED},
+    "fmi2ExitInitializationMode": {Phase.INITIALISING},
+    "fmi2DoStep": {Phase.RUNNING},
+    "fmi2Terminate": {Phase.RUNNING},
+    "fmi2SetReal": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
+    "fmi2SetInteger": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
+    "fmi2SetBoolean": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
+}
+
+#: What each phase is, for the message of a call it does not allow.
+_PHASE_TEXT = {
+    Phase.INSTANTIATED: "instantiated (call fmi2SetupExperiment and "
+                        "fmi2EnterInitializationMode first)",
+    Phase.INITIALISING: "in initialisation mode (call fmi2ExitInitializationMode first)",
+    Phase.RUNNING: "running (initialisation ended; fmi2Reset starts over)",
+    Phase.TERMINATED: "terminated (fmi2Reset starts over)",
+    Phase.ERROR: "in the error state",
+}
+
+_STATE_MAGIC = b"tire_fmu.fmu-state/2"
+_DIGEST_HEX = 64  # sha256
+_MAX_STATE_BYTES = 1 << 30
 
 
 @dataclass(frozen=True, eq=False)
 class _Snapshot:
-    """An FMU state: every variable's value, the simulator's state and the warning latch."""
+    """An FMU state: every variable's value, the phase, the simulator's state and flags."""
 
     values: tuple
     phase: str
+    why_not_running: str
+    start_time: float
     simulator: ContactState | None
     contact_warning_armed: bool
+    stale: bool
 
 
 @dataclass(frozen=True)
@@ -116,12 +157,12 @@ class TireModal(Fmi2Slave):
                                if v.causality == "parameter"]
         self._input_vrs = list(range(INPUTS.start, INPUTS.stop))
         self._output_vrs = list(range(OUTPUTS.start, OUTPUTS.stop))
-        self._phase = _Phase.INSTANTIATED
-        self._why_not_running = "the FMU is not initialised (call fmi2ExitInitializationMode)"
+        self._phase = Phase.INSTANTIATED
+        self._why_not_running = _PHASE_TEXT[Phase.INSTANTIATED]
         self._start_time = 0.0
         self._simulator: ContactSimulator | None = None
         self._built_for: tuple | None = None  # parameter values the simulator was built with
-        self._running: ContactSimulator | None = None  # the simulator while do_step may run
+        self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
         # Inputs set since the outputs were last computed: the next read recomputes the
         # forces at the current point with them (see ContactSimulator.outputs_with).
@@ -140,54 +181,108 @@ class TireModal(Fmi2Slave):
         # units go into the model description at build time, from the same table
         self.register_variable(_KINDS[v.type](v.name, **kwargs))
 
+    # -- messages ----------------------------------------------------------------------------
+    def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
+        super().log(fmi_message(msg), status, category)
+
+    def _refuse(self, call: str, why: str) -> bool:
+        """Log that ``call`` was refused and why (status error); nothing was changed."""
+        self.log(f"{call} refused: {why}; nothing changed", Fmi2Status.error)
+        return False
+
+    def _allowed(self, call: str) -> bool:
+        if self._phase in ALLOWED[call]:
+            return True
+        why = (self._why_not_running if self._phase == Phase.ERROR
+               else f"the FMU is {_PHASE_TEXT[self._phase]}")
+        return self._refuse(call, why)
+
+    def _fail(self, what: str, error: Exception) -> None:
+        """An unexpected failure: the FMU goes to the error state (reset or set a state)."""
+        self._phase = Phase.ERROR
+        self._why_not_running = (f"the FMU is in the error state: {what} failed "
+                                 f"({type(error).__name__}: {error}); reset it or set an FMU "
+                                 "state")
+        self.log(self._why_not_running, Fmi2Status.error)
+
+    def _warn_zone_edge(self, at_time: float) -> None:
+        self._contact_warning_armed = False
+        self.log(f"t = {at_time:.9g} s: the footprint reached the end of the contact zone, so "
+                 "road forces beyond it are missing; raise contact_zone_length (logged once "
+                 "until the footprint is back inside)", Fmi2Status.warning)
+
     # -- lifecycle ---------------------------------------------------------------------------
     def setup_experiment(self, start_time: float, stop_time: float | None = None,
                          tolerance: float | None = None) -> None:
-        self._start_time = float(start_time)
+        call = "fmi2SetupExperiment"
+        if not self._allowed(call):
+            return
+        if not math.isfinite(start_time):
+            self._refuse(call, f"startTime = {start_time!r} s: must be finite")
+        elif stop_time is not None and not (math.isfinite(stop_time) and stop_time >= start_time):
+            self._refuse(call, f"stopTime = {stop_time!r} s: must be finite and >= startTime "
+                         f"= {start_time!r} s")
+        elif tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0.0):
+            self._refuse(call, f"tolerance = {tolerance!r}: must be finite and > 0")
+        else:
+            self._start_time = float(start_time)
 
     def enter_initialization_mode(self) -> None:
-        if self._phase == _Phase.INSTANTIATED:
-            self._phase = _Phase.INITIALISING
+        if self._allowed("fmi2EnterInitializationMode"):
+            self._phase = Phase.INITIALISING
+            self._why_not_running = _PHASE_TEXT[Phase.INITIALISING]
 
     def exit_initialization_mode(self) -> None:
+        if not self._allowed("fmi2ExitInitializationMode"):
+            return
         try:
-            self._initialise(self._parameter_values())
-        except Exception as error:  # an escaping exception would be fmi2Fatal (see module doc)
-            why = f"building the model failed ({type(error).__name__}: {error})"
-            self.log(f"TireModal cannot run: {why}", Fmi2Status.error)
-            self._stop(_Phase.REJECTED, why + "; reset the FMU")
+            self._initialise()
+        except Exception as error:  # an escaping exception would be fmi2Fatal (module doc)
+            self._fail("building the model", error)
 
     def terminate(self) -> None:
-        self._stop(_Phase.TERMINATED, "the FMU was terminated (fmi2Terminate)")
+        if self._allowed("fmi2Terminate"):
+            self._phase = Phase.TERMINATED
+            self._why_not_running = f"the FMU is {_PHASE_TEXT[Phase.TERMINATED]}"
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        simulator = self._running
-        if simulator is None:
-            return self._discard(f"doStep at t = {current_time!r} s refused: "
-                                 f"{self._why_not_running}")
+        if self._phase != Phase.RUNNING:
+            return self._allowed("fmi2DoStep")
+        simulator = self._simulator
         now = simulator.time
-        if current_time != now:
-            if abs(current_time - now) > max(TIME_ABS_TOLERANCE_S, TIME_REL_TOLERANCE * abs(now)):
-                return self._discard(
-                    f"doStep at t = {current_time!r} s refused: the last communication point "
-                    f"is t = {now!r} s, and a step must start there (roll back with "
-                    "fmi2SetFMUstate to step from an earlier time); state unchanged")
-            simulator.time = current_time  # the host's clock is the reference: no drift
         values = self._values
-        try:  # the inputs are value references 0-3 (INPUTS); indexing beats *args here
+        if current_time != now:
+            # also refuses a non-finite t: every comparison with nan is false
+            if not abs(current_time - now) <= max(TIME_ABS_TOLERANCE_S,
+                                                  TIME_REL_TOLERANCE * abs(now)):
+                return self._refuse_step(
+                    current_time, step_size,
+                    f"t = {current_time!r} s: must be the last communication point t = {now!r} "
+                    "s (roll back with fmi2SetFMUstate to step from an earlier time)")
+        if step_size != self._checked_h:  # false for nan too: checked, and refused
+            problem = self._step_size_problem(step_size)
+            if problem:
+                return self._refuse_step(current_time, step_size, problem)
+            self._checked_h = step_size
+        simulator.time = current_time  # the host's clock is the reference: no drift
+        try:  # the inputs are value references 0-3 (INPUTS); the core checks their range
             outputs = simulator.step_values(step_size, values[0], values[1], values[2],
                                             values[3])
         except StepError as error:
             simulator.time = now
-            return self._discard(f"doStep at t = {current_time!r} s refused: {error}; "
-                                 "state unchanged")
+            return self._refuse_step(current_time, step_size, str(error))
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self._stop(_Phase.BROKEN, f"the step at t = {current_time!r} s failed "
-                       f"({type(error).__name__}: {error}); reset the FMU")
-            return self._discard(f"doStep at t = {current_time!r} s failed: {error}")
+            self._fail(f"the step from t = {current_time!r} s", error)
+            return False
+        if not math.isfinite(outputs[0] + outputs[1] + outputs[2] + outputs[3]):
+            self._fail(f"the step from t = {current_time!r} s",
+                       ArithmeticError(f"non-finite outputs {outputs}"))
+            return False
         values[OUTPUTS] = outputs
         self._stale = False
         values[IN_CONTACT] = outputs[2] > 0.0
+        # contact loss is physics (logged by nobody, in_contact says it); a footprint at the
+        # end of the zone is the model's limit, and warns
         if simulator.at_zone_edge():
             if self._contact_warning_armed:
                 self._warn_zone_edge(simulator.time)
@@ -195,13 +290,27 @@ class TireModal(Fmi2Slave):
             self._contact_warning_armed = True
         return True
 
+    def _step_size_problem(self, h: float) -> str | None:
+        if not 0.0 < h <= MAX_STEP_S:  # false for nan too
+            return f"step size h = {h!r} s: must be in (0, {MAX_STEP_S:g}] s"
+        reach = self._simulator.contact.windows.horizon_s
+        if not reach / h <= MAX_DELAY_STEPS:
+            return (f"step size h = {h!r} s: must be at least {reach / MAX_DELAY_STEPS:.3g} s "
+                    f"at this speed: the road reaches the contact zone's last node "
+                    f"{reach:.3g} s after its front, and the FMU keeps at most "
+                    f"{MAX_DELAY_STEPS} steps of its history")
+        return None
+
+    def _refuse_step(self, t: float, h: float, why: str) -> bool:
+        return self._refuse(f"fmi2DoStep(t = {t!r} s, h = {h!r} s)", why)
+
     # -- building the model ------------------------------------------------------------------
     def _parameter_values(self) -> tuple:
         return tuple(self._values[vr] for vr in self._parameter_vrs)
 
-    def _initialise(self, parameters: tuple) -> None:
-        """Validate every parameter, build the contact model, prepare the simulator."""
-        started = time.perf_counter()
+    def _build(self, parameters: tuple) -> tuple:
+        """Validate every parameter and build the contact model: (simulator, contact model,
+        warnings). Raises ParameterError listing every problem; changes nothing."""
         named = {self._table[vr].name: value for vr, value in zip(self._parameter_vrs,
                                                                    parameters)}
         tire_values = {name: named[name] for name in TIRE_FIELDS}
@@ -209,7 +318,7 @@ class TireModal(Fmi2Slave):
                      "speed_m_s": named["speed"],
                      "allow_supercritical": bool(named["allow_supercritical"]),
                      "contact_zone_length_m": named["contact_zone_length"]}
-        problems, contact = [], None
+        problems = []
         f_max, n_modes = named["f_max"], named["n_modes"]
         truncation = None
         try:
@@ -217,7 +326,7 @@ class TireModal(Fmi2Slave):
                                         n_modes=None if n_modes == 0 else int(n_modes),
                                         static_correction=bool(named["static_correction"]))
         except ParameterError as error:
-            problems += error.problems
+            problems += error.details
         settings = ContactSettings(law="linear" if named["linear_contact"] else "unilateral")
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -225,15 +334,34 @@ class TireModal(Fmi2Slave):
                 tire, op = validate(tire_values, op_values)
                 contact = build_contact_model(tire, op, truncation, settings)
             except ParameterError as error:
-                problems += error.problems
+                problems += error.details
             if problems:
-                self._reject(problems)
-                return
-        for warning in caught:
-            self.log(_fmu_wording(str(warning.message)), Fmi2Status.warning)
+                raise ParameterError(problems)
         simulator = ContactSimulator(contact, start_time=self._start_time)
+        return simulator, contact, [fmu_message(str(w.message)) for w in caught]
+
+    def _initialise(self) -> None:
+        started = time.perf_counter()
+        parameters = self._parameter_values()
+        try:
+            simulator, contact, said = self._build(parameters)
+        except ParameterError as error:
+            problems = _fmu_problems(error)
+            for number, problem in enumerate(problems, 1):
+                self.log(f"parameter problem {number}/{len(problems)}: {problem}",
+                         Fmi2Status.error)
+            self._phase = Phase.ERROR
+            self._why_not_running = (
+                f"the parameters were refused at fmi2ExitInitializationMode ({len(problems)} "
+                f"problem(s): {'; '.join(problems)}); reset the FMU and set valid parameters")
+            self.log("fmi2ExitInitializationMode refused: " + self._why_not_running,
+                     Fmi2Status.error)
+            return
+        for text in said:
+            self.log(text, Fmi2Status.warning)
         self._simulator, self._built_for = simulator, parameters
-        self._running, self._phase = simulator, _Phase.RUNNING
+        self._checked_h = math.nan
+        self._phase, self._why_not_running = Phase.RUNNING, ""
         self._contact_warning_armed = True
         self._show(simulator.output_dict(), simulator.in_contact)
         # inputs set during initialisation feed through on the first read
@@ -246,143 +374,131 @@ class TireModal(Fmi2Slave):
             f"{summary['patch_length_m'] * 100:.3g} cm at {summary['load_n']:.6g} N, deflection "
             f"{summary['deflection_m'] * 1e3:.4g} mm, vertical stiffness "
             f"{summary['vertical_stiffness_n_per_m']:.6g} N/m, critical speed "
-            f"{summary['critical_speed_m_s']:.4g} m/s, {settings.law} contact; core tire_fmu "
-            f"{tire_fmu.__version__} from {tire_fmu.__file__}")
-
-    def _reject(self, problems: list[str]) -> None:
-        for number, problem in enumerate(problems, 1):
-            self.log(f"parameter problem {number}/{len(problems)}: {_fmu_wording(problem)}",
-                     Fmi2Status.error)
-        self._stop(_Phase.REJECTED,
-                   f"the parameters were rejected when initialisation ended "
-                   f"({len(problems)} problem(s), logged then: "
-                   f"{'; '.join(_fmu_wording(p) for p in problems)}); reset the FMU and set "
-                   "valid parameters")
-        self.log("TireModal cannot run: " + self._why_not_running, Fmi2Status.error)
-
-    def _stop(self, phase: str, why: str) -> None:
-        self._phase, self._why_not_running, self._running = phase, why, None
+            f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact; core "
+            f"tire_fmu {tire_fmu.__version__} from {tire_fmu.__file__}")
 
     def _show(self, outputs: dict, in_contact: bool) -> None:
         for name, value in outputs.items():
             self._values[self._index[name]] = value
-        self._values[self._index["in_contact"]] = in_contact
-
-    # -- messages ----------------------------------------------------------------------------
-    def _discard(self, message: str) -> bool:
-        self.log(message, Fmi2Status.discard)
-        return False
-
-    def _warn_zone_edge(self, at_time: float) -> None:
-        self._contact_warning_armed = False
-        self.log(f"t = {at_time:.9g} s: the footprint reached the end of the contact zone, so "
-                 "road forces beyond it are missing; raise contact_zone_length (logged once "
-                 "until the footprint is back inside)", Fmi2Status.warning)
+        self._values[IN_CONTACT] = in_contact
 
     # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
     # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
     def _refresh(self) -> None:
         """Outputs at the current time for the inputs set since the last step."""
-        self._stale = False
         values = self._values
         try:
-            outputs = self._running.outputs_with(values[0], values[1], values[2], values[3])
+            outputs = self._simulator.outputs_with(values[0], values[1], values[2], values[3])
         except StepError as error:
-            self.log(f"outputs kept from the last step: {error}", Fmi2Status.warning)
+            self.log(f"the outputs at t = {self._simulator.time!r} s cannot follow the inputs "
+                     f"set there ({error}): they are those of the last step", Fmi2Status.error)
             return
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self.log(f"outputs kept from the last step: {type(error).__name__}: {error}",
-                     Fmi2Status.error)
+            self._fail("computing the outputs", error)
             return
+        self._stale = False
         values[OUTPUTS] = outputs
         values[IN_CONTACT] = outputs[2] > 0.0
 
     def get_real(self, vrs):
         if self._stale:
             self._refresh()
-        values = self._values
         if vrs == self._output_vrs:  # the host's usual call: the four forces, in order
-            return values[OUTPUTS]
-        try:
-            return [values[vr] for vr in vrs]
-        except (IndexError, TypeError):
-            return self._get_checked(vrs, float, math.nan)
+            return self._values[OUTPUTS]
+        return self._get("fmi2GetReal", vrs, "Real", float, 0.0)
 
     def get_integer(self, vrs):
-        return self._get_checked(vrs, int, 0)
+        return self._get("fmi2GetInteger", vrs, "Integer", int, 0)
 
     def get_boolean(self, vrs):
         if self._stale:
             self._refresh()
-        return self._get_checked(vrs, bool, False)
+        return self._get("fmi2GetBoolean", vrs, "Boolean", bool, False)
 
     def get_string(self, vrs):
         if vrs:
-            self.log(f"fmi2GetString{list(vrs)}: TireModal has no String variables",
-                     Fmi2Status.error)
+            self._refuse("fmi2GetString", f"value references {list(vrs)}: TireModal has no "
+                         "String variables")
         return ["" for _ in vrs]
 
+    def _get(self, call, vrs, kind, convert, fallback):
+        result = []
+        for vr in vrs:
+            problem = self._reference_problem(vr, kind)
+            if problem:
+                self.log(f"{call} refused for value reference {vr!r}: {problem}; "
+                         f"{fallback!r} returned", Fmi2Status.error)
+                result.append(fallback)
+            else:
+                result.append(convert(self._values[vr]))
+        return result
+
+    def _reference_problem(self, vr, kind: str) -> str | None:
+        if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
+            return f"it does not exist (TireModal has {len(self._table)} variables)"
+        v = self._table[vr]
+        if v.type != kind:
+            return f"{v.name} has FMI type {v.type}: use fmi2Get{v.type} and fmi2Set{v.type}"
+        return None
+
     def set_real(self, vrs, values):
-        if vrs == self._input_vrs:  # the host's usual call: all four inputs, in order
+        if vrs == self._input_vrs and self._phase == Phase.RUNNING:  # the host's usual call
             self._values[INPUTS] = values
-            self._stale = self._running is not None
+            self._stale = True
         else:
-            for vr, value in zip(vrs, values):
-                self._set(vr, value, "Real")
+            self._set("fmi2SetReal", vrs, values, "Real")
 
     def set_integer(self, vrs, values):
-        for vr, value in zip(vrs, values):
-            self._set(vr, value, "Integer")
+        self._set("fmi2SetInteger", vrs, values, "Integer")
 
     def set_boolean(self, vrs, values):
-        for vr, value in zip(vrs, values):
-            self._set(vr, bool(value), "Boolean")
+        self._set("fmi2SetBoolean", vrs, [bool(v) for v in values], "Boolean")
 
     def set_string(self, vrs, values):
         if vrs:
-            self.log(f"fmi2SetString{list(vrs)}: TireModal has no String variables",
-                     Fmi2Status.error)
+            self._refuse("fmi2SetString", f"value references {list(vrs)}: TireModal has no "
+                         "String variables")
 
-    def _get_checked(self, vrs, convert, fallback):
-        result = []
-        for vr in vrs:
-            try:
-                result.append(convert(self._values[vr]))
-            except (IndexError, TypeError, ValueError, OverflowError):
-                self.log(f"value reference {vr!r} cannot be read as {convert.__name__} "
-                         f"(TireModal has {len(self._values)} variables)", Fmi2Status.error)
-                result.append(fallback)
-        return result
-
-    def _set(self, vr, value, kind) -> None:
-        if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
-            self.log(f"value reference {vr!r} does not exist (TireModal has "
-                     f"{len(self._table)} variables); ignored", Fmi2Status.error)
+    def _set(self, call, vrs, values, kind) -> None:
+        """Set every value or, if one is refused, none."""
+        if not self._allowed(call):
             return
-        v = self._table[vr]
-        if v.type != kind:
-            self.log(f"{v.name} has FMI type {v.type}: set it with fmi2Set{v.type}; "
-                     "ignored", Fmi2Status.error)
-        elif v.causality == "output":
-            self.log(f"{v.name} is an output; ignored", Fmi2Status.error)
-        elif v.causality == "parameter" and self._phase not in (
-                _Phase.INSTANTIATED, _Phase.INITIALISING):
-            self.log(f"{v.name} = {value!r} ignored: parameters are fixed after "
-                     "initialisation (they define the reduced basis); reset the FMU to change "
-                     "them", Fmi2Status.error)
-        else:
+        for vr, value in zip(vrs, values):
+            problem = self._reference_problem(vr, kind)
+            if problem:
+                self._refuse(call, f"value reference {vr!r}: {problem}")
+                return
+            v = self._table[vr]
+            problem = self._value_problem(v)
+            if problem:
+                self._refuse(call, f"{v.name} = {value_text(value, v.unit)}: {problem}")
+                return
+        for vr, value in zip(vrs, values):
             self._values[vr] = value
+            v = self._table[vr]
             if v.causality == "input":
-                self._stale = self._running is not None
-            if v.name == "load":  # the outputs echo the static load until initialised
+                self._stale = self._phase == Phase.RUNNING
+            elif v.name == "load" and math.isfinite(value):
+                # the outputs echo the static load until initialised
                 self._show({"rim_Fz": value, "contact_Fz": value}, value > 0)
+
+    def _value_problem(self, v: FmuVariable) -> str | None:
+        """Why ``v`` cannot be set now, or None."""
+        if v.causality == "output":
+            return "it is an output"
+        if v.causality == "parameter" and self._phase not in (Phase.INSTANTIATED,
+                                                              Phase.INITIALISING):
+            return ("parameters are fixed after initialisation (they define the reduced "
+                    "basis); reset the FMU to change them")
+        return None
 
     # -- FMU state ---------------------------------------------------------------------------
     def _get_fmu_state(self):
         try:
             simulator = self._simulator.get_state() if self._simulator is not None else None
-            return _Snapshot(tuple(self._values), self._phase, simulator,
-                             self._contact_warning_armed)
+            return _Snapshot(tuple(self._values), self._phase, self._why_not_running,
+                             self._start_time, simulator, self._contact_warning_armed,
+                             self._stale)
         except Exception as error:  # an escaping exception would be fmi2Fatal
             self.log(f"fmi2GetFMUstate failed: {type(error).__name__}: {error}",
                      Fmi2Status.error)
@@ -392,65 +508,157 @@ class TireModal(Fmi2Slave):
         try:
             self._restore(state)
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self._refuse_state(f"{type(error).__name__}: {error}")
+            self._refuse("fmi2SetFMUstate", f"{type(error).__name__}: {error}")
 
     def _restore(self, state) -> None:
+        """Everything is checked, and the model built if need be, before anything changes."""
+        call = "fmi2SetFMUstate"
         if isinstance(state, _InvalidState):
-            self._refuse_state(state.reason)
+            self._refuse(call, state.reason)
             return
-        if not isinstance(state, _Snapshot) or len(state.values) != len(self._values):
-            self._refuse_state(f"it is not a TireModal state ({type(state).__name__})")
+        if not isinstance(state, _Snapshot):
+            self._refuse(call, f"it is not a TireModal state ({type(state).__name__})")
             return
         parameters = tuple(state.values[vr] for vr in self._parameter_vrs)
-        if state.simulator is not None and parameters != self._built_for:
-            # a state of other parameters, or restored into a fresh instance: build its model
-            self._initialise(parameters)
-            if self._simulator is None or self._built_for != parameters:
-                self._refuse_state("its parameters do not build a model (logged above)")
-                return
+        simulator, built_for = None, None
         if state.simulator is not None:
-            self._simulator.set_state(state.simulator)
+            simulator, built_for = self._simulator, self._built_for
+            if parameters != self._built_for:
+                # a state of other parameters, or restored into a fresh instance: build its
+                # model (with the state's start time, which the simulator state overrides)
+                try:
+                    simulator = self._build(parameters)[0]
+                except ParameterError as error:
+                    self._refuse(call, "its parameters do not build a model: "
+                                 + "; ".join(_fmu_problems(error)))
+                    return
+                built_for = parameters
+            try:
+                simulator.set_state(state.simulator)  # checks the shapes before it changes
+            except StateError as error:
+                self._refuse(call, str(error))
+                return
+        self._simulator, self._built_for = simulator, built_for
+        self._checked_h = math.nan
         self._values[:] = state.values
+        self._phase, self._why_not_running = state.phase, state.why_not_running
+        self._start_time = state.start_time
         self._contact_warning_armed = state.contact_warning_armed
-        self._stale = False  # the snapshot's outputs belong to its inputs
-        self._phase = state.phase
-        self._running = self._simulator if state.phase == _Phase.RUNNING else None
-        if state.phase != _Phase.RUNNING:
-            self._why_not_running = (f"the restored FMU state was taken in phase "
-                                     f"'{state.phase}'")
-
-    def _refuse_state(self, reason: str) -> None:
-        self._stop(_Phase.BROKEN, f"an FMU state could not be restored ({reason}); set a valid "
-                   "state or reset the FMU")
-        self.log(f"fmi2SetFMUstate refused: {reason}; doStep returns fmi2Discard until a valid "
-                 "state is set or the FMU is reset", Fmi2Status.error)
+        self._stale = state.stale and simulator is not None  # nothing to feed through else
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
-        # JSON header, a newline (JSON escapes its own), then the simulator's npz bytes: no
-        # pickle, so a state file cannot run code when read.
+        # A line with the format and a sha256 of the rest, a JSON header, a newline (JSON
+        # escapes its own), then the simulator's npz bytes: no pickle, so a state file cannot
+        # run code when read, and the checksum refuses any byte changed, cut or appended.
         if isinstance(state, _InvalidState):
-            header = {"format": _STATE_FORMAT, "invalid": state.reason}
-            return json.dumps(header).encode() + b"\n"
-        header = {"format": _STATE_FORMAT, "values": list(state.values), "phase": state.phase,
-                  "contact_warning_armed": state.contact_warning_armed}
-        simulator = state.simulator.to_bytes() if state.simulator is not None else b""
-        return json.dumps(header).encode() + b"\n" + simulator
+            header, payload = {"invalid": state.reason}, b""
+        else:
+            payload = state.simulator.to_bytes() if state.simulator is not None else b""
+            header = {"values": list(state.values), "phase": state.phase,
+                      "why_not_running": state.why_not_running, "start_time": state.start_time,
+                      "contact_warning_armed": state.contact_warning_armed,
+                      "stale": state.stale, "simulator_bytes": len(payload)}
+        body = json.dumps(header, sort_keys=True).encode() + b"\n" + payload
+        return _STATE_MAGIC + b" " + hashlib.sha256(body).hexdigest().encode() + b"\n" + body
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes):
         try:
-            head, _, simulator = bytes(data).partition(b"\n")
-            header = json.loads(head.decode())
-            if header.get("format") != _STATE_FORMAT:
-                return _InvalidState(f"unknown state format {header.get('format')!r}")
-            if "invalid" in header:
-                return _InvalidState(header["invalid"])
-            return _Snapshot(tuple(header["values"]), header["phase"],
-                             ContactState.from_bytes(simulator) if simulator else None,
-                             bool(header["contact_warning_armed"]))
+            return _decode_state(bytes(data))
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            return _InvalidState(f"the serialized bytes are not a TireModal state ({error})")
+            return _InvalidState(f"the bytes are not a TireModal state "
+                                 f"({type(error).__name__}: {error})")
+
+
+def _decode_state(data: bytes) -> _Snapshot | _InvalidState:
+    """Check serialized state bytes in full: format, checksum, then every field."""
+    magic = _STATE_MAGIC + b" "
+    if not data.startswith(magic):
+        return _InvalidState(f"they do not start with {_STATE_MAGIC.decode()!r} (they start "
+                             f"with {data[:len(magic)]!r}): not a TireModal state of this "
+                             "version")
+    if len(data) > _MAX_STATE_BYTES:
+        return _InvalidState(f"{len(data)} bytes: a TireModal state is far smaller")
+    digest, newline, body = data[len(magic):].partition(b"\n")
+    if not newline or hashlib.sha256(body).hexdigest().encode() != digest:
+        return _InvalidState("the checksum does not match: the bytes were changed, cut or "
+                             "extended after fmi2SerializeFMUstate")
+    head, _, payload = body.partition(b"\n")
+    header = json.loads(head.decode())
+    if not isinstance(header, dict):
+        return _InvalidState("the header is not a JSON object")
+    if "invalid" in header:
+        return _InvalidState(str(header["invalid"]))
+    problems = _header_problems(header)
+    if not problems and header["simulator_bytes"] != len(payload):
+        problems.append(f"the header announces {header['simulator_bytes']} bytes of simulator "
+                        f"state and {len(payload)} follow")
+    simulator = None
+    if not problems and payload:
+        simulator, problem = _simulator_state(payload)
+        if problem:
+            problems.append(problem)
+    if not problems and simulator is None and header["phase"] in (Phase.RUNNING,
+                                                                   Phase.TERMINATED):
+        problems.append(f"phase {header['phase']!r} needs a simulator state and there is none")
+    if problems:
+        return _InvalidState("; ".join(problems))
+    values = tuple(float(x) if v.type == "Real" else x
+                   for v, x in zip(_TABLE, header["values"]))
+    phase = next(p for p in Phase.ALL if p == header["phase"])  # the constant itself
+    return _Snapshot(values, phase, header["why_not_running"],
+                     float(header["start_time"]), simulator, header["contact_warning_armed"],
+                     header["stale"])
+
+
+def _header_problems(header: dict) -> list[str]:
+    problems = []
+    expected = {"values": list, "phase": str, "why_not_running": str, "start_time": float,
+                "contact_warning_armed": bool, "stale": bool, "simulator_bytes": int}
+    for key, kind in expected.items():
+        value = header.get(key)
+        ok = (isinstance(value, (int, float)) and not isinstance(value, bool)
+              and math.isfinite(value)) if kind is float else (
+            isinstance(value, kind) and not (kind is int and isinstance(value, bool)))
+        if not ok:
+            problems.append(f"{key} = {value!r}: must be {kind.__name__}"
+                            + (" and finite" if kind is float else ""))
+    unknown = sorted(set(header) - set(expected))
+    if unknown:
+        problems.append(f"unknown header fields {unknown}")
+    if problems:
+        return problems
+    if header["phase"] not in Phase.ALL:
+        problems.append(f"phase = {header['phase']!r}: must be one of {list(Phase.ALL)}")
+    values = header["values"]
+    if len(values) != len(_TABLE):
+        return problems + [f"{len(values)} values: TireModal has {len(_TABLE)} variables"]
+    for v, value in zip(_TABLE, values):
+        problem = _state_value_problem(v, value)
+        if problem:
+            problems.append(problem)
+    return problems
+
+
+def _state_value_problem(v: FmuVariable, value) -> str | None:
+    if v.type == "Boolean":
+        return None if isinstance(value, bool) else f"{v.name} = {value!r}: must be a Boolean"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return f"{v.name} = {value!r}: must be a number"
+    if v.type == "Integer" and not (isinstance(value, int) and -2**31 <= value < 2**31):
+        return f"{v.name} = {value!r}: must be an integer of 32 bits (fmi2Integer)"
+    if v.causality == "output" and not math.isfinite(value):
+        return f"{v.name} = {value!r}: an output must be finite"
+    return None  # inputs and parameters are checked when they are used, as when set
+
+
+def _simulator_state(payload: bytes) -> tuple[ContactState | None, str | None]:
+    """The simulator's part, checked by the core (format, checksum, finite values)."""
+    try:
+        return ContactState.from_bytes(payload), None
+    except StateError as error:
+        return None, str(error)
 
 
 def _baked_parameter_values(resources: str | None) -> dict | None:
@@ -464,6 +672,6 @@ def _baked_parameter_values(resources: str | None) -> dict | None:
         return {str(k): float(v) for k, v in json.load(stream).items()}
 
 
-def _fmu_wording(message: str) -> str:
-    """A core message in the FMU's variable names (the wording the native FMU uses too)."""
-    return fmu_message(message)
+def _fmu_problems(error: ParameterError) -> list[str]:
+    """The problems in the FMU's names, in the fields and in the core's words around them."""
+    return [fmu_message(text) for text in error.render(FMU_NAMES, FMU_UNSET)]

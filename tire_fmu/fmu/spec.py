@@ -31,6 +31,8 @@ from ..core import (
     stepping,
 )
 from .interface import (
+    FMU_NAMES,
+    FMU_UNSET,
     IN_CONTACT,
     INPUTS,
     OUTPUTS,
@@ -41,14 +43,7 @@ from .interface import (
 )
 
 #: Core names -> the FMU's names for the same thing, applied to every core message an FMU logs.
-FMU_WORDING = (
-    ("load_n", "load"),
-    ("speed_m_s", "speed"),
-    ("f_max_hz", "f_max"),
-    ("contact_zone_length_m", "contact_zone_length"),
-)
-#: The FMU's spelling of "no limit" for f_max and n_modes (the core's is None).
-FMU_UNSET = "0"
+FMU_WORDING = tuple(FMU_NAMES.items())
 
 #: Numbers both runtimes use, by the C name they get in spec.h.
 CONSTANTS: dict[str, float | int] = {
@@ -90,41 +85,72 @@ CONSTANTS: dict[str, float | int] = {
     "MAX_ELEMENTS": parameters.MAX_ELEMENTS,
     "F_MAX_LIMIT_HZ": free_ring.F_MAX_LIMIT_HZ,
     "N_MODES_LIMIT": free_ring.N_MODES_LIMIT,
+    "MIN_ROLLING_SPEED_M_S": parameters.MIN_ROLLING_SPEED_M_S,
+    # what double precision resolves
+    "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
+    "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
 }
 
-#: Problem messages, as printf templates. Arguments: ``%s`` takes a value written as Python's
-#: ``repr`` would (the C has py_repr for it) or a text; ``%g`` and friends a number.
+#: Problem messages, as printf templates. A value is passed as the core's
+#: :func:`~tire_fmu.core.parameters.value_text` writes it (the C has value_text for it, with
+#: the unit), ``%g`` and friends take numbers. Each is the core's own text for that problem
+#: (tests/test_native_fmu.py renders both and compares).
 MESSAGES: dict[str, str] = {
-    # tire data (TIRE_FIELDS): name, repr(value) or value, [unit,] range text, description
-    "FIELD_NOT_FINITE": "%s = %s: must be finite, in %s (%s)",
-    "FIELD_RANGE": "%s = %g %s: must be in %s (%s)",
-    "PRESSURE_LAW": "inflation_pressure = 0 Pa with sidewall_pressure_exponent = %g: the "
-                    "pressure law would leave the sidewall without stiffness; give a pressure "
-                    "> 0 or set the exponent to 0",
+    # how any problem reads: name, value text, what is allowed; then the reason
+    "PROBLEM": parameters.PROBLEM_TEMPLATE,
+    "REASON": parameters.REASON_TEMPLATE,
+    # tire data (TIRE_FIELDS): name, value text, range text, description
+    "FIELD_NOT_FINITE": "%s = %s: must be a finite number in %s (%s)",
+    "FIELD_RANGE": "%s = %s: must be in %s (%s)",
+    "PRESSURE_LAW": "inflation_pressure = 0 Pa: must be > 0 Pa, or sidewall_pressure_exponent = "
+                    "0 (with sidewall_pressure_exponent = %g the pressure law would leave the "
+                    "sidewall without stiffness)",
     # operating point
-    "ELEMENTS_RANGE": "n_elements = %d: must be in [%d, %d] (the 5-point bending stencil needs "
-                      "at least 8 nodes around the ring)",
+    "ELEMENTS_RANGE": f"n_elements = %d: must be an integer in [%d, %d] "
+                      f"({parameters.ELEMENTS_REASON})",
     "NOT_NONNEGATIVE": "%s = %s: must be a finite number >= 0 %s",
+    "MIN_ROLLING_SPEED": "speed = %s: must be 0 or at least %g m/s (slower is at rest to "
+                         "rounding, and the road would take days to cross the patch)",
     # truncation
-    "F_MAX_RANGE": "f_max = %s: must be in (0, %g] Hz, or 0 for no frequency cut",
-    "N_MODES_RANGE": "n_modes = %d: must be an integer in [1, %d] or 0",
+    "F_MAX_RANGE": "f_max = %s: must be in (0, %g] Hz, or 0 for no limit",
+    "N_MODES_RANGE": "n_modes = %d: must be an integer in [1, %d], or 0 for no limit",
+    # the conditioning of the static solution (parameters.conditioning_problems)
+    "CONDITIONING_REASON": parameters.CONDITIONING_REASON,
+    "CONDITIONING_STIFF_ALLOWED": parameters.CONDITIONING_STIFF_ALLOWED,
+    "CONDITIONING_WEAK_ALLOWED": parameters.CONDITIONING_WEAK_ALLOWED,
+    "CONDITIONING_WEAK_LARGER": parameters.CONDITIONING_WEAK_LARGER,
+    **{f"STIFF_TERM_{field.upper()}": what for field, what in parameters.STIFF_TERMS.items()},
     # what needs the model
-    "SUPERCRITICAL": "speed = %g m/s: must be below the critical (standing-wave) speed %.4g m/s "
+    "SUPERCRITICAL": "speed = %s: must be below the critical (standing-wave) speed %.4g m/s "
                      "of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > "
                      "0 raises it, allow_supercritical runs anyway",
     "NEAR_CRITICAL": "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): "
                      "sidewall modes near zero frequency dominate the response",
-    "ZONE_RANGE": "contact_zone_length = %s m: must be in (0, %.4g] m (at most 60 degrees of "
+    "ZONE_RANGE": "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of "
                   "the ring either side of the contact centre)",
-    "ZONE_TOO_SHORT": "contact_zone_length = %g m holds only the centre node of a mesh of %d "
-                      "elements: must be at least %.4g m (one node either side), or refine the "
-                      "mesh",
-    "LOAD_RANGE": "load = %g N: must be in [0, %.6g] N for this tire and mesh; at %.6g N "
+    "ZONE_TOO_SHORT": "contact_zone_length = %s: must be at least %.4g m (one node either "
+                      "side), or refine the mesh (it holds only the centre node of a mesh of %d "
+                      "elements)",
+    "LOAD_RANGE": "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N "
                   "(deflection %.3g mm) %s",
     "LOAD_REASON_ZONE": "its footprint reaches the end of the contact zone (raise "
                         "contact_zone_length)",
     "LOAD_REASON_LENGTH": "its footprint reaches %.4g m, beyond which the linear ring is not "
                           "credible",
+    # the eigenvalues double precision resolves (model.check_resolved)
+    "RESOLVED_ALLOWED": model.RESOLVED_ALLOWED,
+    "RESOLVED_REASON": model.RESOLVED_REASON,
+    "RESOLVED_SPREAD": model.RESOLVED_SPREAD,
+    "RESOLVED_SPREAD_UNBOUNDED": model.RESOLVED_SPREAD_UNBOUNDED,
+    **{f"RESOLVED_{key}_{field.upper()}": text
+       for field, way, what in model.RESOLVED_CANDIDATES
+       for key, text in (("WAY", way), ("WHAT", what))},
+    # the native FMU only: its quartic solver for an order did not converge (LAPACK, in the
+    # Python FMU, may still solve it)
+    "RING_NOT_COMPUTED": "the native FMU could not compute the free ring's modes for these "
+                         "parameters (the roots of an order did not converge); the fastest "
+                         "modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them "
+                         "tractable, or the Python FMU (TireModal.fmu) may solve them",
     "PROBLEM_LINE": "parameter problem %d/%d: %s",
     # the running FMU
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "

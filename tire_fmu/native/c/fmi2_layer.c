@@ -500,7 +500,14 @@ static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueRe
         }
         v = &SPEC_VARIABLES[vr[i]];
         if (v->causality == SPEC_INPUT && fabs(in[i]) <= input_limit(v)) continue;  /* hot */
-        number(text, in[i]);
+        /* as the Python FMU shows it (parameters.value_text) */
+        if (type == SPEC_BOOLEAN) {
+            snprintf(text, sizeof text, "%s", in[i] != 0.0 ? "True" : "False");
+        } else if (type == SPEC_INTEGER) {
+            snprintf(text, sizeof text, "%d", (int)in[i]);
+        } else {
+            value_text(in[i], v->unit, text, sizeof text);
+        }
         if (v->causality == SPEC_OUTPUT) {
             log_message(inst, fmi2Error, "%s refused: %s = %s: it is an output; nothing "
                         "changed", call, v->name, text);

@@ -397,3 +397,19 @@ uint64_t fnv1a(uint64_t hash, const unsigned char* bytes, size_t count)
     }
     return hash;
 }
+
+void value_text(double x, const char* unit, char* text, size_t size)
+{
+    char buffer[40];
+    if (!isfinite(x)) {
+        py_repr(x, text, size);
+        return;
+    }
+    snprintf(buffer, sizeof buffer, "%g", x);
+    if (strtod(buffer, NULL) != x) py_repr(x, buffer, sizeof buffer);
+    if (unit != NULL && unit[0] != '\0') {
+        snprintf(text, size, "%s %s", buffer, unit);
+    } else {
+        snprintf(text, size, "%s", buffer);
+    }
+}

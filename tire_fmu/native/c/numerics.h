@@ -56,6 +56,9 @@ double brentq(scalar_function f, void* data, double xa, double xb, double xtol, 
 
 /* x as Python's repr() writes it (the shortest text that reads back to x). */
 void py_repr(double x, char* text, size_t size);
+/* a value as the core's messages show it (parameters.value_text): %g when that reads back
+ * exactly, else the shortest repr; then the unit, for a finite value */
+void value_text(double x, const char* unit, char* text, size_t size);
 
 /* 64-bit FNV-1a over bytes, continuing from hash (start with FNV_OFFSET). */
 #define FNV_OFFSET UINT64_C(14695981039346656037)

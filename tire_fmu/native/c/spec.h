@@ -32,9 +32,12 @@
 #define SPEC_SCAN_POINTS 801
 #define SPEC_ROOT_TOLERANCE 1e-12
 #define SPEC_MIN_ELEMENTS 8
-#define SPEC_MAX_ELEMENTS 20000
+#define SPEC_MAX_ELEMENTS 1600
 #define SPEC_F_MAX_LIMIT_HZ 10000000.0
 #define SPEC_N_MODES_LIMIT 100000
+#define SPEC_MIN_ROLLING_SPEED_M_S 0.001
+#define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
+#define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
 #define SPEC_BLOCK_INPUTS_FIRST 0
 #define SPEC_BLOCK_N_INPUTS 4
@@ -160,20 +163,42 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
     "logAll",
 };
 
-#define SPEC_MSG_FIELD_NOT_FINITE "%s = %s: must be finite, in %s (%s)"
-#define SPEC_MSG_FIELD_RANGE "%s = %g %s: must be in %s (%s)"
-#define SPEC_MSG_PRESSURE_LAW "inflation_pressure = 0 Pa with sidewall_pressure_exponent = %g: the pressure law would leave the sidewall without stiffness; give a pressure > 0 or set the exponent to 0"
-#define SPEC_MSG_ELEMENTS_RANGE "n_elements = %d: must be in [%d, %d] (the 5-point bending stencil needs at least 8 nodes around the ring)"
+#define SPEC_MSG_PROBLEM "%s = %s: must be %s"
+#define SPEC_MSG_REASON "%s (%s)"
+#define SPEC_MSG_FIELD_NOT_FINITE "%s = %s: must be a finite number in %s (%s)"
+#define SPEC_MSG_FIELD_RANGE "%s = %s: must be in %s (%s)"
+#define SPEC_MSG_PRESSURE_LAW "inflation_pressure = 0 Pa: must be > 0 Pa, or sidewall_pressure_exponent = 0 (with sidewall_pressure_exponent = %g the pressure law would leave the sidewall without stiffness)"
+#define SPEC_MSG_ELEMENTS_RANGE "n_elements = %d: must be an integer in [%d, %d] (the 5-point bending stencil needs at least 8 nodes around the ring; meshes above 1600 cost too much time and memory to build)"
 #define SPEC_MSG_NOT_NONNEGATIVE "%s = %s: must be a finite number >= 0 %s"
-#define SPEC_MSG_F_MAX_RANGE "f_max = %s: must be in (0, %g] Hz, or 0 for no frequency cut"
-#define SPEC_MSG_N_MODES_RANGE "n_modes = %d: must be an integer in [1, %d] or 0"
-#define SPEC_MSG_SUPERCRITICAL "speed = %g m/s: must be below the critical (standing-wave) speed %.4g m/s of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > 0 raises it, allow_supercritical runs anyway"
+#define SPEC_MSG_MIN_ROLLING_SPEED "speed = %s: must be 0 or at least %g m/s (slower is at rest to rounding, and the road would take days to cross the patch)"
+#define SPEC_MSG_F_MAX_RANGE "f_max = %s: must be in (0, %g] Hz, or 0 for no limit"
+#define SPEC_MSG_N_MODES_RANGE "n_modes = %d: must be an integer in [1, %d], or 0 for no limit"
+#define SPEC_MSG_CONDITIONING_REASON "the ring's support on k_r1 and k_r2 in series, %.3g N/m^2, may be at most %g times weaker than the stiffest term, %s (%.3g N/m^2), or double precision loses the static solution"
+#define SPEC_MSG_CONDITIONING_STIFF_ALLOWED "at most %.3g %s with these springs on this mesh (fewer n_elements raise the bound)"
+#define SPEC_MSG_CONDITIONING_WEAK_ALLOWED "at least %.3g N/m^2 with these data"
+#define SPEC_MSG_CONDITIONING_WEAK_LARGER "larger, with the other spring above %.3g N/m^2"
+#define SPEC_MSG_STIFF_TERM_K_CW "the tread on k_r1 and the contact stiffness k_cw"
+#define SPEC_MSG_STIFF_TERM_EI "the tread's bending EI at the mesh's shortest wavelength"
+#define SPEC_MSG_STIFF_TERM_INFLATION_PRESSURE "the tread's inflation tension at the mesh's shortest wavelength"
+#define SPEC_MSG_STIFF_TERM_SIDEWALL_SHEAR "the sidewall on k_r1 + k_r2 and its shear"
+#define SPEC_MSG_SUPERCRITICAL "speed = %s: must be below the critical (standing-wave) speed %.4g m/s of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > 0 raises it, allow_supercritical runs anyway"
 #define SPEC_MSG_NEAR_CRITICAL "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): sidewall modes near zero frequency dominate the response"
-#define SPEC_MSG_ZONE_RANGE "contact_zone_length = %s m: must be in (0, %.4g] m (at most 60 degrees of the ring either side of the contact centre)"
-#define SPEC_MSG_ZONE_TOO_SHORT "contact_zone_length = %g m holds only the centre node of a mesh of %d elements: must be at least %.4g m (one node either side), or refine the mesh"
-#define SPEC_MSG_LOAD_RANGE "load = %g N: must be in [0, %.6g] N for this tire and mesh; at %.6g N (deflection %.3g mm) %s"
+#define SPEC_MSG_ZONE_RANGE "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of the ring either side of the contact centre)"
+#define SPEC_MSG_ZONE_TOO_SHORT "contact_zone_length = %s: must be at least %.4g m (one node either side), or refine the mesh (it holds only the centre node of a mesh of %d elements)"
+#define SPEC_MSG_LOAD_RANGE "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N (deflection %.3g mm) %s"
 #define SPEC_MSG_LOAD_REASON_ZONE "its footprint reaches the end of the contact zone (raise contact_zone_length)"
 #define SPEC_MSG_LOAD_REASON_LENGTH "its footprint reaches %.4g m, beyond which the linear ring is not credible"
+#define SPEC_MSG_RESOLVED_ALLOWED "%s here, or beta smaller: the model's eigenvalues span %s (fastest over slowest) and may span at most %g"
+#define SPEC_MSG_RESOLVED_REASON "beyond that double precision loses the slowest modes; the fastest here are %s, stiffness over mass %.3g 1/s^2, with beta = %g s"
+#define SPEC_MSG_RESOLVED_SPREAD "%.2g"
+#define SPEC_MSG_RESOLVED_SPREAD_UNBOUNDED "beyond 1e16"
+#define SPEC_MSG_RESOLVED_WAY_M_S "larger"
+#define SPEC_MSG_RESOLVED_WHAT_M_S "the sidewall masses on k_r1 + k_r2"
+#define SPEC_MSG_RESOLVED_WAY_RHOA "larger"
+#define SPEC_MSG_RESOLVED_WHAT_RHOA "the tread nodes on k_r1 + k_cw"
+#define SPEC_MSG_RESOLVED_WAY_EI "smaller"
+#define SPEC_MSG_RESOLVED_WHAT_EI "the tread's bending at the mesh's shortest wavelength (fewer n_elements lengthen it)"
+#define SPEC_MSG_RING_NOT_COMPUTED "the native FMU could not compute the free ring's modes for these parameters (the roots of an order did not converge); the fastest modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them tractable, or the Python FMU (TireModal.fmu) may solve them"
 #define SPEC_MSG_PROBLEM_LINE "parameter problem %d/%d: %s"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
 

@@ -74,8 +74,10 @@ void model_destroy(Model* model)
 
 void model_preview(const double* values, double* out_values)
 {
-    /* before initialisation the forces echo the static load */
+    /* before initialisation the forces echo the static load (a load that is no number is not
+     * echoed: no output is ever non-finite) */
     double load = values[SPEC_VR_LOAD];
+    if (!isfinite(load)) return;
     out_values[SPEC_VR_RIM_FZ] = load;
     out_values[SPEC_VR_CONTACT_FZ] = load;
     out_values[SPEC_VR_IN_CONTACT] = load > 0 ? 1.0 : 0.0;
@@ -127,20 +129,24 @@ static void tire_from_values(const double* values, Tire* t)
     t->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
 }
 
-/* what the Python FMU checks before it builds: truncation, tire data, operating point */
-static void plain_problems(const double* values, Problems* p)
+/* what the Python FMU checks before it builds: truncation, tire data, operating point; the
+ * count of problems beyond the truncation's (with none, the model is still built, for the
+ * problems only the model finds) */
+static int plain_problems(const double* values, Problems* p)
 {
-    char text[40];
+    char text[64];
+    int truncation_problems;
     double f_max = values[SPEC_VR_F_MAX];
     double n_modes = values[SPEC_VR_N_MODES];
     int field, tire_problems = 0;
     if (f_max != 0.0 && !(0 < f_max && f_max <= SPEC_F_MAX_LIMIT_HZ)) {
-        py_repr(f_max, text, sizeof text);
+        value_text(f_max, "Hz", text, sizeof text);
         PROBLEM(p, SPEC_MSG_F_MAX_RANGE, text, SPEC_F_MAX_LIMIT_HZ);
     }
     if (n_modes != 0.0 && !(1 <= n_modes && n_modes <= SPEC_N_MODES_LIMIT)) {
         PROBLEM(p, SPEC_MSG_N_MODES_RANGE, (int)n_modes, SPEC_N_MODES_LIMIT);
     }
+    truncation_problems = p->count;
     for (field = 0; field < SPEC_N_TIRE_FIELDS; field++) {
         const SpecField* f = &SPEC_TIRE_FIELDS[field];
         double value = values[variable_index(f->name)];
@@ -153,8 +159,8 @@ static void plain_problems(const double* values, Problems* p)
         }
         below = f->low_inclusive ? value < f->low : value <= f->low;
         if (below || value > f->high) {
-            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, value, f->unit, f->range_text,
-                    f->description);
+            value_text(value, f->unit, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, text, f->range_text, f->description);
             tire_problems++;
         }
     }
@@ -177,25 +183,213 @@ static void plain_problems(const double* values, Problems* p)
         for (i = 0; i < 2; i++) {
             double value = values[op[i].vr];
             if (!isfinite(value) || value < 0) {
-                py_repr(value, text, sizeof text);
+                value_text(value, op[i].unit, text, sizeof text);
                 PROBLEM(p, SPEC_MSG_NOT_NONNEGATIVE, op[i].name, text, op[i].unit);
+            } else if (op[i].vr == SPEC_VR_SPEED && 0 < value &&
+                       value < SPEC_MIN_ROLLING_SPEED_M_S) {
+                value_text(value, op[i].unit, text, sizeof text);
+                PROBLEM(p, SPEC_MSG_MIN_ROLLING_SPEED, text, SPEC_MIN_ROLLING_SPEED_M_S);
             }
         }
     }
+    return p->count - truncation_problems;
+}
+
+/* one problem as the core renders it (parameters.render): name = value: must be allowed
+ * (reason) */
+static void add_problem(Problems* p, const char* name, double value, const char* unit,
+                        const char* allowed, const char* reason)
+{
+    char text[64], line[MESSAGE_SIZE / 2]; /* and the reason at most the other half */
+    value_text(value, unit, text, sizeof text);
+    snprintf(line, sizeof line, SPEC_MSG_PROBLEM, name, text, allowed);
+    if (reason != NULL && reason[0] != '\0') {
+        PROBLEM(p, SPEC_MSG_REASON, line, reason);  /* the reason at most MESSAGE_SIZE / 2 */
+    } else {
+        PROBLEM(p, "%s", line);
+    }
+}
+
+static const char* field_unit(const char* name)
+{
+    int i;
+    for (i = 0; i < SPEC_N_TIRE_FIELDS; i++) {
+        if (strcmp(SPEC_TIRE_FIELDS[i].name, name) == 0) return SPEC_TIRE_FIELDS[i].unit;
+    }
+    return "";
+}
+
+/* the stiff local terms of parameters._stiff_terms, in its order; bound: the field's value at
+ * which the term reaches limit, or NAN when no value of the field alone would do */
+#define N_STIFF_TERMS 4
+static double stiff_term(const Tire* t, double ds, int which, double limit, double* bound)
+{
+    double above;
+    switch (which) {
+    case 0:
+        above = limit - t->k_r1;
+        *bound = above > 0 ? above : NAN;
+        return t->k_r1 + t->k_cw;
+    case 1:
+        *bound = limit * pow(ds, 4) / 16.0;
+        return 16.0 * t->EI / pow(ds, 4);
+    case 2:
+        *bound = limit * ds * ds / (4.0 * t->b * t->R);
+        return 4.0 * t->inflation_pressure * t->b * t->R / (ds * ds);
+    default:
+        above = (limit - t->k_r1 - t->k_r2) * ds * ds / 4.0;
+        *bound = above > 0 ? above : NAN;
+        return t->k_r1 + t->k_r2 + 4.0 * t->sidewall_shear / (ds * ds);
+    }
+}
+
+static const char* const STIFF_FIELDS[N_STIFF_TERMS] = {"k_cw", "EI", "inflation_pressure",
+                                                         "sidewall_shear"};
+static const char* const STIFF_WHAT[N_STIFF_TERMS] = {
+    SPEC_MSG_STIFF_TERM_K_CW, SPEC_MSG_STIFF_TERM_EI, SPEC_MSG_STIFF_TERM_INFLATION_PRESSURE,
+    SPEC_MSG_STIFF_TERM_SIDEWALL_SHEAR};
+
+static double field_value(const Tire* t, const char* name)
+{
+    if (strcmp(name, "k_cw") == 0) return t->k_cw;
+    if (strcmp(name, "EI") == 0) return t->EI;
+    if (strcmp(name, "inflation_pressure") == 0) return t->inflation_pressure;
+    if (strcmp(name, "sidewall_shear") == 0) return t->sidewall_shear;
+    if (strcmp(name, "k_r1") == 0) return t->k_r1;
+    if (strcmp(name, "k_r2") == 0) return t->k_r2;
+    if (strcmp(name, "m_s") == 0) return t->m_s;
+    if (strcmp(name, "rhoA") == 0) return t->rhoA;
+    return NAN;
+}
+
+/* parameters.conditioning_problems: whether double precision resolves the static response;
+ * 1 with the problem added when it does not */
+static int conditioning_problem(const Tire* t, int n_elements, Problems* p)
+{
+    Tire reference;
+    double ds = t->R * 2.0 * PI / n_elements, support, limit, stiffness = -1, bound = NAN;
+    double reference_support, too_stiff, other, needed, unused;
+    char reason[MESSAGE_SIZE], allowed[256];
+    const char* weak;
+    int i, stiffest = 0;
+    support = t->k_r1 * t->k_r2 / (t->k_r1 + t->k_r2);
+    limit = SPEC_MAX_STIFFNESS_RATIO * support;
+    for (i = 0; i < N_STIFF_TERMS; i++) {
+        double b, k = stiff_term(t, ds, i, limit, &b);
+        if (k > stiffness) {
+            stiffness = k;
+            bound = b;
+            stiffest = i;
+        }
+    }
+    if (stiffness <= limit) return 0;
+    {   /* the default tire (GL073A): the start values of the spec's table */
+        double defaults[SPEC_N_VARIABLES];
+        for (i = 0; i < SPEC_N_VARIABLES; i++) defaults[i] = SPEC_VARIABLES[i].start;
+        tire_from_values(defaults, &reference);
+    }
+    reference_support = reference.k_r1 * reference.k_r2 / (reference.k_r1 + reference.k_r2);
+    too_stiff = stiffness / stiff_term(&reference, ds, stiffest, limit, &unused);
+    snprintf(reason, sizeof reason, SPEC_MSG_CONDITIONING_REASON, support,
+             SPEC_MAX_STIFFNESS_RATIO, STIFF_WHAT[stiffest], stiffness);
+    if (too_stiff >= reference_support / support && !isnan(bound)) {
+        const char* unit = field_unit(STIFF_FIELDS[stiffest]);
+        snprintf(allowed, sizeof allowed, SPEC_MSG_CONDITIONING_STIFF_ALLOWED, bound, unit);
+        add_problem(p, STIFF_FIELDS[stiffest], field_value(t, STIFF_FIELDS[stiffest]), unit,
+                    allowed, reason);
+        return 1;
+    }
+    if (t->k_r2 <= t->k_r1) {
+        weak = "k_r2";
+        other = t->k_r1;
+    } else {
+        weak = "k_r1";
+        other = t->k_r2;
+    }
+    needed = stiffness / SPEC_MAX_STIFFNESS_RATIO;
+    if (other > needed) {
+        snprintf(allowed, sizeof allowed, SPEC_MSG_CONDITIONING_WEAK_ALLOWED,
+                 needed * other / (other - needed));
+    } else {
+        snprintf(allowed, sizeof allowed, SPEC_MSG_CONDITIONING_WEAK_LARGER, needed);
+    }
+    add_problem(p, weak, field_value(t, weak), field_unit(weak), allowed, reason);
+    return 1;
+}
+
+/* the fastest modes of the tire, by stiffness over mass (model.check_resolved's candidates) */
+static const char* const RESOLVED_FIELDS[3] = {"m_s", "rhoA", "EI"};
+static const char* const RESOLVED_WAYS[3] = {SPEC_MSG_RESOLVED_WAY_M_S, SPEC_MSG_RESOLVED_WAY_RHOA,
+                                             SPEC_MSG_RESOLVED_WAY_EI};
+static const char* const RESOLVED_WHATS[3] = {SPEC_MSG_RESOLVED_WHAT_M_S,
+                                              SPEC_MSG_RESOLVED_WHAT_RHOA,
+                                              SPEC_MSG_RESOLVED_WHAT_EI};
+
+static int fastest_modes(const Tire* t, int n_elements, double* ratio)
+{
+    double ratios[3], step = 2 * PI / n_elements;
+    int i, which = 0;
+    ratios[0] = (t->k_r1 + t->k_r2) / t->m_s;
+    ratios[1] = (t->k_r1 + t->k_cw) / t->rhoA;
+    ratios[2] = t->EI * 16 / pow(step * t->R, 4) / t->rhoA;
+    for (i = 1; i < 3; i++) {
+        if (ratios[i] > ratios[which]) which = i;
+    }
+    *ratio = ratios[which];
+    return which;
+}
+
+static void ring_problem(const Tire* t, int n_elements, Problems* p)
+{
+    double ratio;
+    int which = fastest_modes(t, n_elements, &ratio);
+    PROBLEM(p, SPEC_MSG_RING_NOT_COMPUTED, RESOLVED_WHATS[which], ratio, RESOLVED_FIELDS[which],
+            RESOLVED_WAYS[which]);
+}
+
+/* model.check_resolved on the free ring's modes (its rigid rotation, eigenvalue 0, left out);
+ * 1 with the problem added when double precision does not resolve them */
+static int resolved_problem(const Tire* t, const Ring* ring, int n_elements, Problems* p)
+{
+    double slow = INFINITY, fast = 0, ratio;
+    char spread[64], allowed[512], reason[512];
+    int i, finite = 1, count = 0, which;
+    for (i = 0; i < ring->n_modes; i++) {
+        double magnitude = cx_abs(ring->lam[i]);
+        if (ring->lam[i].re == 0.0 && ring->lam[i].im == 0.0) continue;
+        if (!isfinite(magnitude)) finite = 0;
+        if (magnitude < slow) slow = magnitude;
+        if (magnitude > fast) fast = magnitude;
+        count++;
+    }
+    if (count == 0 || (finite && fast <= SPEC_MAX_EIGENVALUE_SPREAD * slow)) return 0;
+    which = fastest_modes(t, n_elements, &ratio);
+    if (slow > 0 && finite) {
+        snprintf(spread, sizeof spread, SPEC_MSG_RESOLVED_SPREAD, fast / slow);
+    } else {
+        snprintf(spread, sizeof spread, "%s", SPEC_MSG_RESOLVED_SPREAD_UNBOUNDED);
+    }
+    snprintf(allowed, sizeof allowed, SPEC_MSG_RESOLVED_ALLOWED, RESOLVED_WAYS[which], spread,
+             SPEC_MAX_EIGENVALUE_SPREAD);
+    snprintf(reason, sizeof reason, SPEC_MSG_RESOLVED_REASON, RESOLVED_WHATS[which], ratio,
+             t->beta);
+    add_problem(p, RESOLVED_FIELDS[which], field_value(t, RESOLVED_FIELDS[which]),
+                field_unit(RESOLVED_FIELDS[which]), allowed, reason);
+    return 1;
 }
 
 /* the zone length on this mesh (contact.zone_problems); 0 when usable */
 static int zone_problem(double radius, int n_elements, double length, Problems* p)
 {
     double limit = 2 * radius * tan(SPEC_MAX_ZONE_HALF_ANGLE), dtheta = 2.0 * PI / n_elements;
-    char text[40];
+    char text[64];
+    value_text(length, "m", text, sizeof text);
     if (!(isfinite(length) && 0 < length && length <= limit)) {
-        py_repr(length, text, sizeof text);
         PROBLEM(p, SPEC_MSG_ZONE_RANGE, text, limit);
         return 1;
     }
     if (atan(0.5 * length / radius) < dtheta) {
-        PROBLEM(p, SPEC_MSG_ZONE_TOO_SHORT, length, n_elements, 2 * radius * tan(dtheta));
+        PROBLEM(p, SPEC_MSG_ZONE_TOO_SHORT, text, 2 * radius * tan(dtheta), n_elements);
         return 1;
     }
     return 0;
@@ -211,14 +405,17 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     double speed = values[SPEC_VR_SPEED], load = values[SPEC_VR_LOAD], spin;
     Truncation truncation;
     Footprint limit;
+    char text[64];
     warning[0] = '\0';
     tire_from_values(values, tire);
     model->n_elements = n;
     model->speed = speed;
     model->linear = values[SPEC_VR_LINEAR_CONTACT] != 0.0;
+    if (conditioning_problem(tire, n, p)) return MODEL_ERROR;
     model->critical = critical_speed(tire, n);
     if (speed >= model->critical && values[SPEC_VR_ALLOW_SUPERCRITICAL] == 0.0) {
-        PROBLEM(p, SPEC_MSG_SUPERCRITICAL, speed, model->critical, n);
+        value_text(speed, "m/s", text, sizeof text);
+        PROBLEM(p, SPEC_MSG_SUPERCRITICAL, text, model->critical, n);
         return MODEL_ERROR;
     }
     if (SPEC_CRITICAL_SPEED_WARNING_FRACTION * model->critical <= speed &&
@@ -229,14 +426,14 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     if (zone_problem(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH], p)) return MODEL_ERROR;
     half = zone_half_count(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH]);
     spin = speed / tire->R;
-    truncation.f_max_hz = values[SPEC_VR_F_MAX];
-    truncation.n_modes = (int)values[SPEC_VR_N_MODES];
+    /* a truncation already refused builds the whole ring: for the other problems only */
+    truncation.f_max_hz = p->count ? 0.0 : values[SPEC_VR_F_MAX];
+    truncation.n_modes = p->count ? 0 : (int)values[SPEC_VR_N_MODES];
     truncation.static_correction = values[SPEC_VR_STATIC_CORRECTION] != 0.0;
     if (zone_build(&model->zone, mem, n, tire->R, tire->k_cw, tire->beta, half) != 0) goto memory;
     status = ring_build(&model->ring, mem, tire, n, spin, half, &truncation);
     if (status != 0) {
-        PROBLEM(p, "the free ring's modes could not be computed for these parameters (the "
-                   "eigenvalues of an order did not converge)");
+        ring_problem(tire, n, p);
         return MODEL_ERROR;
     }
     model->compliance = (double*)mem_alloc(mem, (size_t)(model->zone.n_zone * model->zone.n_zone),
@@ -262,12 +459,14 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
             snprintf(reason, sizeof reason, SPEC_MSG_LOAD_REASON_LENGTH,
                      SPEC_MAX_PATCH_FRACTION * (2.0 * PI * tire->R));
         }
-        PROBLEM(p, SPEC_MSG_LOAD_RANGE, load, limit.load, limit.load, limit.deflection * 1e3,
+        value_text(load, "N", text, sizeof text);
+        PROBLEM(p, SPEC_MSG_LOAD_RANGE, text, limit.load, limit.load, limit.deflection * 1e3,
                 reason);
         footprint_free(&limit, mem);
         return MODEL_ERROR;
     }
     footprint_free(&limit, mem);
+    if (resolved_problem(tire, &model->ring, n, p)) return MODEL_ERROR;
     if (footprint_alloc(&model->footprint, mem, model->zone.n_zone) != 0) goto memory;
     if (footprint_at_load(&model->path, &model->zone, tire->R, load, &model->footprint) != 0) {
         PROBLEM(p, "load = %g N needs a rim deflection beyond %g m", load,
@@ -306,8 +505,9 @@ int model_initialise(Model* model, const double* values, double start_time, doub
     int status, i;
     problems.count = 0;
     model_clear(model);
-    plain_problems(values, &problems);
-    status = problems.count ? MODEL_ERROR : build(model, values, &problems, warning);
+    status = plain_problems(values, &problems) ? MODEL_ERROR
+             : build(model, values, &problems, warning);
+    if (problems.count) status = MODEL_ERROR;
     if (status != MODEL_OK) {
         for (i = 0; i < problems.count; i++) {
             snprintf(line, sizeof line, SPEC_MSG_PROBLEM_LINE, i + 1, problems.count,
