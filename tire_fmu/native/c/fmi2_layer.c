@@ -521,6 +521,7 @@ static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueRe
         }
         if (v->causality == SPEC_INPUT && !(fabs(in[i]) <= input_limit(v))) {
             double limit = input_limit(v);
+            number(text, in[i]);  /* as the core's StepError shows it: repr, then the unit */
             log_message(inst, fmi2Error, "%s refused: %s = %s %s: must be in [-%g, %g] %s; "
                         "nothing changed", call, v->name, text, v->unit, limit, limit,
                         v->unit);
