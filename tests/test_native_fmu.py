@@ -230,6 +230,7 @@ def _problems(fmu: Opened, parameters: dict) -> tuple[int, list[str], list[str]]
     {"f_max": 1e8, "n_modes": 200000, "static_correction": False},
     {"f_max": -1.0, "load": 1e7},  # a refused truncation: the model still finds the load's
     {"speed": 1e-4},
+    {"load": -2.0**-24},  # repr: 16 correctly rounded digits do not read back, ...063 does
     {"k_r1": 1e-3},  # conditioning: the support is too weak for k_cw
     {"EI": 1e8, "n_elements": 1000},  # conditioning: the bending is too stiff on this mesh
 ])
@@ -304,17 +305,35 @@ def test_refused_steps_change_nothing(native):
     a = _continue(undisturbed, 0.0, 200)
     b = _continue(disturbed, 0.0, 100)
     for t, h in ((math.nan, 1e-4), (0.5, 1e-4), (0.01, 0.0), (0.01, -1e-4), (0.01, math.inf),
-                 (0.01, math.nan), (math.inf, 1e-4)):
+                 (0.01, math.nan), (math.inf, 1e-4), (0.01, 1e300)):
         assert disturbed.step(t, h) == 3
     reasons = disturbed.errors()
-    assert len(reasons) == 7 and all("refused" in r and "nothing changed" in r for r in reasons)
+    assert len(reasons) == 8 and all("refused" in r and "nothing changed" in r for r in reasons)
     assert "t must be finite" in reasons[0] and "last communication point" in reasons[1]
-    assert "h must be finite and > 0" in reasons[2]
+    assert "step size h = 0.0 s: must be in (0, 1e+06] s" in reasons[2]
+    # 1e300 s gave nan outputs with status OK before (the long fuzz run found it)
+    assert "step size h = 1e+300 s: must be in (0, 1e+06] s" in reasons[7]
     assert disturbed.slave.getRealStatus(2) == pytest.approx(0.01, abs=1e-15)
     b = np.vstack([b, _continue(disturbed, 0.01, 100)])
     assert np.array_equal(a, b)
     undisturbed.free()
     disturbed.free()
+
+
+def test_a_step_too_short_for_the_road_history_at_a_crawl_is_refused_as_in_python(native,
+                                                                                  python):
+    """At 1 mm/s the road takes minutes to cross the zone: 1e-4 s steps would keep millions of
+    samples of road history. Both FMUs refuse, in the same words, and take a longer step."""
+    reasons = []
+    for fmu in (native, python):
+        instance = Instance(fmu)
+        assert instance.initialise(speed=1e-3) == 0
+        assert instance.step(0.0, 1e-4) == 3
+        reasons.append(instance.errors()[-1])
+        assert instance.step(0.0, 1e-2) == 0
+        instance.free()
+    assert reasons[0] == reasons[1]
+    assert "step size h = 0.0001 s: must be at least" in reasons[0]
 
 
 def test_calls_outside_their_phase_are_refused(native):

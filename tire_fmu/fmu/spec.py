@@ -34,6 +34,8 @@ from .interface import (
     FMU_NAMES,
     FMU_UNSET,
     IN_CONTACT,
+    MAX_DELAY_STEPS,
+    MAX_STEP_S,
     INPUTS,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
@@ -50,6 +52,8 @@ CONSTANTS: dict[str, float | int] = {
     # communication points and the step cache
     "TIME_ABS_TOLERANCE_S": TIME_ABS_TOLERANCE_S,
     "TIME_REL_TOLERANCE": TIME_REL_TOLERANCE,
+    "MAX_STEP_S": MAX_STEP_S,
+    "MAX_DELAY_STEPS": MAX_DELAY_STEPS,
     "SAME_POINT_EPS": road.SAME_POINT_EPS,
     "LAG_SLACK": road.LAG_SLACK,
     "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,

@@ -600,7 +600,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     (void)noSetFMUStatePriorToCurrentPoint;
     tolerance = fmax(SPEC_TIME_ABS_TOLERANCE_S, SPEC_TIME_REL_TOLERANCE * fabs(inst->time));
     if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance &&
-          communicationStepSize > 0.0 && isfinite(communicationStepSize))) {
+          communicationStepSize > 0.0 && communicationStepSize <= SPEC_MAX_STEP_S)) {
         number(t, currentCommunicationPoint);  /* the texts only for a refusal */
         number(h, communicationStepSize);
     }
@@ -616,10 +616,24 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                     "step from an earlier time); nothing changed", t, h, now);
         return fmi2Error;
     }
-    if (!(communicationStepSize > 0.0 && isfinite(communicationStepSize))) {
-        log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: h must be finite "
-                    "and > 0; nothing changed", t, h);
-        return fmi2Error;
+    {   /* the Python FMU's checks, in its words */
+        double h_value = communicationStepSize, reach = model_road_horizon(inst->model);
+        if (!(0.0 < h_value && h_value <= SPEC_MAX_STEP_S)) {
+            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: step size h "
+                        "= %s s: must be in (0, %g] s; nothing changed", t, h, h,
+                        SPEC_MAX_STEP_S);
+            return fmi2Error;
+        }
+        if (!(reach / h_value <= SPEC_MAX_DELAY_STEPS)) {
+            number(t, currentCommunicationPoint);
+            number(h, h_value);
+            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: step size h "
+                        "= %s s: must be at least %.3g s at this speed: the road reaches the "
+                        "contact zone's last node %.3g s after its front, and the FMU keeps at "
+                        "most %d steps of its history; nothing changed", t, h, h,
+                        reach / SPEC_MAX_DELAY_STEPS, reach, SPEC_MAX_DELAY_STEPS);
+            return fmi2Error;
+        }
     }
     /* the host's clock is the reference: no drift from rounding in t */
     model_set_time(inst->model, currentCommunicationPoint);
@@ -630,6 +644,18 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     }
     inst->stale = 0;
     inst->time = model_time(inst->model);
+    {
+        int i;
+        for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
+            if (!isfinite(inst->values[SPEC_BLOCK_OUTPUTS_FIRST + i])) {
+                number(t, currentCommunicationPoint);
+                log_message(inst, fmi2Error, "the step from t = %s s gave non-finite outputs; "
+                            "reset the FMU or set an FMU state", t);
+                inst->broken = 1;
+                return fmi2Error;
+            }
+        }
+    }
     return status == MODEL_WARNING ? fmi2Warning : fmi2OK;
 }
 

@@ -34,6 +34,8 @@ int model_step(Model* model, double h, double* values);
 /* the outputs at model_time for the inputs in values (direct feedthrough) */
 int model_refresh(Model* model, double* values);
 double model_time(const Model* model);
+/* how long the road takes from the zone front to its last node (s; 0 at rest) */
+double model_road_horizon(const Model* model);
 void model_set_time(Model* model, double time);
 /* does the model hold a built simulator for exactly these parameter values? */
 int model_built_for(const Model* model, const double* values);

@@ -326,6 +326,47 @@ double brentq(scalar_function f, void* data, double xa, double xb, double xtol, 
 
 /* -- repr --------------------------------------------------------------------------------------- */
 
+/* the decimal of ``precision`` digits one unit in the last place from the correctly rounded
+ * one that reads back as x, written as %e writes it; 0 when neither does */
+static int neighbour_digits(double x, int precision, char* buffer, size_t size)
+{
+    char rounded[40], candidate[40];
+    unsigned long long mantissa = 0, low = 1, high;
+    int exponent, i, delta;
+    const char* p;
+    snprintf(rounded, sizeof rounded, "%.*e", precision - 1, fabs(x));
+    for (p = rounded; *p && *p != 'e'; p++) {
+        if (*p != '.') mantissa = mantissa * 10 + (unsigned long long)(*p - '0');
+    }
+    exponent = atoi(p + 1);
+    for (i = 1; i < precision; i++) low *= 10;
+    high = low * 10;
+    for (delta = -1; delta <= 1; delta += 2) {
+        unsigned long long m = delta < 0 ? mantissa - 1 : mantissa + 1;
+        int e = exponent;
+        char digits[24];
+        if (m >= high) {
+            m /= 10;
+            e++;
+        } else if (m < low) {
+            m = high - 1;
+            e--;
+        }
+        snprintf(digits, sizeof digits, "%llu", m);
+        if (precision > 1) {
+            snprintf(candidate, sizeof candidate, "%s%c.%se%+03d", x < 0 ? "-" : "", digits[0],
+                     digits + 1, e);
+        } else {
+            snprintf(candidate, sizeof candidate, "%s%ce%+03d", x < 0 ? "-" : "", digits[0], e);
+        }
+        if (strtod(candidate, NULL) == x) {
+            snprintf(buffer, size, "%s", candidate);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 void py_repr(double x, char* text, size_t size)
 {
     char buffer[40], digits[24];
@@ -347,6 +388,9 @@ void py_repr(double x, char* text, size_t size)
     for (precision = 1; precision <= 17; precision++) {
         snprintf(buffer, sizeof buffer, "%.*e", precision - 1, x);
         if (strtod(buffer, NULL) == x) break;
+        /* the correctly rounded digits may miss x where a neighbour of the same length hits
+         * it (2^-24: 16 digits round to ...062, only ...063 reads back): Python takes that */
+        if (neighbour_digits(x, precision, buffer, sizeof buffer)) break;
     }
     {   /* buffer: [-]d[.ddd]e[+-]XX */
         const char* p = buffer;

@@ -600,6 +600,8 @@ int model_refresh(Model* model, double* values)
 
 double model_time(const Model* model) { return model->sim.time; }
 
+double model_road_horizon(const Model* model) { return model->windows.horizon; }
+
 void model_set_time(Model* model, double time) { model->sim.time = time; }
 
 /* -- the model's part of an FMU state --------------------------------------------------------
