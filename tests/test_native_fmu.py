@@ -428,18 +428,20 @@ def test_loss_of_contact_is_ok_and_logged_as_an_event(native):
 
 def test_footprint_at_the_zone_edge_warns_once_per_episode(native):
     """Pressed down 3 cm twice (a slow cosine of the rim), the footprint reaches the end of a
-    0.2 m zone each time: fmi2Warning from one step of each press, OK otherwise."""
+    0.2 m zone each time: one warning logged per press, and every step OK (as the Python FMU:
+    a strict host must not stop on it)."""
     instance = Instance(native)
     assert instance.initialise(contact_zone_length=0.2, load=15000.0) == 0
-    statuses, w = [], 2 * math.pi / 0.1
+    statuses, w, warned = [], 2 * math.pi / 0.1, []
     for k in range(2000):
         t = k * 1e-4
         rim = [-0.015 * (1 - math.cos(w * t)), -0.015 * w * math.sin(w * t), 0.0, 0.0]
         instance.slave.setReal(instance.inputs, rim)
+        before = len(instance.log)
         statuses.append(instance.step(t))
-    warned = [k for k, status in enumerate(statuses) if status == 1]
+        warned += [k for s, _, _ in instance.log[before:] if s == 1]
     warnings = [m for s, _, m in instance.log if s == 1]
-    assert set(statuses) == {0, 1} and len(warned) == 2 == len(warnings)
+    assert set(statuses) == {0} and len(warned) == 2 == len(warnings)
     assert warned[0] < 1000 <= warned[1]  # one per press
     assert "reached the end of the contact zone" in warnings[0]
     instance.free()
