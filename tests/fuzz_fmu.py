@@ -53,6 +53,8 @@ from hypothesis.stateful import (
     rule,
 )
 
+from tire_fmu.core.parameters import MAX_ELEMENTS
+
 OK, ERROR = 0, 3
 INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
 OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
@@ -66,8 +68,10 @@ inputs = st.one_of(small, small, small, anything)  # mostly ordinary, so that ru
 steps = st.one_of(st.sampled_from([1e-4, 1e-3, 1e-3, 2.5e-3]), special,
                   st.floats(1e-6, 1e-2))
 good_meshes = st.sampled_from([8, 12, 16, 24])
+# refused meshes: the one past the limit follows it (a fixed 1001 became a valid mesh that takes
+# seconds to build when the limit rose, and timed the CI profile out)
 meshes = st.one_of(good_meshes, good_meshes, good_meshes,
-                   st.sampled_from([0, -1, 7, 1001, 2**31 - 1]))
+                   st.sampled_from([0, -1, 7, MAX_ELEMENTS + 1, 2**31 - 1]))
 start_times = st.one_of(st.just(0.0), st.just(0.0), st.just(1.5), special)
 bad_parameters = st.one_of(st.just([]), st.just([]), st.lists(
     st.tuples(st.sampled_from(["load", "speed", "R", "m_s", "k_cw", "beta", "f_max", "n_modes"]),
@@ -277,6 +281,8 @@ class FmuMachine(RuleBasedStateMachine):
         kind = self.variables[name].type
         if kind == "Integer":
             value = int(value) if math.isfinite(value) and abs(value) < 2**31 else 0
+            if name == "n_elements" and 24 < value <= MAX_ELEMENTS:
+                value = 24  # valid meshes this fine take seconds to build: not what is fuzzed
         elif kind == "Boolean":
             value = bool(value == value and value)
         self.set_values("set a parameter", [(name, value)])

@@ -310,9 +310,9 @@ def test_refused_steps_change_nothing(native):
     reasons = disturbed.errors()
     assert len(reasons) == 8 and all("refused" in r and "nothing changed" in r for r in reasons)
     assert "t must be finite" in reasons[0] and "last communication point" in reasons[1]
-    assert "step size h = 0.0 s: must be in (0, 1e+06] s" in reasons[2]
+    assert "step size h = 0.0 s: must be in (0, 1] s" in reasons[2]
     # 1e300 s gave nan outputs with status OK before (the long fuzz run found it)
-    assert "step size h = 1e+300 s: must be in (0, 1e+06] s" in reasons[7]
+    assert "step size h = 1e+300 s: must be in (0, 1] s" in reasons[7]
     assert disturbed.slave.getRealStatus(2) == pytest.approx(0.01, abs=1e-15)
     b = np.vstack([b, _continue(disturbed, 0.01, 100)])
     assert np.array_equal(a, b)

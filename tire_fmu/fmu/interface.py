@@ -43,9 +43,10 @@ def same_fixed_value(given: float, fixed: float) -> bool:
     given, fixed = float(given), float(fixed)
     return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
 
-#: The longest communication step (s), about 11 days: the exact step's coefficients stay
-#: finite far beyond it, but not for any h (1e300 s overflows them).
-MAX_STEP_S = 1e6
+#: The longest communication step (s). The contact is solved in sub-steps of at most
+#: contact_dynamics.MAX_SUBSTEP_S (0.1 ms), so this is 10^4 of them (a fraction of a second of
+#: work); 1e6 s, the former limit, meant 10^10 sub-steps and hung the host (found by fuzzing).
+MAX_STEP_S = 1.0
 #: At speed the FMU keeps the road's history back to the patch's last node, one sample per
 #: step, and reads it through a delay line of that many steps: at most this many.
 MAX_DELAY_STEPS = 100_000
