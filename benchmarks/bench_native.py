@@ -138,7 +138,7 @@ def main(argv=None) -> int:
         trivial = Opened(trivial_fmu(tmp / "trivial"))
 
         # 1. initialisation against N
-        meshes = (100, 200, 400)
+        meshes = (100, 200, 300)  # from N = 400 the native ring solver fails (docs/native.md)
         init = {(kind, n): [] for kind in ("native", "python") for n in meshes}
         for _ in range(max(3, args.rounds // 3)):
             for n in meshes:
