@@ -56,6 +56,10 @@ MAX_DISPLACEMENT_M = 10.0
 MAX_VELOCITY_M_S = 1000.0
 #: Longest internal step (s); shorter still if the contact frequency asks for it.
 MAX_SUBSTEP_S = 1e-4
+#: The shortest contact sub-step a tire may need (s): GL073A needs 1.8e-4 s (so 0.1 ms), and
+#: 1e-7 s is 1000 sub-steps per 0.1 ms communication step. Stiffer contacts on lighter treads
+#: are refused rather than run for hours (a property test over the ranges found one).
+MIN_SUBSTEP_S = 1e-7
 _STATE_FORMAT = "tire_fmu.contact-state/1"
 _KERNEL_CACHE_SIZE = 32
 _SOLVE_CACHE_SIZE = 256
@@ -135,6 +139,14 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
     # the free ring's rigid rotation (eigenvalue 0 exactly) is no mode to resolve
     check_resolved(ring.eigenvalues[ring.eigenvalues != 0], model)
     contact_rad_s = math.sqrt(tire.k_cw / tire.rhoA)
+    if 1.0 / contact_rad_s < MIN_SUBSTEP_S:
+        from .parameters import TIRE_FIELDS, ParameterError, Problem
+
+        raise ParameterError([Problem(
+            "k_cw", tire.k_cw, TIRE_FIELDS["k_cw"].unit,
+            f"at most {tire.rhoA / MIN_SUBSTEP_S**2:.3g} N/m^2 with rhoA = {tire.rhoA:g} kg/m",
+            f"the contact is sub-stepped at 1/sqrt(k_cw/rhoA), which would be below "
+            f"{MIN_SUBSTEP_S:g} s: more than 10^4 sub-steps per millisecond")])
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
     return ContactModel(model=model, ring=ring, settings=settings, substep_s=substep)
 
