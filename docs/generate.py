@@ -308,6 +308,79 @@ def fmu_step_cost() -> str:
     return "\n".join(lines)
 
 
+def _computed(data: dict) -> str:
+    """Where a recorded result of the computation (no timing) comes from."""
+    return (f"From `{data['command']}` on {data['recorded']} (results of the computation, the "
+            "same on any machine).")
+
+
+def _pair(name: str) -> str:
+    return name.replace("->", " → ")
+
+
+@generator("reduction-defaults")
+def reduction_defaults() -> str:
+    data = record("bench_reduction")
+    lines = ["| operating point | full | modal (default) | modal, no static correction | "
+             "balanced (default) |", "|---|---|---|---|---|"]
+    for row in data["results"]["defaults"]:
+        case = row["case"].replace("f_max_hz = 300", "`f_max_hz=300`")
+        if "plain_states" in row:
+            lines.append(f"| {case} | {row['full_states']} | {row['modal_states']} states, "
+                         f"{100 * row['modal_error']:.2f} % | {row['plain_states']}, "
+                         f"{100 * row['plain_error']:.2f} % | {row['balanced_states']}, "
+                         f"{100 * row['balanced_error']:.2f} % |")
+        else:
+            lines.append(f"| {case} | {row['full_states']} | {row['modal_states']}, "
+                         f"**{100 * row['modal_error']:.0f} %** ({_pair(row['worst_pair'])}) "
+                         "| | |")
+    lines += ["", _computed(data)]
+    return "\n".join(lines)
+
+
+@generator("reduction-one-percent")
+def reduction_one_percent() -> str:
+    data = record("bench_reduction")
+    rows = data["results"]["one_percent"]
+    lines = [f"States kept for 1 % maximum relative FRF error over 1-300 Hz, N = "
+             f"{rows[0]['n_elements']}, default load:", "",
+             "| speed | full (reachable) | modal, former selection | modal | balanced | "
+             "modal / balanced | hardest pair alone (modes above 300 Hz) | its Σ\\|terms\\| / "
+             "\\|Σ terms\\| | modal, + velocity correction | modal, 1 % of each peak |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        pair = r["pairs"][r["hardest_pair"]]
+        lines.append(
+            f"| {r['speed_m_s']:g} m/s | {r['full_states']} ({r['reachable_states']}) | "
+            f"{r['former_modal_states']} | {r['modal_states']} ({100 * r['modal_error']:.2f} %) "
+            f"| {r['balanced_states']} ({100 * r['balanced_error']:.2f} %) | "
+            f"{r['modal_states'] / r['balanced_states']:.1f} | {_pair(r['hardest_pair'])}: "
+            f"{pair['states_alone']} ({pair['modes_above_band_alone']}) | "
+            f"{pair['sum_of_magnitudes'] / pair['magnitude_of_sum']:.1f} | "
+            f"{r['velocity_corrected_states']} | {r['peak_relative_states']} |")
+    lines += ["", _computed(data)]
+    return "\n".join(lines)
+
+
+@generator("reduction-meshes")
+def reduction_meshes() -> str:
+    data = record("bench_reduction")
+    meshes = data["results"]["finer_meshes"]
+    lines = ["| N | speed | full | modal, former selection | modal | balanced | "
+             "modal / balanced |", "|---|---|---|---|---|---|---|"]
+    for r in meshes["rows"]:
+        lines.append(f"| {r['n_elements']} | {r['speed_m_s']:g} m/s | {r['full_states']} | "
+                     f"{r['former_modal_states']} | {r['modal_states']} | "
+                     f"{r['balanced_states']} | {r['modal_states'] / r['balanced_states']:.1f} |")
+    cut = meshes["cut"]
+    lines += ["", f"At N = {cut['n_elements']} and {cut['speed_m_s']:g} m/s with the default "
+              f"target a cut at `f_max_hz={cut['f_max_hz']:g}` leaves "
+              f"{100 * cut['error']:.1f} % error with {cut['states']} states; no cut meets "
+              f"the target, {100 * cut['uncut_error']:.2f} % with {cut['uncut_states']}.", "",
+              _computed(data)]
+    return "\n".join(lines)
+
+
 # -- rewriting ----------------------------------------------------------------------------------
 
 def render(text: str) -> tuple[str, list[str]]:

@@ -20,13 +20,13 @@ def run_json(capsys, *argv):
 
 
 def test_reduce_json_is_the_report_of_the_python_api(capsys, tire):
-    data = run_json(capsys, "reduce", *MODEL, "--threshold", "0.01")
+    data = run_json(capsys, "reduce", *MODEL, "--target-error", "0.01")
     reduced = reduce(build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.204)),
-                     ReductionSettings(contribution_threshold=0.01))
+                     ReductionSettings(target_error=0.01))
     assert data["n_states"] == reduced.n_states
     assert data["report"]["max_relative_error"] == pytest.approx(
         reduced.report.max_relative_error, rel=1e-9)
-    assert data["settings"]["contribution_threshold"] == 0.01
+    assert data["settings"]["target_error"] == 0.01
 
 
 def test_reduce_exact_report_checks_against_the_assembled_model(capsys, tire):
@@ -72,12 +72,23 @@ def test_export_writes_a_file_that_loads(tmp_path, capsys, suffix):
 
 
 def test_bad_reduction_settings_are_all_reported_on_one_line(capsys):
-    code = main(["reduce", *MODEL, "--threshold", "2", "--f-max", "-5", "--n-modes", "0"])
+    code = main(["reduce", *MODEL, "--target-error", "2", "--f-max", "-5", "--n-modes", "0"])
     err = capsys.readouterr().err
     assert code == 2
     assert err.count("\n") == 1
-    for fragment in ("--threshold = 2", "--f-max = -5", "--n-modes = 0"):
+    for fragment in ("--target-error = 2", "--f-max = -5", "--n-modes = 0"):
         assert fragment in err
+
+
+def test_the_former_threshold_option_is_refused_naming_its_replacement(capsys):
+    """--threshold was the modal budget (a bound on summed mode shares); --target-error is the
+    error itself, for both methods. The refusal is reported with the other problems."""
+    code = main(["reduce", *MODEL, "--threshold", "0.01", "--n-modes", "0"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1
+    assert "--threshold = 0.01" in err and "give --target-error 0.01" in err
+    assert "--n-modes = 0" in err
 
 
 def test_road_input_needs_a_patch(capsys):

@@ -138,6 +138,10 @@ def load_npz(path) -> ReducedModel:
     try:
         known = {f.name for f in fields(ReductionSettings)}
         settings_values = {k: v for k, v in meta["settings"].items() if k in known}
+        former = meta["settings"].get("contribution_threshold")
+        if former is not None and settings_values.get("method") == "modal":
+            # written before target_error applied to modal truncation: this was its budget
+            settings_values["target_error"] = former
         settings_values["error_band_hz"] = tuple(settings_values["error_band_hz"])
         settings = ReductionSettings(**settings_values)
         report = meta["report"]

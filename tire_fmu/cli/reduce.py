@@ -9,9 +9,12 @@ import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.io_model import OUTPUTS as OUTPUT_NAMES
+from ..core.parameters import ParameterError
 from ..core.reduction import ReductionSettings, reduce
 from .commands import command_help
 from .common import (
+    CLI_NAMES,
+    CLI_UNSET,
     CliError,
     Output,
     add_contact_options,
@@ -47,20 +50,20 @@ def add_reduction_options(p: argparse.ArgumentParser) -> None:
                    help="modal truncation (default) or balanced truncation")
     g.add_argument("--f-max", metavar="HZ", type=float, default=None,
                    help="keep only modes with natural frequency up to this, Hz; the rest "
-                   "enter statically (default: no cut, the threshold decides)")
-    g.add_argument("--threshold", metavar="X", type=float,
-                   default=_DEFAULTS.contribution_threshold,
-                   help="modal: drop the least contributing modes while their summed relative "
-                   f"contribution stays below X (default {_DEFAULTS.contribution_threshold:g})")
+                   "enter statically (default: no cut, the error target decides)")
+    g.add_argument("--target-error", metavar="X", type=float, default=_DEFAULTS.target_error,
+                   help="largest relative FRF error allowed over the band: modal keeps the "
+                   "fewest modes it finds that meet it, balanced the fewest states "
+                   f"(default {_DEFAULTS.target_error:g})")
     g.add_argument("--n-modes", metavar="K", type=int, default=None,
-                   help="modal: keep at most K modes (complex pairs), largest contributions first")
+                   help="modal: keep at most K modes (complex pairs), the most dominant first")
     g.add_argument("--no-static-correction", action="store_true",
                    help="do not add the dropped modes' static response (DC gain then inexact)")
     g.add_argument("--n-states", metavar="K", type=int, default=None,
                    help="balanced: states to keep (default: fewest meeting --target-error)")
-    g.add_argument("--target-error", metavar="X", type=float, default=_DEFAULTS.target_error,
-                   help="balanced: largest relative FRF error allowed over the band "
-                   f"(default {_DEFAULTS.target_error:g})")
+    # the former modal budget, refused with what to give instead
+    g.add_argument("--threshold", metavar="X", type=float, default=None,
+                   help=argparse.SUPPRESS)
     g.add_argument("--band", metavar="LOW,HIGH", default="1,300",
                    help="band of the error report in Hz (default 1,300)")
 
@@ -74,17 +77,28 @@ def _band(text: str) -> tuple[float, float]:
 
 
 def settings_from_args(args: argparse.Namespace) -> ReductionSettings:
-    """Reduction settings from the options; ReductionSettings lists every problem at once."""
-    return ReductionSettings(
-        method=args.method,
-        f_max_hz=args.f_max,
-        contribution_threshold=args.threshold,
-        n_modes=args.n_modes,
-        static_correction=not args.no_static_correction,
-        n_states=args.n_states,
-        target_error=args.target_error,
-        error_band_hz=_band(args.band),
-    )
+    """Reduction settings from the options; every problem is reported at once."""
+    problems = []
+    if args.threshold is not None:
+        problems.append(f"--threshold = {args.threshold:g}: replaced by --target-error, the "
+                        "largest relative FRF error allowed over the band, which modal "
+                        "truncation now meets exactly as balanced truncation does: give "
+                        f"--target-error {args.threshold:g}")
+    settings = None
+    try:
+        settings = ReductionSettings(
+            method=args.method,
+            f_max_hz=args.f_max,
+            n_modes=args.n_modes,
+            static_correction=not args.no_static_correction,
+            n_states=args.n_states,
+            target_error=args.target_error,
+            error_band_hz=_band(args.band),
+        )
+    except ParameterError as error:
+        problems += error.render(CLI_NAMES, CLI_UNSET)
+    raise_problems(problems)
+    return settings
 
 
 def _add_model_options(p: argparse.ArgumentParser) -> None:
