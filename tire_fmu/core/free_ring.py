@@ -37,7 +37,7 @@ import scipy.linalg as sla
 from .discretisation import Grid
 from .discretisation import symbols as fdm_symbols
 from .dispersion import per_order_matrices
-from .modal_form import ModalForm, diagonalise
+from .modal_form import canonical_modes
 from .parameters import Problem, TireParameters
 
 RIM_OUTPUTS = ("rim_Fz", "rim_Fx", "deflection")
@@ -248,6 +248,29 @@ def zone_compliance(static_gain: np.ndarray) -> np.ndarray:
     return -static_gain[3:3 + n_zone, 1:]
 
 
+def momentum_matrices(mass: np.ndarray, damping: np.ndarray, stiffness: np.ndarray) -> np.ndarray:
+    """A_n (orders, 4, 4) of each order in the momentum state x = [u_n, M u̇_n - B_v r]:
+    u̇ = M⁻¹ p, ṗ = -K_n u - D_n M⁻¹ p (the input terms apart), from :func:`order_matrices`."""
+    m_inv = 1.0 / mass
+    a_n = np.zeros((damping.shape[0], 4, 4), dtype=complex)
+    a_n[:, 0, 2], a_n[:, 1, 3] = m_inv
+    a_n[:, 2:, :2] = -stiffness
+    a_n[:, 2:, 2:] = -damping * m_inv[None, None, :]
+    return a_n
+
+
+def order_modes(a_n: np.ndarray, real_orders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues (orders, 4) and eigenvectors (orders, 4, 4, columns) of each order's A_n in
+    the canonical normalisation and order (:func:`.modal_form.canonical_modes`); a real order
+    (n = 0, N/2: ``real_orders``) is the real system Re A_n, whose pairs are exactly conjugate
+    and whose real eigenvalues have real eigenvectors. The native FMU's C builds the same."""
+    values = np.empty(a_n.shape[:2], dtype=complex)
+    vectors = np.empty(a_n.shape, dtype=complex)
+    for index, a in enumerate(a_n):
+        values[index], vectors[index] = sla.eig(a.real if real_orders[index] else a)
+    return canonical_modes(values, vectors)
+
+
 def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
                     zone_nodes: np.ndarray,
                     truncation: RingTruncation | None = None) -> FreeRingModel:
@@ -262,24 +285,28 @@ def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
     m_inv = 1.0 / mass
 
     # Momentum form per order and its eigen-decomposition.
-    a_n = np.zeros((orders.size, 4, 4), dtype=complex)
-    a_n[:, 0, 2], a_n[:, 1, 3] = m_inv
-    a_n[:, 2:, :2] = -stiffness
-    a_n[:, 2:, 2:] = -damping * m_inv[None, None, :]
+    a_n = momentum_matrices(mass, damping, stiffness)
     mb_v = b_v * m_inv[None, :, None]
     b_n = np.concatenate([mb_v, b_z - np.einsum("nij,njk->nik", damping, mb_v)], axis=1)
     c_n = np.concatenate([l_u, l_v * m_inv[None, None, :]], axis=2)
     feedthrough = np.einsum("n,nok->ok", weight,
                             np.einsum("noi,nik->nok", l_v * m_inv[None, None, :], b_v).real)
+    real_orders = weight == 1.0
+    lam_n, vectors_n = order_modes(a_n, real_orders)
     values, modal_b, modal_c = [], [], []
     for index in range(orders.size):
-        if weight[index] == 1.0:  # n = 0 or N/2: a real system, conjugate pairs inside it
-            form: ModalForm = diagonalise(a_n[index].real, b_n[index].real, c_n[index].real)
-            values.append(form.eigenvalues)
-            modal_b.append(form.b)
-            modal_c.append(form.c)
+        lam, vectors = lam_n[index], vectors_n[index]
+        if real_orders[index]:  # n = 0 or N/2: a real system, conjugate pairs inside it
+            keep = lam.imag >= 0.0  # one of each pair (its partner's state is its conjugate)
+            real = lam.imag == 0.0
+            b_modal = np.linalg.solve(vectors, b_n[index].real)[keep]
+            c_modal = c_n[index].real @ vectors[:, keep] * np.where(real[keep], 1.0, 2.0)
+            b_modal[real[keep]] = b_modal[real[keep]].real  # real mode: drop rounding dust
+            c_modal[:, real[keep]] = c_modal[:, real[keep]].real
+            values.append(lam[keep])
+            modal_b.append(b_modal)
+            modal_c.append(c_modal)
             continue
-        lam, vectors = sla.eig(a_n[index])
         values.append(lam)
         modal_b.append(np.linalg.solve(vectors, b_n[index]))
         modal_c.append(2.0 * c_n[index] @ vectors)  # order -n is the conjugate

@@ -20,6 +20,61 @@ class ModalForm:
     c: np.ndarray  # (n_outputs, k) complex, pair factor included
 
 
+#: Relative tolerance of the ties in :func:`canonical_modes` (the C reads it from spec.h): wide
+#: enough for the rounding of any two eigen-solvers on the ring's orders, narrow enough that
+#: values it ties are equal for every purpose of the model.
+MODE_TIE_TOLERANCE = 1e-6
+
+
+def canonical_modes(values: np.ndarray, vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The modes of an eigenproblem (or a stack of them: ``values`` (..., m), eigenvectors the
+    columns of ``vectors`` (..., m, m)) in the canonical normalisation and order, which the
+    Python core and the native FMU's C (``canonical_modes`` in numerics.c) both follow, so that
+    two builders' modal data compare array by array:
+
+    - each eigenvector is scaled to unit 2-norm and then by the unit complex factor that makes
+      its pivot real and positive; the pivot is the component of lowest index whose magnitude is
+      at least (1 - MODE_TIE_TOLERANCE) times the largest, so that components equal but for
+      rounding count as tied and the first of them wins;
+    - the modes are sorted by Im λ, then by Re λ, each compared with a tie: λ_a goes before λ_b
+      when Im λ_a < Im λ_b by more than MODE_TIE_TOLERANCE max(|λ_a|, |λ_b|), or, their
+      imaginary parts so tied, when Re λ_a < Re λ_b by more than the same; otherwise the two keep
+      their order. The sort is an insertion sort (stable; the same steps in the C), so values
+      within the tie of each other come out in the solver's order, which differs between
+      solvers only for eigenvalues that rounding cannot separate anyway.
+
+    Products such as c·b of a modal form do not depend on either choice.
+    """
+    values = np.array(values, dtype=complex)
+    vectors = np.array(vectors, dtype=complex)
+    size = np.abs(vectors)
+    norm = np.linalg.norm(vectors, axis=-2)
+    big = size.max(axis=-2)
+    pivot = np.argmax(size >= (1.0 - MODE_TIE_TOLERANCE) * big[..., None, :], axis=-2)
+    p = np.take_along_axis(vectors, pivot[..., None, :], axis=-2)[..., 0, :]
+    p_size = np.abs(p)
+    vectors *= (np.conj(p) * (1.0 / (p_size * norm)))[..., None, :]
+    np.put_along_axis(vectors, pivot[..., None, :], (p_size / norm)[..., None, :] + 0j, axis=-2)
+    m = values.shape[-1]
+    for i in range(1, m):  # insertion sort, every stack at once: moving[...] while it moves
+        moving = np.ones(values.shape[:-1], dtype=bool)
+        for j in range(i, 0, -1):
+            a, b = values[..., j], values[..., j - 1]
+            tie = MODE_TIE_TOLERANCE * np.maximum(np.abs(a), np.abs(b))
+            by_im = np.abs(a.imag - b.imag) > tie
+            by_re = np.abs(a.real - b.real) > tie
+            before = np.where(by_im, a.imag < b.imag, by_re & (a.real < b.real))
+            moving &= before
+            if not moving.any():
+                break
+            values[..., [j - 1, j]] = np.where(moving[..., None], values[..., [j, j - 1]],
+                                               values[..., [j - 1, j]])
+            vectors[..., [j - 1, j]] = np.where(moving[..., None, None],
+                                                vectors[..., [j, j - 1]],
+                                                vectors[..., [j - 1, j]])
+    return values, vectors
+
+
 def diagonalise(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> ModalForm:
     """Modal form of a real (A, B, C): eigenvectors V, B_q = V⁻¹B, C_q = C V.
 

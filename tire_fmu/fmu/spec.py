@@ -24,6 +24,7 @@ from ..core import (
     contact,
     contact_dynamics,
     free_ring,
+    modal_form,
     model,
     parameters,
     road,
@@ -79,6 +80,8 @@ CONSTANTS: dict[str, float | int] = {
     "MAX_DEFLECTION_FRACTION": contact.MAX_DEFLECTION_FRACTION,
     "LENGTH_BISECTIONS": contact.LENGTH_BISECTIONS,
     "MAX_PATCH_FRACTION": parameters.MAX_PATCH_FRACTION,
+    # the free ring's modes: their canonical normalisation and order
+    "MODE_TIE_TOLERANCE": modal_form.MODE_TIE_TOLERANCE,
     # the critical speed
     "CRITICAL_SPEED_WARNING_FRACTION": model.CRITICAL_SPEED_WARNING_FRACTION,
     "MAX_SCANNED_SPEED_M_S": standing_waves.MAX_SCANNED_SPEED_M_S,
@@ -149,10 +152,10 @@ MESSAGES: dict[str, str] = {
     **{f"RESOLVED_{key}_{field.upper()}": text
        for field, way, what in model.RESOLVED_CANDIDATES
        for key, text in (("WAY", way), ("WHAT", what))},
-    # the native FMU only: its quartic solver for an order did not converge (LAPACK, in the
+    # the native FMU only: its eigen-solver for an order did not converge (LAPACK, in the
     # Python FMU, may still solve it)
     "RING_NOT_COMPUTED": "the native FMU could not compute the free ring's modes for these "
-                         "parameters (the roots of an order did not converge); the fastest "
+                         "parameters (the QR iteration of an order did not converge); the fastest "
                          "modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them "
                          "tractable, or the Python FMU (TireModal.fmu) may solve them",
     "PROBLEM_LINE": "parameter problem %d/%d: %s",

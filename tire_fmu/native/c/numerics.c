@@ -1,4 +1,4 @@
-/* numerics.c: complex arithmetic, the per-order quartic, small dense solves, brentq, repr. */
+/* numerics.c: complex arithmetic, dense eigenproblems, small dense solves, brentq, repr. */
 #include "numerics.h"
 
 #include <float.h>
@@ -45,101 +45,443 @@ void phi_functions(cx z, double series_limit, cx* phi1, cx* phi2)
     }
 }
 
-/* -- the per-order quartic ------------------------------------------------------------------- */
+/* -- dense eigenproblems ---------------------------------------------------------------------- */
 
-static void det_q(const double m[2], const cx d[4], const cx k[4], cx s, cx* value, cx* slope)
+cx cx_sqrt(cx z)
 {
-    cx s2 = cx_mul(s, s);
-    cx q11 = cx_add(cx_add(cx_scale(s2, m[0]), cx_mul(d[0], s)), k[0]);
-    cx q22 = cx_add(cx_add(cx_scale(s2, m[1]), cx_mul(d[3], s)), k[3]);
-    cx q12 = cx_add(cx_mul(d[1], s), k[1]);
-    cx q21 = cx_add(cx_mul(d[2], s), k[2]);
-    cx p11 = cx_add(cx_scale(s, 2.0 * m[0]), d[0]);
-    cx p22 = cx_add(cx_scale(s, 2.0 * m[1]), d[3]);
-    *value = cx_sub(cx_mul(q11, q22), cx_mul(q12, q21));
-    *slope = cx_sub(cx_add(cx_mul(p11, q22), cx_mul(q11, p22)),
-                    cx_add(cx_mul(d[1], q21), cx_mul(q12, d[2])));
+    double size = cx_abs(z), t;
+    if (size == 0.0) return cx_make(0.0, z.im);
+    if (size > 1e300) {  /* size + |re| would overflow: the root of z / 4, doubled */
+        cx half = cx_sqrt(cx_scale(z, 0.25));
+        return cx_scale(half, 2.0);
+    }
+    t = sqrt(0.5 * (size + fabs(z.re)));
+    if (z.re >= 0.0) return cx_make(t, z.im / (2.0 * t));
+    return cx_make(fabs(z.im) / (2.0 * t), z.im < 0.0 ? -t : t);
 }
 
-static cx poly(const cx* c, int degree, cx x, cx* slope)
-{
-    cx value = c[degree], d = cx_make(0.0, 0.0);
-    int i;
-    for (i = degree - 1; i >= 0; i--) {
-        d = cx_add(cx_mul(d, x), value);
-        value = cx_add(cx_mul(value, x), c[i]);
-    }
-    *slope = d;
-    return value;
-}
+static double cabs1(cx z) { return fabs(z.re) + fabs(z.im); }
 
-int order_roots(const double m[2], const cx d[4], const cx k[4], int real_system, cx roots[4])
+#define E(m, r, c) (m)[(r) * EIG_MAX_N + (c)]
+
+/* zgebal's scaling (LAPACK 3.5 on): A := D^-1 A D, D = diag(scale) of powers of 2 that make
+ * each row's and column's 2-norms comparable; exact, so only the rounding of later steps
+ * changes */
+static void balance(cx* a, int n, double* scale)
 {
-    cx a[5], b[5], x[4];
-    double scale, size;
-    int i, j, iteration, converged = 0;
-    a[4] = cx_make(m[0] * m[1], 0.0);
-    a[3] = cx_add(cx_scale(d[3], m[0]), cx_scale(d[0], m[1]));
-    a[2] = cx_sub(cx_add(cx_add(cx_scale(k[3], m[0]), cx_scale(k[0], m[1])), cx_mul(d[0], d[3])),
-                  cx_mul(d[1], d[2]));
-    a[1] = cx_sub(cx_add(cx_mul(d[0], k[3]), cx_mul(d[3], k[0])),
-                  cx_add(cx_mul(d[1], k[2]), cx_mul(d[2], k[1])));
-    a[0] = cx_sub(cx_mul(k[0], k[3]), cx_mul(k[1], k[2]));
-    /* s = scale x makes the polynomial monic with |b0| = 1, roots near the unit circle */
-    size = cx_abs(a[0]) / cx_abs(a[4]);
-    scale = size > 0.0 ? pow(size, 0.25) : 1.0;
-    for (i = 0; i <= 4; i++) {
-        b[i] = cx_scale(cx_div(a[i], a[4]), pow(scale, i - 4));
-    }
-    for (i = 0; i < 4; i++) {  /* Aberth-Ehrlich from points spread around the unit circle */
-        double angle = 2.0 * 3.14159265358979323846 * i / 4 + 0.4;
-        x[i] = cx_make(cos(angle), sin(angle));
-    }
-    for (iteration = 0; iteration < 500 && !converged; iteration++) {
-        converged = 1;
-        for (i = 0; i < 4; i++) {
-            cx slope, value = poly(b, 4, x[i], &slope), ratio, sum = cx_make(0.0, 0.0), w;
-            if (value.re == 0.0 && value.im == 0.0) continue;
-            ratio = cx_div(value, slope);
-            for (j = 0; j < 4; j++) {
-                if (j != i) sum = cx_add(sum, cx_div(cx_make(1.0, 0.0), cx_sub(x[i], x[j])));
+    const double radix = 2.0, factor = 0.95;
+    const double sfmin1 = DBL_MIN / DBL_EPSILON, sfmax1 = 1.0 / sfmin1;
+    const double sfmin2 = sfmin1 * radix, sfmax2 = 1.0 / sfmin2;
+    int i, j, noconv = 1, sweeps = 0;
+    for (i = 0; i < n; i++) scale[i] = 1.0;
+    while (noconv && sweeps++ < 1000) {
+        noconv = 0;
+        for (i = 0; i < n; i++) {
+            double c = 0.0, r = 0.0, ca = 0.0, ra = 0.0, g, f, s;
+            for (j = 0; j < n; j++) {
+                c = hypot(c, cx_abs(E(a, j, i)));
+                r = hypot(r, cx_abs(E(a, i, j)));
+                if (cx_abs(E(a, j, i)) > ca) ca = cx_abs(E(a, j, i));
+                if (cx_abs(E(a, i, j)) > ra) ra = cx_abs(E(a, i, j));
             }
-            w = cx_div(ratio, cx_sub(cx_make(1.0, 0.0), cx_mul(ratio, sum)));
-            x[i] = cx_sub(x[i], w);
-            if (!(cx_abs(w) <= 1e-13 * cx_abs(x[i]))) converged = 0;
+            if (c == 0.0 || r == 0.0) continue;
+            g = r / radix;
+            f = 1.0;
+            s = c + r;
+            while (c < g && fmax(f, fmax(c, ca)) < sfmax2 && fmin(r, fmin(g, ra)) > sfmin2) {
+                f *= radix;
+                c *= radix;
+                ca *= radix;
+                r /= radix;
+                g /= radix;
+                ra /= radix;
+            }
+            g = c / radix;
+            while (g >= r && fmax(r, ra) < sfmax2 &&
+                   fmin(fmin(f, c), fmin(g, ca)) > sfmin2) {
+                f /= radix;
+                c /= radix;
+                g /= radix;
+                ca /= radix;
+                r *= radix;
+                ra *= radix;
+            }
+            if (c + r >= factor * s) continue;
+            if (f < 1.0 && scale[i] < 1.0 && f * scale[i] <= sfmin1) continue;
+            if (f > 1.0 && scale[i] > 1.0 && scale[i] >= sfmax1 / f) continue;
+            scale[i] *= f;
+            noconv = 1;
+            for (j = 0; j < n; j++) E(a, i, j) = cx_scale(E(a, i, j), 1.0 / f);
+            for (j = 0; j < n; j++) E(a, j, i) = cx_scale(E(a, j, i), f);
         }
     }
-    /* a polynomial whose rounding floor stops the corrections above that still has its roots
-     * to working accuracy: the Newton steps on the determinant below settle them */
-    converged = 1;
-    for (i = 0; i < 4; i++) {
-        if (!(isfinite(x[i].re) && isfinite(x[i].im))) converged = 0;
+}
+
+/* H := Q^H A Q upper Hessenberg by Householder reflections P = I - tau u u^H (Hermitian,
+ * unitary), Q their product */
+static void hessenberg(cx* h, int n, cx* q)
+{
+    cx u[EIG_MAX_N];
+    int i, j, r;
+    for (i = 0; i < n; i++) {
+        for (j = 0; j < n; j++) E(q, i, j) = cx_make(i == j ? 1.0 : 0.0, 0.0);
     }
-    for (i = 0; i < 4; i++) {
-        cx s = cx_scale(x[i], scale);
-        if (real_system && fabs(s.im) <= 1e-8 * cx_abs(s)) s.im = 0.0;
-        for (j = 0; j < 3; j++) {  /* Newton on the determinant itself: its own residual */
-            cx value, slope;
-            det_q(m, d, k, s, &value, &slope);
-            if ((value.re == 0.0 && value.im == 0.0) || (slope.re == 0.0 && slope.im == 0.0)) {
+    for (j = 0; j + 2 < n; j++) {
+        double norm = 0.0, a0, tau;
+        cx phase;
+        for (r = j + 1; r < n; r++) norm = hypot(norm, cx_abs(E(h, r, j)));
+        if (norm == 0.0) continue;
+        a0 = cx_abs(E(h, j + 1, j));
+        phase = a0 > 0.0 ? cx_make(E(h, j + 1, j).re / a0, E(h, j + 1, j).im / a0)
+                         : cx_make(1.0, 0.0);
+        /* u = (x + phase |x| e1) / |x|: P x = -phase |x| e1 and tau = 2 / |u|^2 */
+        for (r = j + 1; r < n; r++) u[r] = cx_scale(E(h, r, j), 1.0 / norm);
+        u[j + 1] = cx_add(u[j + 1], phase);
+        tau = 1.0 / (1.0 + a0 / norm);
+        for (i = j + 1; i < n; i++) {  /* from the left: rows j+1.., columns j+1.. */
+            cx sum = cx_make(0.0, 0.0);
+            for (r = j + 1; r < n; r++) sum = cx_add(sum, cx_mul(cx_conj(u[r]), E(h, r, i)));
+            sum = cx_scale(sum, tau);
+            for (r = j + 1; r < n; r++) E(h, r, i) = cx_sub(E(h, r, i), cx_mul(u[r], sum));
+        }
+        for (i = 0; i < n; i++) {  /* from the right: every row, columns j+1.. */
+            cx sum = cx_make(0.0, 0.0), sum_q = cx_make(0.0, 0.0);
+            for (r = j + 1; r < n; r++) {
+                sum = cx_add(sum, cx_mul(E(h, i, r), u[r]));
+                sum_q = cx_add(sum_q, cx_mul(E(q, i, r), u[r]));
+            }
+            sum = cx_scale(sum, tau);
+            sum_q = cx_scale(sum_q, tau);
+            for (r = j + 1; r < n; r++) {
+                E(h, i, r) = cx_sub(E(h, i, r), cx_mul(sum, cx_conj(u[r])));
+                E(q, i, r) = cx_sub(E(q, i, r), cx_mul(sum_q, cx_conj(u[r])));
+            }
+        }
+        E(h, j + 1, j) = cx_scale(phase, -norm);
+        for (r = j + 2; r < n; r++) E(h, r, j) = cx_make(0.0, 0.0);
+    }
+}
+
+/* the rotation G = [c s; -conj(s) c] (c real) with G [f; g] = [r; 0] (zlartg) */
+static void givens(cx f, cx g, double* c, cx* s, cx* r)
+{
+    double af = cx_abs(f), ag = cx_abs(g), norm;
+    cx phase;
+    if (ag == 0.0) {
+        *c = 1.0;
+        *s = cx_make(0.0, 0.0);
+        *r = f;
+        return;
+    }
+    if (af == 0.0) {
+        *c = 0.0;
+        *s = cx_make(g.re / ag, -g.im / ag);
+        *r = cx_make(ag, 0.0);
+        return;
+    }
+    norm = hypot(af, ag);
+    phase = cx_make(f.re / af, f.im / af);
+    *c = af / norm;
+    *s = cx_mul(phase, cx_make(g.re / norm, -g.im / norm));
+    *r = cx_scale(phase, norm);
+}
+
+/* the rotation on rows k, k+1 (columns from..n-1) and, as G^H, on columns k, k+1 of h (rows
+ * 0..last) and of z (every row) */
+static void rotate(cx* h, cx* z, int n, int k, int from, int last, double c, cx s)
+{
+    int j;
+    for (j = from; j < n; j++) {
+        cx a = E(h, k, j), b = E(h, k + 1, j);
+        E(h, k, j) = cx_add(cx_scale(a, c), cx_mul(s, b));
+        E(h, k + 1, j) = cx_sub(cx_scale(b, c), cx_mul(cx_conj(s), a));
+    }
+    for (j = 0; j <= last; j++) {
+        cx a = E(h, j, k), b = E(h, j, k + 1);
+        E(h, j, k) = cx_add(cx_scale(a, c), cx_mul(cx_conj(s), b));
+        E(h, j, k + 1) = cx_sub(cx_scale(b, c), cx_mul(s, a));
+    }
+    for (j = 0; j < n; j++) {
+        cx a = E(z, j, k), b = E(z, j, k + 1);
+        E(z, j, k) = cx_add(cx_scale(a, c), cx_mul(cx_conj(s), b));
+        E(z, j, k + 1) = cx_sub(cx_scale(b, c), cx_mul(s, a));
+    }
+}
+
+/* is h(k, k-1) negligible? zlahqr's test: against its neighbours (Ahues and Kressner's
+ * conservative criterion), or below the underflow guard */
+static int negligible(const cx* h, int n, int k, double ulp, double smlnum)
+{
+    double sub = cabs1(E(h, k, k - 1)), tst, ab, ba, aa, bb, s;
+    if (sub <= smlnum) return 1;
+    tst = cabs1(E(h, k - 1, k - 1)) + cabs1(E(h, k, k));
+    if (tst == 0.0) {
+        if (k - 2 >= 0) tst += cabs1(E(h, k - 1, k - 2));
+        if (k + 1 < n) tst += cabs1(E(h, k + 1, k));
+    }
+    if (!(sub <= ulp * tst)) return 0;
+    ab = fmax(sub, cabs1(E(h, k - 1, k)));
+    ba = fmin(sub, cabs1(E(h, k - 1, k)));
+    aa = fmax(cabs1(E(h, k, k)), cabs1(cx_sub(E(h, k - 1, k - 1), E(h, k, k))));
+    bb = fmin(cabs1(E(h, k, k)), cabs1(cx_sub(E(h, k - 1, k - 1), E(h, k, k))));
+    s = aa + ab;
+    return ba * (ab / s) <= fmax(smlnum, ulp * (bb * (aa / s)));
+}
+
+/* the eigenvalue of the trailing 2x2 block [a b; c d] closer to d (zlahqr's form) */
+static cx wilkinson_shift(cx a, cx b, cx c, cx d)
+{
+    cx u = cx_mul(cx_sqrt(b), cx_sqrt(c)), x, y;
+    double s = cabs1(u), sx;
+    if (s == 0.0) return d;
+    x = cx_scale(cx_sub(a, d), 0.5);
+    sx = cabs1(x);
+    s = fmax(s, sx);
+    {
+        cx xs = cx_scale(x, 1.0 / s), us = cx_scale(u, 1.0 / s);
+        y = cx_scale(cx_sqrt(cx_add(cx_mul(xs, xs), cx_mul(us, us))), s);
+    }
+    if (sx > 0.0 && (x.re / sx) * y.re + (x.im / sx) * y.im < 0.0) y = cx_scale(y, -1.0);
+    return cx_sub(d, cx_mul(u, cx_div(u, cx_add(x, y))));
+}
+
+/* The Schur form: h (upper Hessenberg) := Z^H h Z upper triangular, z := z Z (zlahqr with
+ * Givens rotations for its reflections). 0, or -2 without convergence. */
+static int schur(cx* h, cx* z, int n)
+{
+    const double ulp = DBL_EPSILON, smlnum = DBL_MIN * ((double)n / ulp), dat1 = 0.75;
+    const int kexsh = 10, itmax = 30 * (n > 10 ? n : 10);
+    int i = n - 1, kdefl = 0;
+    while (i >= 0) {
+        int l = 0, its, converged = 0;
+        for (its = 0; its <= itmax; its++) {
+            int k;
+            cx t, x, y;
+            for (k = i; k > l; k--) {
+                if (negligible(h, n, k, ulp, smlnum)) break;
+            }
+            l = k;
+            if (l > 0) E(h, l, l - 1) = cx_make(0.0, 0.0);
+            if (l >= i) {
+                converged = 1;
                 break;
             }
-            s = cx_sub(s, cx_div(value, slope));
+            kdefl++;
+            if (kdefl % (2 * kexsh) == 0) {
+                t = cx_add(E(h, i, i), cx_make(dat1 * cx_abs(E(h, i, i - 1)), 0.0));
+            } else if (kdefl % kexsh == 0) {
+                t = cx_add(E(h, l, l), cx_make(dat1 * cx_abs(E(h, l + 1, l)), 0.0));
+            } else {
+                t = wilkinson_shift(E(h, i - 1, i - 1), E(h, i - 1, i), E(h, i, i - 1),
+                                    E(h, i, i));
+            }
+            /* one implicit single-shift QR sweep over rows and columns l..i */
+            x = cx_sub(E(h, l, l), t);
+            y = E(h, l + 1, l);
+            for (k = l; k < i; k++) {
+                double c;
+                cx s, r;
+                if (k > l) {
+                    x = E(h, k, k - 1);
+                    y = E(h, k + 1, k - 1);
+                }
+                givens(x, y, &c, &s, &r);
+                if (k > l) {
+                    E(h, k, k - 1) = r;
+                    E(h, k + 1, k - 1) = cx_make(0.0, 0.0);
+                }
+                rotate(h, z, n, k, k, k + 2 < i ? k + 2 : i, c, s);
+            }
         }
-        if (!(isfinite(s.re) && isfinite(s.im))) return -1;
-        {   /* a root: det Q(s) vanishes against the size of its two products */
-            cx s2 = cx_mul(s, s);
-            cx q11 = cx_add(cx_add(cx_scale(s2, m[0]), cx_mul(d[0], s)), k[0]);
-            cx q22 = cx_add(cx_add(cx_scale(s2, m[1]), cx_mul(d[3], s)), k[3]);
-            cx q12 = cx_add(cx_mul(d[1], s), k[1]);
-            cx q21 = cx_add(cx_mul(d[2], s), k[2]);
-            double products = cx_abs(cx_mul(q11, q22)) + cx_abs(cx_mul(q12, q21));
-            double residual = cx_abs(cx_sub(cx_mul(q11, q22), cx_mul(q12, q21)));
-            if (!(residual <= 1e-8 * products)) return -1;
-        }
-        roots[i] = s;
+        if (!converged) return -2;
+        kdefl = 0;
+        i = l - 1;
     }
-    return converged ? 0 : -1;
+    return 0;
+}
+
+/* column k of v: the eigenvector of the upper triangular t for t(k, k), through z */
+static void schur_vector(const cx* t, const cx* z, int n, int k, double tnorm, cx* v)
+{
+    const double ulp = DBL_EPSILON, smlnum = DBL_MIN * ((double)n / ulp);
+    const double limit = DBL_MAX / (4.0 * n * fmax(1.0, tnorm));
+    cx x[EIG_MAX_N], lam = E(t, k, k);
+    double smin = fmax(ulp * cabs1(lam), smlnum);
+    int j, r;
+    x[k] = cx_make(1.0, 0.0);
+    for (r = 0; r < k; r++) x[r] = cx_scale(E(t, r, k), -1.0);
+    for (j = k - 1; j >= 0; j--) {
+        cx d = cx_sub(E(t, j, j), lam);
+        double num = cabs1(x[j]), den;
+        if (cabs1(d) < smin) d = cx_make(smin, 0.0);
+        den = cabs1(d);
+        if (den < 1.0 && num > den * limit) {
+            double f = 0.5 * den * limit / num;
+            for (r = 0; r <= k; r++) x[r] = cx_scale(x[r], f);
+        }
+        x[j] = cx_div(x[j], d);
+        if (cabs1(x[j]) > limit) {
+            double f = 0.5 * limit / cabs1(x[j]);
+            for (r = 0; r <= k; r++) x[r] = cx_scale(x[r], f);
+        }
+        for (r = 0; r < j; r++) x[r] = cx_sub(x[r], cx_mul(E(t, r, j), x[j]));
+    }
+    for (r = 0; r < n; r++) {
+        cx sum = cx_make(0.0, 0.0);
+        for (j = 0; j <= k; j++) sum = cx_add(sum, cx_mul(E(z, r, j), x[j]));
+        v[r] = sum;
+    }
+}
+
+/* v / |v|_2, computed without overflow */
+static void unit_vector(cx* v, int n)
+{
+    double big = 0.0, norm = 0.0;
+    int r;
+    for (r = 0; r < n; r++) big = fmax(big, cabs1(v[r]));
+    if (!(big > 0.0)) return;
+    for (r = 0; r < n; r++) v[r] = cx_scale(v[r], 1.0 / big);
+    for (r = 0; r < n; r++) norm = hypot(norm, cx_abs(v[r]));
+    for (r = 0; r < n; r++) v[r] = cx_scale(v[r], 1.0 / norm);
+}
+
+/* v (stride apart) scaled to unit 2-norm and by the phase that makes its pivot, the first
+ * component within a relative tie of the largest magnitude, real and positive */
+static void canonical_vector(cx* v, int n, int stride, double tie)
+{
+    double big = 0.0, norm = 0.0, size;
+    int r, pivot = 0;
+    cx p, factor;
+    for (r = 0; r < n; r++) big = fmax(big, cx_abs(v[r * stride]));
+    if (!(big > 0.0)) return;
+    for (r = 0; r < n; r++) {
+        if (cx_abs(v[r * stride]) >= (1.0 - tie) * big) {
+            pivot = r;
+            break;
+        }
+    }
+    for (r = 0; r < n; r++) norm = hypot(norm, cx_abs(v[r * stride]));
+    p = v[pivot * stride];
+    size = cx_abs(p);
+    factor = cx_scale(cx_conj(p), 1.0 / (size * norm));
+    for (r = 0; r < n; r++) v[r * stride] = cx_mul(v[r * stride], factor);
+    v[pivot * stride] = cx_make(size / norm, 0.0);
+}
+
+/* a real matrix's spectrum: match each eigenvalue with the conjugate of another or itself,
+ * closest first, and give the pairs and the real ones their exact structure */
+static void real_structure(cx* values, cx* vectors, int n)
+{
+    int partner[EIG_MAX_N], i, j, r;
+    for (i = 0; i < n; i++) partner[i] = -1;
+    for (;;) {
+        double best = HUGE_VAL;
+        int bi = -1, bj = -1;
+        for (i = 0; i < n; i++) {
+            if (partner[i] >= 0) continue;
+            for (j = i; j < n; j++) {
+                double gap;
+                if (partner[j] >= 0) continue;
+                gap = cx_abs(cx_sub(values[i], cx_conj(values[j])));
+                if (gap < best) {
+                    best = gap;
+                    bi = i;
+                    bj = j;
+                }
+            }
+        }
+        if (bi < 0) break;
+        partner[bi] = bj;
+        partner[bj] = bi;
+    }
+    for (i = 0; i < n; i++) {
+        j = partner[i];
+        if (j == i) {
+            values[i].im = 0.0;
+            canonical_vector(&vectors[i], n, n, 0.0);
+            for (r = 0; r < n; r++) vectors[r * n + i].im = 0.0;
+        } else if (j > i) {
+            cx mean = cx_scale(cx_add(values[i], cx_conj(values[j])), 0.5);
+            int up = mean.im >= 0.0 ? i : j, down = up == i ? j : i;
+            if (mean.im < 0.0) mean = cx_conj(mean);
+            values[up] = mean;
+            values[down] = cx_conj(mean);
+            for (r = 0; r < n; r++) vectors[r * n + down] = cx_conj(vectors[r * n + up]);
+        }
+    }
+}
+
+int cx_eig(const cx* a, int n, int real, cx* values, cx* vectors)
+{
+    cx h[EIG_MAX_N * EIG_MAX_N], z[EIG_MAX_N * EIG_MAX_N], v[EIG_MAX_N];
+    double scale[EIG_MAX_N], tnorm = 0.0, big = 0.0;
+    int i, j, status, exponent = 0;
+    if (n < 1 || n > EIG_MAX_N) return -1;
+    for (i = 0; i < n; i++) {
+        for (j = 0; j < n; j++) {
+            cx x = a[i * n + j];
+            if (real) x.im = 0.0;
+            if (!(isfinite(x.re) && isfinite(x.im))) return -1;
+            E(h, i, j) = x;
+            big = fmax(big, cabs1(x));
+        }
+    }
+    /* entries of order 1, by a power of 2 (exact), as zgeev scales a matrix outside the
+     * safe range: the deflation's underflow guard and the norms then work at any scale */
+    if (big > 0.0) {
+        (void)frexp(big, &exponent);
+        for (i = 0; i < n; i++) {
+            for (j = 0; j < n; j++) {
+                E(h, i, j) = cx_make(ldexp(E(h, i, j).re, -exponent),
+                                     ldexp(E(h, i, j).im, -exponent));
+            }
+        }
+    }
+    balance(h, n, scale);
+    hessenberg(h, n, z);
+    status = schur(h, z, n);
+    if (status != 0) return status;
+    for (i = 0; i < n; i++) {
+        for (j = i; j < n; j++) tnorm = fmax(tnorm, cabs1(E(h, i, j)));
+    }
+    for (j = 0; j < n; j++) {
+        values[j] = cx_make(ldexp(E(h, j, j).re, exponent), ldexp(E(h, j, j).im, exponent));
+        schur_vector(h, z, n, j, tnorm, v);
+        unit_vector(v, n);  /* before the balancing's scales, which could overflow it */
+        for (i = 0; i < n; i++) v[i] = cx_scale(v[i], scale[i]);
+        unit_vector(v, n);
+        for (i = 0; i < n; i++) vectors[i * n + j] = v[i];
+    }
+    if (real) real_structure(values, vectors, n);
+    return 0;
+}
+
+#undef E
+
+/* the canonical order: a before b (canonical_modes) */
+static int mode_before(cx a, cx b, double tie)
+{
+    double scale = tie * fmax(cx_abs(a), cx_abs(b));
+    if (fabs(a.im - b.im) > scale) return a.im < b.im;
+    if (fabs(a.re - b.re) > scale) return a.re < b.re;
+    return 0;
+}
+
+void canonical_modes(int n, cx* values, cx* vectors, double tie)
+{
+    cx column[EIG_MAX_N];
+    int i, j, r;
+    for (j = 0; j < n; j++) canonical_vector(&vectors[j], n, n, tie);
+    for (i = 1; i < n; i++) {  /* insertion sort: stable */
+        cx value = values[i];
+        for (r = 0; r < n; r++) column[r] = vectors[r * n + i];
+        for (j = i; j > 0 && mode_before(value, values[j - 1], tie); j--) {
+            values[j] = values[j - 1];
+            for (r = 0; r < n; r++) vectors[r * n + j] = vectors[r * n + j - 1];
+        }
+        values[j] = value;
+        for (r = 0; r < n; r++) vectors[r * n + j] = column[r];
+    }
 }
 
 /* -- small dense solves ------------------------------------------------------------------------- */

@@ -34,10 +34,29 @@ cx cx_expm1(cx z);
 /* phi1(z) = (e^z - 1)/z and phi2(z) = (e^z - 1 - z)/z^2 (series below |z| = limit) */
 void phi_functions(cx z, double series_limit, cx* phi1, cx* phi2);
 
-/* Roots s of det(M s^2 + D s + K) = 0 for a 2-DOF order: m diagonal, d and k 2x2 (row major).
- * real_system: the coefficients are real; roots that are real to rounding come out exactly
- * real. Returns 0, or -1 when the iteration does not converge. */
-int order_roots(const double m[2], const cx d[4], const cx k[4], int real_system, cx roots[4]);
+cx cx_sqrt(cx z); /* the principal square root */
+
+/* Eigenvalues and right eigenvectors of a dense n x n complex matrix a (row major, 1 <= n <=
+ * EIG_MAX_N), the steps of LAPACK's zgeev: scaling by a power of 2 to entries of order 1,
+ * balancing by powers of 2 (zgebal's scaling, without its permutations), Householder reduction to upper Hessenberg form, complex single-shift QR
+ * with Wilkinson shifts and exceptional shifts (after 10 and 20 iterations without a
+ * deflation) to the Schur form T = Z^H A Z, eigenvectors of T by back-substitution (ztrevc's,
+ * a diagonal within ulp |lambda| of zero moved there, scaled against overflow), then through Z
+ * and the balancing. vectors: n x n row major, column k the eigenvector of values[k] with unit
+ * 2-norm. real: a is real (its imaginary parts are not read) and the result keeps a real
+ * matrix's structure, as LAPACK's dgeev returns it: each eigenvalue is matched with the
+ * conjugate of another (pairs) or of itself (real) by the closest match first; a pair is made
+ * exactly conjugate, values and vectors, from its member with Im > 0, a real eigenvalue gets
+ * Im = 0 and a real eigenvector. Returns 0; -1 for n out of range or a non-finite entry; -2
+ * when the QR iteration does not converge (more than 30 max(10, n) sweeps for one eigenvalue).
+ * No order is promised: canonical_modes gives one. */
+#define EIG_MAX_N 16
+int cx_eig(const cx* a, int n, int real, cx* values, cx* vectors);
+
+/* The canonical normalisation and order of the modes (values[k], column k of the n x n row
+ * major vectors), in place: the rule of tire_fmu.core.modal_form.canonical_modes, with its
+ * tolerance tie (spec.h: SPEC_MODE_TIE_TOLERANCE). */
+void canonical_modes(int n, cx* values, cx* vectors, double tie);
 
 /* Dense complex n x n inverse by Gauss-Jordan with partial pivoting, in place (n <= 8).
  * Returns 0, or -1 for a singular matrix. */

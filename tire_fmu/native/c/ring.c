@@ -1,12 +1,13 @@
 /* ring.c: the free rolling ring in diagonal modal form, order by order (core/free_ring.py).
  *
  * Without contact the ground-frame ring is circulant, so order n (n = 0 .. N/2) is a 2-DOF
- * system M u'' + D_n u' + K_n u = F_n. Its four eigenvalues are the roots of the quartic
- * det(M s^2 + D_n s + K_n); each eigenvector follows from the 2x2 null space, and V^-1 of the
- * 4x4 momentum form gives the modal inputs. A zone force f_j enters every order through
- * e^{-i n theta_j}, a zone displacement reads every order through e^{i n theta_j}, the rim
- * only orders +-1: that structure is kept (no dense mode x node tables), so building costs
- * O(N Z) and a step O(K + N Z). Orders 0 < n < N/2 stand for n and -n (factor 2 in c). */
+ * system M u'' + D_n u' + K_n u = F_n. Its 4x4 momentum-form state matrix A_n
+ * (free_ring.momentum_matrices) is diagonalised by the dense eigen-solver of numerics.c, its
+ * modes put in the canonical normalisation and order (free_ring.order_modes), and V^-1 gives
+ * the modal inputs. A zone force f_j enters every order through e^{-i n theta_j}, a zone
+ * displacement reads every order through e^{i n theta_j}, the rim only orders +-1: that
+ * structure is kept (no dense mode x node tables), so building costs O(N Z) and a step
+ * O(K + N Z). Orders 0 < n < N/2 stand for n and -n (factor 2 in c). */
 #include <stdlib.h>
 #include <string.h>
 
@@ -193,41 +194,54 @@ static void build_order(const Tire* tire, double arc, double spin, int n, int n_
 
 static cx ones_row(const cx* a, int column) { return cx_add(a[column], a[2 + column]); }
 
+/* A_n = [0 M^-1; -K_n -D_n M^-1] (row major) of the momentum state x = [u_n, M u_n'] and its
+ * four modes, canonical (free_ring.order_modes): a real order is the real system. 0, or the
+ * eigen-solver's error. */
+static int order_eigen(const Order* o, const double mass[2], cx a[16], cx values[4],
+                       cx vectors[16])
+{
+    double m_inv[2];
+    int i, j, status;
+    m_inv[0] = 1.0 / mass[0];
+    m_inv[1] = 1.0 / mass[1];
+    for (i = 0; i < 16; i++) a[i] = cx_make(0.0, 0.0);
+    a[0 * 4 + 2] = cx_make(m_inv[0], 0.0);
+    a[1 * 4 + 3] = cx_make(m_inv[1], 0.0);
+    for (i = 0; i < 2; i++) {
+        for (j = 0; j < 2; j++) {
+            a[(2 + i) * 4 + j] = cx_scale(o->k[2 * i + j], -1.0);
+            a[(2 + i) * 4 + 2 + j] = cx_scale(cx_scale(o->d[2 * i + j], -1.0), m_inv[j]);
+        }
+    }
+    status = cx_eig(a, 4, o->real_system, values, vectors);
+    if (status != 0) return status;
+    canonical_modes(4, values, vectors, SPEC_MODE_TIE_TOLERANCE);
+    return 0;
+}
+
+int ring_order_modes(const Tire* tire, int n_elements, double spin, int n, cx a[16],
+                     cx values[4], cx vectors[16])
+{
+    double arc = tire->R * (2.0 * PI / n_elements), mass[2];
+    Order o;
+    mass[0] = arc * tire->rhoA;
+    mass[1] = arc * tire->m_s;
+    build_order(tire, arc, spin, n, n_elements, &o);
+    return order_eigen(&o, mass, a, values, vectors);
+}
+
 /* The order's modes: eigenvalues, eigenvectors [u; s M u], V^-1, and what the ring needs of
  * them. Returns the number of modes written (4, or fewer for n = 0, N/2), -1 on failure. */
 static int order_modes(const Order* o, const double mass[2], int n, int n_elements,
                        Mode* out, int first_index)
 {
-    cx roots[4], v[16], vinv[16];
+    cx a[16], values[4], v[16], vinv[16];
     int k, count = 0;
-    if (order_roots(mass, o->d, o->k, o->real_system, roots) != 0) return -1;
-    for (k = 0; k < 4; k++) {
-        cx s = roots[k], s2 = cx_mul(s, s), u0, u1;
-        cx q11 = cx_add(cx_add(cx_scale(s2, mass[0]), cx_mul(o->d[0], s)), o->k[0]);
-        cx q12 = cx_add(cx_mul(o->d[1], s), o->k[1]);
-        cx q21 = cx_add(cx_mul(o->d[2], s), o->k[2]);
-        cx q22 = cx_add(cx_add(cx_scale(s2, mass[1]), cx_mul(o->d[3], s)), o->k[3]);
-        double norm;
-        if (cx_abs(q11) + cx_abs(q12) >= cx_abs(q21) + cx_abs(q22)) {
-            u0 = q12;
-            u1 = cx_scale(q11, -1.0);
-        } else {
-            u0 = q22;
-            u1 = cx_scale(q21, -1.0);
-        }
-        norm = hypot(cx_abs(u0), cx_abs(u1));
-        if (!(norm > 0.0)) return -1;
-        u0 = cx_scale(u0, 1.0 / norm);
-        u1 = cx_scale(u1, 1.0 / norm);
-        v[0 * 4 + k] = u0;
-        v[1 * 4 + k] = u1;
-        v[2 * 4 + k] = cx_scale(cx_mul(s, u0), mass[0]);
-        v[3 * 4 + k] = cx_scale(cx_mul(s, u1), mass[1]);
-    }
+    if (order_eigen(o, mass, a, values, v) != 0) return -1;
     memcpy(vinv, v, sizeof v);
     if (cx_invert(vinv, 4) != 0) return -1;
     for (k = 0; k < 4; k++) {
-        cx lam = roots[k];
+        cx lam = values[k];
         double factor = 2.0;
         Mode* m;
         int row;

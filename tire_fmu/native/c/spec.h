@@ -29,6 +29,7 @@
 #define SPEC_MAX_DEFLECTION_FRACTION 0.5
 #define SPEC_LENGTH_BISECTIONS 60
 #define SPEC_MAX_PATCH_FRACTION 0.125
+#define SPEC_MODE_TIE_TOLERANCE 1e-06
 #define SPEC_CRITICAL_SPEED_WARNING_FRACTION 0.8
 #define SPEC_MAX_SCANNED_SPEED_M_S 400.0
 #define SPEC_SCAN_POINTS 801
@@ -200,7 +201,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_RESOLVED_WHAT_RHOA "the tread nodes on k_r1 + k_cw"
 #define SPEC_MSG_RESOLVED_WAY_EI "smaller"
 #define SPEC_MSG_RESOLVED_WHAT_EI "the tread's bending at the mesh's shortest wavelength (fewer n_elements lengthen it)"
-#define SPEC_MSG_RING_NOT_COMPUTED "the native FMU could not compute the free ring's modes for these parameters (the roots of an order did not converge); the fastest modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them tractable, or the Python FMU (TireModal.fmu) may solve them"
+#define SPEC_MSG_RING_NOT_COMPUTED "the native FMU could not compute the free ring's modes for these parameters (the QR iteration of an order did not converge); the fastest modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them tractable, or the Python FMU (TireModal.fmu) may solve them"
 #define SPEC_MSG_PROBLEM_LINE "parameter problem %d/%d: %s"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
 

@@ -65,6 +65,11 @@ typedef struct {
 int ring_build(Ring* ring, const Memory* mem, const Tire* tire, int n_elements, double spin,
                int half, const Truncation* truncation);
 void ring_free(Ring* ring, const Memory* mem);
+/* order n's momentum-form state matrix A_n (4x4 row major) and its four modes as ring_build
+ * takes them (canonical: free_ring.order_modes; eigenvectors are the columns of vectors):
+ * tests/test_native_eig.py compares them with the core's. 0, or the eigen-solver's error. */
+int ring_order_modes(const Tire* tire, int n_elements, double spin, int n, cx a[16],
+                     cx values[4], cx vectors[16]);
 /* G (Z x Z, m/N) from the static gain: w = -G f for zone forces f pushing inwards */
 void ring_compliance(const Ring* ring, double* compliance);
 /* the lowest speed at which a ground-frame frequency of the undeformed mesh reaches zero */
