@@ -82,7 +82,9 @@ def _core_problem(make) -> str:
      ("sidewall_pressure_exponent", "4", "[0, 3]",
       TIRE_FIELDS["sidewall_pressure_exponent"].description)),
     (lambda: TireParameters(inflation_pressure=0.0, sidewall_pressure_exponent=1.5),
-     "PRESSURE_LAW", (1.5,)),
+     "PRESSURE_LAW", ("0 Pa", 1e4, 1.5)),
+    (lambda: TireParameters(inflation_pressure=1e-300, sidewall_pressure_exponent=1.0),
+     "PRESSURE_LAW", ("1e-300 Pa", 1e4, 1.0)),
     (lambda: OperatingPoint(n_elements=4), "ELEMENTS_RANGE", (4, 8, MAX_ELEMENTS)),
     (lambda: OperatingPoint(load_n=-2.5), "NOT_NONNEGATIVE", ("load", "-2.5 N", "N")),
     (lambda: OperatingPoint(speed_m_s=math.inf), "NOT_NONNEGATIVE", ("speed", "inf", "m/s")),
@@ -222,6 +224,7 @@ def _problems(fmu: Opened, parameters: dict) -> tuple[int, list[str], list[str]]
     {"R": -1.0, "b": math.nan, "k_cw": math.inf, "beta": 0.5, "n_elements": 4, "load": -1.0,
      "speed": math.nan, "f_max": -1.0, "n_modes": -3},
     {"sidewall_pressure_exponent": 1.0, "inflation_pressure": 0.0},
+    {"sidewall_pressure_exponent": 1.0, "inflation_pressure": 1e-300},  # critical speed 0
     {"load": 1e7},
     {"load": 2e5, "contact_zone_length": 0.2},
     {"speed": 80.0},
@@ -243,12 +246,33 @@ def test_parameter_problems_are_the_python_fmus(native, python, parameters):
     assert native_lines and native_lines == python_lines
 
 
-@pytest.mark.parametrize("m_s", [1e-20, 1e-5])
-def test_a_ring_the_native_solver_cannot_resolve_is_an_error_naming_the_field(native, m_s):
-    """Sidewall masses far below the tread's: the Python FMU refuses 1e-20 kg/m (double
-    precision cannot resolve the modes) and runs 1e-5; the native FMU's quartic solver fails
-    on both, and says so with the field to change instead of running to nan."""
-    status, lines, _ = _problems(native, {"m_s": m_s})
+@pytest.mark.parametrize("parameters, field", [
+    ({"rhoA": 1e-301}, "rhoA"),
+    ({"m_s": 1e-301}, "m_s"),
+    ({"k_cw": 5e-324}, "k_cw"),
+    ({"m_s": 1e-301, "speed": 5.0, "allow_supercritical": True}, "m_s"),
+    ({"k_cw": 5e-324, "speed": 5.0, "allow_supercritical": True}, "k_cw"),
+    ({"inflation_pressure": 1e-300, "sidewall_pressure_exponent": 1.0}, "inflation_pressure"),
+])
+def test_tiny_values_are_refused_alike_naming_the_parameter(native, python, parameters, field):
+    """They were refused as a critical speed of 0 m/s, a load in [0, 0] N or a singular
+    matrix; now as the parameter at fault, its value and its range, by both FMUs alike."""
+    status, native_lines, _ = _problems(native, parameters)
+    _, python_lines, _ = _problems(python, parameters)
+    assert status == 3 and native_lines == python_lines
+    [line] = native_lines
+    assert line.startswith(f"parameter problem 1/1: {field} = ") and ": must be " in line
+
+
+@pytest.mark.parametrize("parameters", [{"m_s": 1e-3, "k_r2": 1e11, "beta": 0.1},
+                                        {"m_s": 1e-3, "beta": 0.1}])
+def test_a_ring_the_native_solver_cannot_resolve_is_an_error_naming_the_field(native,
+                                                                           parameters):
+    """Sidewall masses at the field's lower bound, 2e4 times lighter than the tread, heavily
+    damped: the Python FMU refuses them on stiff springs (double precision cannot resolve the
+    modes) and runs them on the default ones; the native FMU's quartic solver fails on both,
+    and says so with the field to change instead of running to nan."""
+    status, lines, _ = _problems(native, parameters)
     assert status == 3
     [line] = lines
     assert "could not compute the free ring's modes" in line
