@@ -213,6 +213,9 @@ def test_a_published_folder_replaces_the_old_one_whole(tmp_path, monkeypatch, at
     (finished / "new.txt").write_text("new")
     publish_folder(finished, dest)
     assert [p.name for p in dest.iterdir()] == ["new.txt"]
+    mask = os.umask(0)
+    os.umask(mask)
+    assert dest.stat().st_mode & 0o777 == 0o777 & ~mask  # as mkdir makes it, not 0700
     assert [p.name for p in tmp_path.iterdir()] == ["out"]  # the old folder is gone
     again = publish.private_folder(tmp_path / "fresh")
     publish_folder(again, tmp_path / "fresh")  # no previous folder

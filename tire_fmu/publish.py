@@ -56,6 +56,8 @@ def publish_folder(finished: Path, dest: Path) -> None:
     the previous content in a hidden ``.NAME.part-*`` folder beside it, never a mix.
     """
     finished, dest = Path(finished), Path(dest)
+    # mkdtemp made it private (0700): published, it gets what mkdir would have given it
+    os.chmod(finished, 0o777 & ~_umask())
     if not dest.exists():
         os.rename(finished, dest)
         return
@@ -67,6 +69,12 @@ def publish_folder(finished: Path, dest: Path) -> None:
         os.rename(dest, old / dest.name)
         os.rename(finished, dest)
     shutil.rmtree(old, ignore_errors=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 _RENAME_EXCHANGE = 2
