@@ -2,7 +2,10 @@
 
 Each command group lives in its own module with a ``register(subparsers)`` function; handlers
 take the parsed arguments and return a :class:`Output` (text for people, a dict for ``--json``).
-Errors the user can fix end the program with a one-line message and exit status 2.
+Errors the user can fix (a bad command line or value, an output that cannot be written,
+stdout included) end the program with a one-line message and exit status 2; an unexpected one
+with one line and status 1; Ctrl-C with one line and 130; a reader that stopped early (``|
+head``) silently with 141 (:mod:`.parsing`).
 
 Only the module of the command given is imported (:mod:`.commands` lists the others with
 their help lines), so ``tire-fmu --help`` answers without loading numpy or scipy. Commands run
