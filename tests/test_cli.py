@@ -13,6 +13,7 @@ import pytest
 from tire_fmu.cli import build_parser, main
 from tire_fmu.cli.common import to_jsonable
 from tire_fmu.core import (
+    DEFAULT_LOAD_N,
     OperatingPoint,
     ParameterError,
     analytic_modes,
@@ -241,6 +242,17 @@ BAD_INPUTS = [
      ["--speed = 50", "critical speed 42.67"]),
     (["dispersion", "--patch-length", "0.204", "--elements", "200"],
      ["default --speed = 40.84", "critical speed 21.49"]),
+    # tiny values: named with their range, not as a critical speed of 0 m/s, a load in
+    # [0, 0] N or a singular matrix
+    (["modes", "--tire", "rhoA=1e-301"], ["rhoA = 1e-301 kg/m", "[1e-06, 10000] kg/m"]),
+    (["modes", "--tire", "m_s=1e-301", "--speed", "5", "--allow-supercritical"],
+     ["m_s = 1e-301 kg/m", "[1e-06, 10000] kg/m"]),
+    (["frf", "--tire", "k_cw=5e-324", "--elements", "40"], ["k_cw = 4.94066e-324 N/m^2",
+                                                            "[10000, 1e+13] N/m^2"]),
+    (["reduce", "--tire", "k_cw=5e-324", "--allow-supercritical", "--speed", "5"],
+     ["k_cw = 4.94066e-324 N/m^2", "[10000, 1e+13] N/m^2"]),
+    (["modes", "--tire", "sidewall_pressure_exponent=1", "--inflation-pressure", "1e-300"],
+     ["--inflation-pressure = 1e-300 Pa: must be at least 10000 Pa"]),
 ]
 
 
@@ -295,7 +307,9 @@ def test_progress_bar_only_on_a_terminal(monkeypatch, capsys):
 # ------------------------------------------------------------------ the command line itself
 
 def test_a_reader_that_stops_early_ends_the_output_quietly():
-    # `tire-fmu analytic --json | head -c 0`: the pipe's read end is already closed
+    # `tire-fmu analytic --json | head -c 0`: the pipe's read end is already closed. No
+    # message (the reader chose to stop), but not success either: 141, as a C tool stopped
+    # by SIGPIPE reports, so that `set -o pipefail` sees it
     read, write = os.pipe()
     os.close(read)
     try:
@@ -303,7 +317,7 @@ def test_a_reader_that_stops_early_ends_the_output_quietly():
                               stdout=write, stderr=subprocess.PIPE, text=True, timeout=60)
     finally:
         os.close(write)
-    assert done.returncode == 0 and done.stderr == ""
+    assert done.returncode == 141 and done.stderr == ""
 
 
 def test_debug_is_accepted_before_and_after_the_command(capsys):
@@ -399,3 +413,212 @@ def test_export_without_fmpy_names_the_extra(capsys, monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "fmpy", None)  # import fmpy now raises ImportError
     code, _, err = run(capsys, "export", str(tmp_path / "t.fmu"))
     assert code == 2 and "pip install 'tire_fmu[fmu]'" in err
+
+
+# ------------------------------------------------------------------ messages a user can act on
+
+def _tire_fmu(*argv, stdout=subprocess.PIPE) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "tire_fmu", *argv], stdout=stdout,
+                          stderr=subprocess.PIPE, text=True, timeout=120)
+
+
+def _one_line(err: str, start: str) -> str:
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(start), err
+    return lines[0]
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize("argv, prog, named, suggested", [
+    (["-m", "tire_fmu", "patch", "--laod", "5"], "tire-fmu patch", "--laod", "--load"),
+    (["-m", "tire_fmu", "patch", "--lo", "27000"], "tire-fmu patch", "--lo", "--load"),
+    (["-m", "tire_fmu", "--debu", "modes"], "tire-fmu", "--debu", "--debug"),
+    (["build_fmu.py", "--out", "dist"], "build_fmu.py", "--out", "--out-dir"),
+    (["-m", "vehicle_demo", "--qu"], "python -m vehicle_demo", "--qu", "--quick"),
+])
+def test_an_unknown_or_abbreviated_option_is_named_with_the_one_meant(tmp_path, argv, prog,
+                                                                       named, suggested):
+    # `patch --laod` said only that one of --load --deflection --patch-length is required,
+    # and `--lo 27000` ran as --load 27000: options are taken only as spelled
+    done = subprocess.run([sys.executable, *argv], capture_output=True, text=True, timeout=120,
+                          cwd=ROOT)
+    assert done.returncode == 2 and done.stdout == ""
+    line = _one_line(done.stderr, f"{prog}: error: unknown option {named} ")
+    assert f"(did you mean {suggested}?)" in line
+    assert not (ROOT / "dist").exists() or "build_fmu" not in argv[0]
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["modes", "--max-frequency", "-1"], "--max-frequency = -1"),
+    (["modes", "--elements=-3"], "--elements = -3"),
+    (["modes", "--tire", "k_r1=-5"], "k_r1 = -5"),
+])
+def test_a_negative_number_after_an_option_is_its_value(capsys, argv, named):
+    code, _, err = run(capsys, *argv)
+    assert code == 2 and named in err and "unknown option" not in err
+
+
+def test_stdout_that_cannot_take_the_output_is_one_line_and_a_failure(tmp_path):
+    with open("/dev/full", "w") as full:
+        done = _tire_fmu("analytic", "--nmax", "3", stdout=full)
+    assert done.returncode == 2
+    _one_line(done.stderr, "tire-fmu analytic: error: cannot write the output to stdout: "
+                           "No space left on device")
+    script = ("import runpy, sys, tire_fmu.fmu.builder as b\n"
+              "b.build_fmu = lambda out: 'dist/TireModal.fmu'\n"
+              "sys.argv = ['build_fmu.py']\n"
+              "runpy.run_path('build_fmu.py', run_name='__main__')\n")
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-c", script], cwd=ROOT, stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=120)
+    assert done.returncode == 2
+    _one_line(done.stderr, "build_fmu.py: error: cannot write the output to stdout")
+
+
+#: Ctrl-C, as the terminal sends it, at the point named: SIGINT to the process itself.
+CTRL_C = ("import os, signal, time\n"
+          "def ctrl_c(*_, **__):\n"
+          "    os.kill(os.getpid(), signal.SIGINT)\n"
+          "    time.sleep(30)\n")
+
+
+@pytest.mark.fmu
+def test_ctrl_c_in_build_fmu_py_is_one_line_status_130_and_leaves_nothing(tmp_path):
+    # during the build, after pythonfmu has written its FMU
+    script = CTRL_C + ("import runpy, sys, tire_fmu.fmu.builder as b\n"
+                       "b.compile_guard = ctrl_c\n"
+                       f"sys.argv = ['build_fmu.py', '-o', {str(tmp_path / 'dist')!r}]\n"
+                       "runpy.run_path('build_fmu.py', run_name='__main__')\n")
+    done = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 130 and done.stdout == ""
+    assert done.stderr == "build_fmu.py: interrupted\n"
+    assert list((tmp_path / "dist").iterdir()) == []
+
+
+def test_ctrl_c_anywhere_in_tire_fmu_is_one_line_status_130():
+    # before the command's own work (parsing, loading numpy and scipy) as well as during it
+    for where in ("cli.build_parser", "ring.analytic_modes"):
+        script = CTRL_C + ("import sys, tire_fmu.cli as cli, tire_fmu.cli.ring as ring\n"
+                           f"{where} = ctrl_c\n"
+                           "sys.exit(cli.main(['analytic']))\n")
+        done = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == 130, (where, done.stderr)
+        assert done.stderr == "tire-fmu analytic: interrupted\n", where
+
+
+def test_an_unwritable_plot_names_the_option_and_the_path(capsys, monkeypatch, tmp_path):
+    import tire_fmu.cli.ring as ring
+
+    folder = tmp_path / "a.png"
+    folder.mkdir()  # a folder where the figure would go: refused before computing
+    monkeypatch.setattr(ring, "analytic_modes", _no_computation)
+    code, _, err = run(capsys, "modes", "--elements", "20", "--plot", str(folder))
+    assert code == 2
+    assert _one_line(err, "tire-fmu modes: error: --plot = ").endswith("is a folder: give a "
+                                                                      "file name")
+    monkeypatch.undo()
+    # a folder that exists but cannot be written (as root too: /proc takes no new files)
+    code, _, err = run(capsys, "modes", "--elements", "20", "--max-frequency", "60",
+                       "--plot", "/proc/tire.png")
+    assert code == 2
+    line = _one_line(err, "tire-fmu modes: error: --plot = '/proc/tire.png': cannot write it: ")
+    assert "Errno" not in line
+
+
+def test_export_writes_to_an_unwritable_path_naming_out(capsys):
+    code, _, err = run(capsys, "export", "/proc/tire.npz", "--elements", "20")
+    assert code == 2
+    _one_line(err, "tire-fmu export: error: OUT = '/proc/tire.npz': cannot write it: ")
+
+
+def test_the_speed_error_names_the_command_line_flag(capsys):
+    code, _, err = run(capsys, "modes", "--speed", "50")
+    line = _one_line(err, "tire-fmu modes: error: --speed = 50 m/s: must be below the critical")
+    assert "--allow-supercritical runs anyway" in line and "(--elements = 100)" in line
+    assert not re.search(r"(?<!-)allow_supercritical", line)
+
+
+def _fake_native_build(out, start_values, platforms=None):
+    import zipfile
+
+    with zipfile.ZipFile(out, "w") as archive:
+        archive.writestr("binaries/linux64/TireModalNative.so", b"")
+    return Path(out)
+
+
+def test_export_of_a_native_fmu_reports_its_file_once(capsys, monkeypatch, tmp_path):
+    import tire_fmu.native as native
+
+    monkeypatch.setattr(native, "build_native_fmu", _fake_native_build)
+    target = tmp_path / "tire_c.fmu"
+    code, out, err = run(capsys, "export", str(target), "--elements", "40")
+    assert code == 0
+    assert (out + err).count("wrote") == 1 and f"wrote {target}" in err
+    assert "binaries: linux64" in out
+
+
+def test_fmu_outputs_may_name_a_folder_still_to_be_made(capsys, monkeypatch, tmp_path):
+    # README order: `tire-fmu build-fmu dist` before dist/ exists (as build_fmu.py -o dist)
+    import tire_fmu.native as native
+
+    monkeypatch.setattr(native, "build_native_fmu", _fake_native_build)
+    code, _, err = run(capsys, "export", "--format", "fmu", str(tmp_path / "new" / "dist"),
+                       "--elements", "40")
+    assert code == 0, err
+    assert (tmp_path / "new" / "dist" / "TireModalNative.fmu").is_file()
+
+
+@pytest.mark.fmu
+def test_build_fmu_into_a_folder_that_does_not_exist_yet(capsys, tmp_path):
+    from fmpy.validation import validate_fmu
+
+    code, out, err = run(capsys, "build-fmu", str(tmp_path / "dist"))
+    assert code == 0, err
+    assert validate_fmu(str(tmp_path / "dist" / "TireModal.fmu")) == []
+
+
+LOAD_DEFAULTS = {"modes": 0.0, "frf": DEFAULT_LOAD_N, "reduce": DEFAULT_LOAD_N,
+                 "export": DEFAULT_LOAD_N}
+
+
+def _load_help(command: str) -> str:
+    parser = build_parser([command])
+    (commands,) = [a for a in parser._actions if a.dest == "command"]
+    (load,) = [a for a in commands.choices[command]._actions if "--load" in a.option_strings]
+    return " ".join(load.help.split())
+
+
+def test_every_load_option_says_its_default_and_what_0_means():
+    with_load = [name for name, options in _options() if "--load" in options]
+    assert sorted(with_load) == sorted([*LOAD_DEFAULTS, "patch", "fit"])
+    for command in with_load:
+        text = _load_help(command)
+        if command in LOAD_DEFAULTS:
+            assert re.search(r"default ([\d.]+) N", text), (command, text)
+        else:
+            assert "no default" in text, (command, text)
+        if command != "fit":  # fit's load is a measurement's, > 0
+            assert "0 N: the tire touches the road without pressing on it" in text, command
+
+
+@pytest.mark.parametrize("command", sorted(LOAD_DEFAULTS))
+def test_the_default_load_a_help_states_is_the_one_used(capsys, monkeypatch, tmp_path, command):
+    stated = float(re.search(r"default ([\d.]+) N", _load_help(command)).group(1))
+    assert stated == LOAD_DEFAULTS[command]
+    if command == "export":
+        import tire_fmu.native as native
+
+        monkeypatch.setattr(native, "build_native_fmu", _fake_native_build)
+        data = run_json(capsys, "export", str(tmp_path / "t.fmu"), "--elements", "20")
+        assert data["start_values"]["load"] == stated
+        used = data["model_at_start_values"]["load_n"]
+    else:
+        extra = {"modes": ["--max-frequency", "60"], "frf": ["--points", "3"], "reduce": []}
+        data = run_json(capsys, command, "--elements", "20", *extra[command])
+        used = data.get("operating_point", data)["load_n"]
+    assert used == pytest.approx(stated, rel=1e-12)

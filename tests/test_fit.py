@@ -329,6 +329,7 @@ def test_with_the_law_vertical_stiffness_falls_with_pressure_as_measured_tires_d
 def test_pressure_law_needs_a_pressure():
     from tire_fmu.core import ParameterError
 
-    with pytest.raises(ParameterError, match="inflation_pressure = 0 Pa: must be > 0 Pa, or "
-                       "sidewall_pressure_exponent = 0 .with sidewall_pressure_exponent = 0.8 "):
+    with pytest.raises(ParameterError, match="inflation_pressure = 0 Pa: must be at least "
+                       "10000 Pa, or sidewall_pressure_exponent = 0 .with "
+                       "sidewall_pressure_exponent = 0.8 "):
         TireParameters(sidewall_pressure_exponent=0.8, inflation_pressure=0.0)

@@ -93,6 +93,31 @@ def test_a_partial_file_warns_and_takes_the_defaults(tmp_path):
     assert "k_r1" not in partial.defaulted and "EI" in partial.defaulted
 
 
+def test_a_file_with_a_byte_order_mark_reads_as_without(tmp_path):
+    # as Windows Notepad saves UTF-8: it read as "Invalid statement (at line 1, column 1)"
+    plain = tire_file_text(TireParameters(k_r1=7e6), name="mark")
+    path = tmp_path / "marked.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + plain.encode("utf-8"))
+    assert read_tire_file(path).tire == TireParameters(k_r1=7e6)
+
+
+@pytest.mark.parametrize("nested", ["x = " + "[" * 5000 + "]" * 5000,
+                                    "x = " + "{a = " * 5000 + "}" * 5000])
+def test_a_deeply_nested_file_is_refused_naming_it(tmp_path, capsys, nested):
+    from tire_fmu.cli import main
+
+    path = tmp_path / "nested.toml"
+    path.write_text(nested + "\n")
+    with pytest.raises(TireFileError, match=f"^{path}: not a tire file: arrays or tables "
+                                            "nested too deeply"):
+        read_tire_file(path)
+    assert main(["analytic", "--tire-file", str(path)]) == 2  # not "internal error"
+    err = capsys.readouterr().err
+    assert err == (f"tire-fmu analytic: error: --tire-file: {path}: not a tire file: arrays or "
+                   "tables nested too deeply to read (a tire file nests at most a few "
+                   "levels)\n")
+
+
 def test_written_text_lists_units_and_descriptions():
     text = tire_file_text(TireParameters())
     assert 'k_r1 = "N/m^2"' in text and "# tread-sidewall radial stiffness" in text

@@ -9,7 +9,9 @@ its target PSD; sweeps on dask against the serial run; the demo and its command 
 
 from __future__ import annotations
 
+import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -430,6 +432,7 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
     (out / "fmus").mkdir(parents=True)
     for path in (fmus.tire, fmus.quarter_car):  # reuse the built FMUs (they are up to date)
         shutil.copy2(path, out / "fmus" / path.name)
+    (out / "summary.json").write_text("an earlier run's")
     summary = run_demo(DemoSettings.quick(out_dir=out, n_elements=40, road_duration_s=0.5,
                                           progress=False), log=lambda *_: None)
     for name in ("ride_transfer_functions.png", "road_run_iso8608.png", "road_run_cleat.png",
@@ -437,6 +440,18 @@ def test_quick_demo_writes_figures_and_tables(tmp_path, fmus, monkeypatch):
                  "road_psd.png", "summary.csv", "resonances.csv", "agreement.csv",
                  "summary.json"):
         assert (out / name).stat().st_size > 0, name
+    # published whole: the run's own files where it says, nothing left beside them
+    from vehicle_demo.demo import OUTPUTS
+
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS)
+    assert sorted(p.name for p in (out / "fmus").iterdir()) == ["QuarterCar.fmu",
+                                                                "TireModal.fmu"]
+    assert [p.name for p in tmp_path.iterdir()] == ["demo"]
+    assert [*summary.figures, *summary.tables] == [*(out / n for n in (
+        "ride_transfer_functions.png", "road_run_iso8608.png", "road_psd.png",
+        "road_run_cleat.png", "contact_events.png")), *(out / n for n in (
+        "summary.csv", "resonances.csv", "agreement.csv", "summary.json"))]
+    assert json.loads((out / "summary.json").read_text())["settings"]["n_elements"] == 40
     assert all(a.max_deviation_db < 1.0 for a in summary.agreements.values())
     # the contact events: the 40 mm cleat throws the tire off the road, the unilateral
     # contact never pulls, the linear one does over the pothole
@@ -507,6 +522,87 @@ def test_demo_without_its_packages_names_the_extra_and_leaves_no_folder(tmp_path
     err = capsys.readouterr().err
     assert "the demo needs matplotlib: pip install 'tire_fmu[demo]'" in err
     assert not out.exists()
+
+
+def _snapshot(folder: Path) -> dict:
+    return {str(p.relative_to(folder)): (p.read_bytes(), p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.fmu
+def test_an_interrupted_rerun_leaves_the_previous_run_as_it_was(tmp_path, fmus, monkeypatch):
+    # the previous run's outputs and FMUs, the FMUs older than their sources: the rerun
+    # rebuilds them, then is interrupted before its first figure
+    import shutil
+
+    import tire_fmu.core
+    from vehicle_demo.demo import DemoSettings, run_demo
+
+    out = tmp_path / "demo"
+    (out / "fmus").mkdir(parents=True)
+    for path in (fmus.tire, fmus.quarter_car):
+        shutil.copy2(path, out / "fmus" / path.name)
+        os.utime(out / "fmus" / path.name, (0, 0))
+    for name in ("ride_transfer_functions.png", "summary.csv", "summary.json"):
+        (out / name).write_text(f"previous run: {name}")
+    before = _snapshot(out)
+    built = []
+
+    def interrupted(*_, **__):
+        built.extend(p.name for p in tmp_path.rglob("*.fmu"))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(tire_fmu.core, "build_model", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_demo(DemoSettings.quick(out_dir=out, n_elements=40, progress=False),
+                 log=lambda *_: None)
+    assert built.count("TireModal.fmu") == 2  # rebuilt (beside the old ones), then stopped
+    assert _snapshot(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["demo"]  # and no partial run beside it
+
+
+def test_an_output_folder_with_other_files_is_refused_untouched(tmp_path, monkeypatch):
+    import vehicle_demo.demo as demo
+    from vehicle_demo.__main__ import main
+
+    monkeypatch.setattr(demo, "ensure_fmus", lambda *_, **__: pytest.fail("built the FMUs"))
+    (tmp_path / "notes.txt").write_text("mine")
+    (tmp_path / "summary.csv").write_text("a run's")
+    assert main(["--out", str(tmp_path), "--quick"]) == 2
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt", "summary.csv"]
+
+
+@pytest.mark.fmu
+def test_the_up_to_date_check_rebuilds_an_fmu_a_killed_build_left(tmp_path, fmus,
+                                                                    monkeypatch):
+    # pythonfmu's zip without the builder's completion (a build killed before the guard and
+    # the model description), and a zip cut short: both newer than every source
+    import shutil
+    import zipfile
+
+    import tire_fmu.fmu.builder as builder
+    import vehicle_demo.quarter_car_fmu as quarter_car_fmu
+    from vehicle_demo.demo import ensure_fmus
+
+    built = []
+
+    def build(folder, *_, **__):
+        built.append(Path(folder))
+
+    monkeypatch.setattr(builder, "build_fmu", build)
+    monkeypatch.setattr(quarter_car_fmu, "build_quarter_car_fmu", build)
+    for path in (fmus.tire, fmus.quarter_car):
+        shutil.copy2(path, tmp_path / path.name)
+    assert ensure_fmus(tmp_path, log=lambda *_: None) and built == []  # whole: reused
+    with zipfile.ZipFile(fmus.tire) as source, \
+            zipfile.ZipFile(tmp_path / "TireModal.fmu", "w") as target:
+        for item in source.infolist():
+            if item.filename != builder.BUILD_RECORD:
+                target.writestr(item, source.read(item.filename))
+    data = fmus.quarter_car.read_bytes()
+    (tmp_path / "QuarterCar.fmu").write_bytes(data[: len(data) // 2])
+    ensure_fmus(tmp_path, log=lambda *_: None)
+    assert built == [tmp_path, tmp_path]  # both rebuilt
 
 
 def test_the_quarter_car_is_defined_once():

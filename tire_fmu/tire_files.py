@@ -99,9 +99,13 @@ def read_tire_file(spec: str | Path, warn: bool = True) -> TireFile:
     """Read a tire file (a path, or the name of a shipped one); every problem at once."""
     path = resolve_tire_file(spec)
     try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
+        # utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the text
+        document = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise TireFileError(f"{path}: not valid TOML: {error}") from error
+    except RecursionError as error:  # tomllib parses nested arrays and tables recursively
+        raise TireFileError(f"{path}: not a tire file: arrays or tables nested too deeply "
+                            "to read (a tire file nests at most a few levels)") from error
     except OSError as error:
         raise TireFileError(f"{path}: cannot be read: {error}") from error
     values, problems = _parameters(document)

@@ -17,9 +17,13 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from tire_fmu.cli.parsing import Parser, interrupted, stdout_failure, write_stdout  # noqa: E402
+
+PROG = "vehicle_demo"
+
 
 def _demo_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="python -m vehicle_demo",
         description="Quarter car co-simulated with TireModal.fmu through fmpy: ride transfer "
                     "functions (0.5-300 Hz) against the full-model and spring-damper "
@@ -40,11 +44,28 @@ def _demo_parser() -> argparse.ArgumentParser:
 
 
 #: The demo's settings under the names of their options, for error messages.
-OPTION_NAMES = {"n_elements": "--n-elements", "road_speed_m_s": "--road-speed"}
+OPTION_NAMES = {"n_elements": "--n-elements", "road_speed_m_s": "--road-speed",
+                "out_dir": "--out"}
+
+
+class _StdoutFailed(Exception):
+    """stdout could not take the output (kept apart from the OSErrors of files)."""
+
+    def __init__(self, error: OSError):
+        super().__init__(str(error))
+        self.error = error
+
+
+def say(text="") -> None:
+    """One line of output on stdout, flushed."""
+    try:
+        write_stdout(str(text))
+    except OSError as error:
+        raise _StdoutFailed(error) from error
 
 
 def _sweep_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="python -m vehicle_demo sweep",
         description="Full-factorial sweep of the co-simulated quarter car on dask; writes the "
                     "table (CSV or Parquet) and a plot of how the resonances move.")
@@ -94,8 +115,8 @@ def _demo(argv) -> int:
     if args.n_elements is not None:
         overrides["n_elements"] = args.n_elements
     settings = DemoSettings.quick(**overrides) if args.quick else DemoSettings(**overrides)
-    summary = run_demo(settings, names=OPTION_NAMES)
-    print(format_summary(summary))
+    summary = run_demo(settings, log=say, names=OPTION_NAMES)
+    say(format_summary(summary))
     return 0
 
 
@@ -106,7 +127,7 @@ def _sweep(argv) -> int:
 
     args = _sweep_parser().parse_args(argv)
     factors = _parse_factors(args.factor)
-    fmus = ensure_fmus(args.out / "fmus", args.rebuild)
+    fmus = ensure_fmus(args.out / "fmus", args.rebuild, log=say)
     result = run_sweep(full_factorial(factors), fmus, SweepSettings(n_elements=args.n_elements),
                        scheduler=args.scheduler,
                        address=args.address, n_workers=args.workers,
@@ -116,19 +137,26 @@ def _sweep(argv) -> int:
                         title=f"Resonances over the sweep ({result.scheduler})")
     shown = [*result.factors, "status", "body_bounce_hz", "wheel_hop_hz", "tire_mode_hz",
              "ref_body_bounce_hz", "ref_wheel_hop_hz", "contact_lost_fraction"]
-    print(result.table[shown].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
+    say(result.table[shown].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
     for _, row in result.failed.iterrows():
         point = ", ".join(f"{f}={row[f]:g}" for f in result.factors)
-        print(f"failed: {point}: {row['error']}")
-    print(f"\n{len(result.table)} points in {result.wall_s:.1f} s "
+        say(f"failed: {point}: {row['error']}")
+    say(f"\n{len(result.table)} points in {result.wall_s:.1f} s "
           f"({result.points_per_minute:.1f} points/min, {result.scheduler}); "
           f"{len(result.failed)} failed")
-    print(f"wrote {table}\nwrote {figure}")
+    say(f"wrote {table}\nwrote {figure}")
     return 0
 
 
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        return interrupted(PROG)
+
+
+def _main(argv: list[str]) -> int:
     from tire_fmu.core.parameters import ParameterError
 
     from .cosim import CoSimError
@@ -145,11 +173,10 @@ def main(argv=None) -> int:
             return _sweep(argv[1:])
         return _demo(argv)
     except user_errors as error:
-        print(f"vehicle_demo: error: {error}", file=sys.stderr)
+        print(f"{PROG}: error: {error}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("vehicle_demo: interrupted", file=sys.stderr)
-        return 130
+    except _StdoutFailed as failed:
+        return stdout_failure(PROG, failed.error)
 
 
 if __name__ == "__main__":

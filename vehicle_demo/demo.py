@@ -7,8 +7,11 @@
 3. compare them with the car on the full ring model and on a spring-damper tire, and
    identify body bounce, wheel hop and the tire modes;
 4. run an ISO 8608 road at speed and a cleat, and plot rim load and contact force;
-5. write the figures and ``summary.csv``, ``resonances.csv``, ``agreement.csv`` to OUT and
-   print the summary.
+5. write the figures and ``summary.csv``, ``resonances.csv``, ``agreement.csv`` and
+   ``summary.json``, and print the summary.
+
+Everything is written into a private folder beside OUT, which replaces OUT once the run is
+complete: OUT holds one run's outputs, never a mix of two (see :func:`run_demo`).
 """
 
 from __future__ import annotations
@@ -16,8 +19,10 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
+import shutil
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -127,9 +132,11 @@ def _sources() -> list[Path]:
 
 
 def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
-    """The two FMUs in ``folder``, built when missing, older than their sources, or asked."""
+    """The two FMUs in ``folder``, built when missing, older than their sources, not a whole
+    FMU that the builder finished (no build record: cut short, or pythonfmu's output alone,
+    as a build killed before its guard and model description leaves it), or asked."""
     try:
-        from tire_fmu.fmu.builder import build_fmu
+        from tire_fmu.fmu.builder import build_fmu, build_record
 
         from .quarter_car_fmu import build_quarter_car_fmu
     except ImportError as error:
@@ -139,7 +146,8 @@ def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
     paths = FmuPaths(folder / "TireModal.fmu", folder / "QuarterCar.fmu")
     newest = max(p.stat().st_mtime for p in _sources() if p.exists())
     for path, build in ((paths.tire, build_fmu), (paths.quarter_car, build_quarter_car_fmu)):
-        if rebuild or not path.exists() or path.stat().st_mtime < newest:
+        if (rebuild or not path.exists() or path.stat().st_mtime < newest
+                or build_record(path) is None):
             started = time.perf_counter()
             build(folder)
             log(f"built {path} ({time.perf_counter() - started:.1f} s)")
@@ -165,21 +173,88 @@ class DemoSummary:
     wall_s: float
 
 
+#: What a run writes into OUT: its figures, its tables and the FMUs it ran.
+FIGURES = ("ride_transfer_functions.png", "road_run_iso8608.png", "road_psd.png",
+           "road_run_cleat.png", "contact_events.png")
+TABLES = ("summary.csv", "resonances.csv", "agreement.csv", "summary.json")
+FMU_FOLDER = "fmus"
+OUTPUTS = (*FIGURES, *TABLES, FMU_FOLDER)
+
+
 def run_demo(settings: DemoSettings | None = None, log=print,
              names: dict[str, str] | None = None) -> DemoSummary:
     """The whole demo; ``names`` names the settings in error messages (see
-    :meth:`DemoSettings.problems`)."""
+    :meth:`DemoSettings.problems`).
+
+    One run's outputs belong together: the run writes into a private folder beside OUT
+    (the FMUs of the previous run linked in, rebuilt there when stale) and that folder
+    replaces OUT only once complete (:func:`tire_fmu.publish.publish_folder`). A run that
+    fails or is interrupted leaves OUT as the previous run left it. OUT must be new, or hold
+    only what a run writes (:data:`OUTPUTS`): it is replaced whole.
+    """
+    from tire_fmu.publish import private_folder, publish_folder
+
     settings = settings or DemoSettings()
     started = time.perf_counter()
     check_settings(settings, names)
     out = Path(settings.out_dir)
+    option = (names or {}).get("out_dir", "out_dir")
+    _check_output_folder(out, option)
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / ".write_test").write_text("")
-        (out / ".write_test").unlink()
+        out.parent.mkdir(parents=True, exist_ok=True)
+        work = private_folder(out)
     except OSError as error:
-        raise DemoError(f"cannot write to {out}: {error.strerror or error}") from error
-    fmus = ensure_fmus(out / "fmus", settings.rebuild, log)
+        raise DemoError(f"{option} = {str(out)!r}: cannot write there: "
+                        f"{error.strerror or error}") from error
+    try:
+        _carry_fmus(out / FMU_FOLDER, work / FMU_FOLDER)
+        summary = _run(settings, work, started,
+                       lambda text: log(str(text).replace(str(work), str(out))))
+        publish_folder(work, out)
+    except OSError as error:
+        if error.filename is None or not Path(error.filename).is_relative_to(work):
+            raise
+        written = out / Path(error.filename).relative_to(work)
+        raise DemoError(f"{option} = {str(out)!r}: cannot write {str(written)!r}: "
+                        f"{error.strerror or error}") from error
+    finally:
+        shutil.rmtree(work, ignore_errors=True)  # gone already once published
+
+    def moved(paths):
+        return [out / Path(p).relative_to(work) for p in paths]
+
+    return replace(summary, figures=moved(summary.figures), tables=moved(summary.tables))
+
+
+def _check_output_folder(out: Path, option: str) -> None:
+    if not out.exists():
+        return
+    if not out.is_dir():
+        raise DemoError(f"{option} = {str(out)!r} is a file: give a folder")
+    foreign = sorted(p.name for p in out.iterdir() if p.name not in OUTPUTS)
+    if foreign:
+        shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
+        raise DemoError(f"{option} = {str(out)!r} holds files a demo run does not write "
+                        f"({shown}); a run replaces its folder whole: give a new folder, or "
+                        "one an earlier run wrote")
+
+
+def _carry_fmus(previous: Path, folder: Path) -> None:
+    """The previous run's FMUs into the new run's folder (hard links where the file system
+    has them; copies keep their times), for :func:`ensure_fmus` to reuse when up to date."""
+    folder.mkdir()
+    if not previous.is_dir():
+        return
+    for path in previous.glob("*.fmu"):
+        try:
+            os.link(path, folder / path.name)
+        except OSError:
+            shutil.copy2(path, folder / path.name)
+
+
+def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
+    """The demo's work, every file written into ``out``."""
+    fmus = ensure_fmus(out / FMU_FOLDER, settings.rebuild, log)
     rows: list[tuple[str, float | str, str]] = []
     figures, tables = [], []
 

@@ -2,7 +2,10 @@
 
 Each command group lives in its own module with a ``register(subparsers)`` function; handlers
 take the parsed arguments and return a :class:`Output` (text for people, a dict for ``--json``).
-Errors the user can fix end the program with a one-line message and exit status 2.
+Errors the user can fix (a bad command line or value, an output that cannot be written,
+stdout included) end the program with a one-line message and exit status 2; an unexpected one
+with one line and status 1; Ctrl-C with one line and 130; a reader that stopped early (``|
+head``) silently with 141 (:mod:`.parsing`).
 
 Only the module of the command given is imported (:mod:`.commands` lists the others with
 their help lines), so ``tire-fmu --help`` answers without loading numpy or scipy. Commands run
@@ -20,18 +23,12 @@ import warnings
 from collections.abc import Sequence
 
 from .commands import COMMANDS
+from .parsing import Parser, interrupted, stdout_failure, write_stdout
 
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 #: Environment variable with the BLAS thread count (0: the library's default).
 BLAS_THREADS_ENV = "TIRE_FMU_BLAS_THREADS"
 DEBUG_HELP = "show tracebacks on errors"
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports a bad command line in one line (usage stays in --help)."""
-
-    def error(self, message: str):  # noqa: D401 - argparse's signature
-        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def _blas_threads(text: str) -> int:
@@ -56,7 +53,7 @@ def _default_blas_threads() -> int:
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The parser; with ``argv``, only the module of the command named there is imported
     (the other commands are listed with their help line), without it every module is."""
-    parser = _Parser(
+    parser = Parser(
         prog="tire-fmu",
         description="Modal ring tire model (in-plane, 0-300 Hz): analysis, reduction, FMU.",
     )
@@ -65,7 +62,7 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
                         help="BLAS/LAPACK threads for the computation (default 1, or "
                         f"${BLAS_THREADS_ENV}; 0: the library's default)")
     subparsers = parser.add_subparsers(dest="command", required=True, metavar="COMMAND",
-                                       parser_class=_Parser)
+                                       parser_class=Parser)
     if argv is None:
         wanted = set(COMMAND_MODULES)
     else:
@@ -86,6 +83,17 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    command = next((arg for arg in argv if arg in COMMANDS), None)
+    prog = f"tire-fmu {command}" if command else "tire-fmu"
+    try:
+        return _main(argv, prog)
+    except KeyboardInterrupt:  # wherever it comes: parsing, imports, the work, the output
+        if "--debug" in argv:
+            raise
+        return interrupted(prog)
+
+
+def _main(argv: list[str], prog: str) -> int:
     parser = build_parser(argv)
     args = parser.parse_args(argv)
     import json
@@ -94,7 +102,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from threadpoolctl import threadpool_limits
 
     from ..core.parameters import ParameterError
-    from .common import CLI_NAMES, CLI_UNSET, CliError, Output, check_plot_option, to_jsonable
+    from .common import CliError, Output, check_plot_option, cli_message, to_jsonable
 
     threads = _default_blas_threads() if args.blas_threads is None else args.blas_threads
     try:
@@ -104,42 +112,40 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("always")
             output: Output = args.handler(args)
         for warning in caught:
-            print(f"tire-fmu {args.command}: warning: {warning.message}", file=sys.stderr)
+            print(f"{prog}: warning: {warning.message}", file=sys.stderr)
     except (ParameterError, CliError, OSError) as error:
         if args.debug:
             raise
-        message = (error.message(CLI_NAMES, CLI_UNSET) if isinstance(error, ParameterError)
-                   else str(error)).replace("\n", " ")
-        print(f"tire-fmu {args.command}: error: {message}", file=sys.stderr)
+        message = (cli_message(error, _command_options(parser, args.command))
+                   if isinstance(error, ParameterError) else str(error)).replace("\n", " ")
+        print(f"{prog}: error: {message}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print(f"tire-fmu {args.command}: interrupted", file=sys.stderr)
-        return 130
     except Exception as error:  # an unexpected failure still gets one line, not a traceback
         if args.debug:
             raise
         print(
-            f"tire-fmu {args.command}: internal error: {type(error).__name__}: {error} "
+            f"{prog}: internal error: {type(error).__name__}: {error} "
             "(run with --debug for the traceback)",
             file=sys.stderr,
         )
         return 1
+    status = 0
     try:
         if getattr(args, "json", False):
-            json.dump(to_jsonable(output.data), sys.stdout, indent=2, allow_nan=False)
-            sys.stdout.write("\n")
+            write_stdout(json.dumps(to_jsonable(output.data), indent=2, allow_nan=False))
         elif output.text:
-            print(output.text)
-        sys.stdout.flush()
-    except BrokenPipeError:
-        # the reader stopped early (`tire-fmu modes --json | head`): not an error of ours.
-        # Point stdout at /dev/null so the interpreter's final flush does not fail again.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        os.close(devnull)
+            write_stdout(output.text)
+    except OSError as error:  # /dev/full, or a reader that stopped early (`| head`)
+        status = stdout_failure(prog, error)
     for path in output.written:
         print(f"wrote {path}", file=sys.stderr)
-    return 0
+    return status
+
+
+def _command_options(parser: argparse.ArgumentParser, command: str) -> set[str]:
+    """The option strings the command's own parser takes."""
+    (commands,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return set(commands.choices[command]._option_string_actions)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,8 +19,10 @@ from ..core.parameters import (
     MAX_ELEMENTS,
     MAX_PATCH_FRACTION,
     MIN_ELEMENTS,
+    ParameterError,
     render,
     tire_problems,
+    value_text,
 )
 
 #: The options that set the core's inputs, for its problems to name them (tire data keep
@@ -35,6 +38,18 @@ CLI_NAMES = {
 }
 #: how "no limit" reads on the command line
 CLI_UNSET = "left out"
+
+
+def cli_message(error: ParameterError, options: Collection[str]) -> str:
+    """The core's problems in one line in the command's own words: each names its input by
+    its option (:data:`CLI_NAMES`), and a setting the text names by its core name
+    (``allow_supercritical runs anyway``) reads as the option that sets it when this command
+    has that option (``--allow-supercritical``); the others keep their names."""
+    text = error.message(CLI_NAMES, CLI_UNSET)
+    for core, option in CLI_NAMES.items():
+        if "_" in core and option in options:  # identifiers only, not words such as "input"
+            text = re.sub(rf"(?<![\w-]){re.escape(core)}(?![\w-])", option, text)
+    return text
 
 
 class CliError(Exception):
@@ -98,12 +113,30 @@ def add_mesh_option(parser: argparse.ArgumentParser, default: int = 100) -> None
                         help=f"number of elements around the ring (default {default})")
 
 
-def add_contact_options(parser: argparse.ArgumentParser, default_text: str) -> None:
+#: What --load 0 means, wherever --load is taken.
+LOAD_ZERO = ("0 N: the tire touches the road without pressing on it, no tread node pushes "
+             "and the road does not reach it: the undeformed tire")
+
+
+def load_default_text(load_n: float) -> str:
+    """How a --help states a command's default load."""
+    if load_n == 0.0:
+        return "default 0 N"
+    return (f"default {value_text(load_n, 'N')}, the FMU's default load: one wheel of the "
+            "heavy vehicle")
+
+
+def add_contact_options(parser: argparse.ArgumentParser, default_load_n: float) -> None:
+    """--load, with the command's default (0: the undeformed tire, for the modes as the paper
+    tabulates them; the FMU's default load where the road must reach the tire), or the paper's
+    --patch-length instead."""
     group = parser.add_mutually_exclusive_group()
     group.add_argument("--patch-length", metavar="M", type=float,
-                       help=f"contact patch length in m ({default_text})")
+                       help="the paper's prescribed contact patch of this length in m, instead "
+                       "of the footprint computed for --load (0: the undeformed tire)")
     group.add_argument("--load", metavar="N", type=float,
-                       help="static vertical load in N; the patch length is computed from it")
+                       help="static vertical load in N; the footprint is computed from it "
+                       f"({load_default_text(default_load_n)}; {LOAD_ZERO})")
 
 
 def add_speed_options(parser: argparse.ArgumentParser) -> None:
@@ -173,7 +206,19 @@ def write_plot(args: argparse.Namespace, output: Output, draw: Callable[[Path], 
     path = getattr(args, "plot", None)
     if path is None:
         return
-    output.written.append(draw(path))
+    with writing("--plot", path):
+        output.written.append(draw(path))
+
+
+@contextmanager
+def writing(option: str, path: Path):
+    """Turn an OSError of writing the output file ``path`` into a CliError naming the option
+    that chose it, the path and the reason."""
+    try:
+        yield
+    except OSError as error:
+        raise CliError(f"{option} = {str(path)!r}: cannot write it: "
+                       f"{error.strerror or error}") from error
 
 
 def figure_formats() -> dict[str, str]:
@@ -197,6 +242,8 @@ def check_plot_option(args: argparse.Namespace) -> None:
         what = f"unknown figure format .{suffix}" if suffix else "no file extension"
         raise CliError(f"--plot = {str(path)!r}: {what}; the extension picks the format, one "
                        f"of {known}")
+    if path.is_dir():
+        raise CliError(f"--plot = {str(path)!r} is a folder: give a file name")
     check_parent_folder("--plot", path)
 
 
@@ -211,19 +258,38 @@ def check_parent_folder(option: str, path: Path) -> None:
 
 def output_file(option: str, path: Path, suffix: str, default_name: str | None = None) -> Path:
     """The file an output option names: a path ending in ``suffix`` (case-insensitive) in an
-    existing folder, or an existing folder to hold ``default_name``."""
+    existing folder, or, given ``default_name``, a folder to hold that file: an existing one,
+    or a path without an extension (created with its parents by :func:`make_folder` when the
+    file is written)."""
     path = Path(path)
-    if path.is_dir():
-        if default_name is None:
-            raise CliError(f"{option} = {str(path)!r} is a folder: give a file name ending "
-                           f"in {suffix}")
+    if default_name is not None and (path.is_dir() or (path.suffix == "" and not path.exists())):
+        _check_ancestors(option, path)
         return path / default_name
+    if path.is_dir():
+        raise CliError(f"{option} = {str(path)!r} is a folder: give a file name ending "
+                       f"in {suffix}")
     if path.suffix.lower() != suffix:
-        folder = " (or an existing folder)" if default_name else ""
+        folder = " (or a folder)" if default_name else ""
         raise CliError(f"{option} = {str(path)!r}: must be a file name ending in "
                        f"{suffix}{folder}")
     check_parent_folder(option, path)
     return path
+
+
+def _check_ancestors(option: str, folder: Path) -> None:
+    """A folder that exists or can be made: its nearest existing ancestor is a folder."""
+    for ancestor in (folder, *folder.parents):
+        if ancestor.exists():
+            if not ancestor.is_dir():
+                raise CliError(f"{option} = {str(folder)!r}: {str(ancestor)!r} is a file, "
+                               "not a folder")
+            return
+
+
+def make_folder(option: str, file: Path) -> None:
+    """The folder of an output file, created with its parents if missing."""
+    with writing(option, file.parent):
+        file.parent.mkdir(parents=True, exist_ok=True)
 
 
 def table(rows: list[list[Any]], header: list[str]) -> str:

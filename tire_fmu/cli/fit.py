@@ -49,7 +49,9 @@ def register(subparsers) -> None:
                    help="least_squares (default) or max: smallest largest relative residual, "
                    "for a re-identification that must stay within a tolerance of every mode")
     g = p.add_argument_group("static contact measured at a load")
-    g.add_argument("--load", metavar="N", type=float, help="load of the static measurement")
+    g.add_argument("--load", metavar="N", type=float,
+                   help="load of the static measurement in N, > 0 (no default: without it no "
+                   "static data are fitted)")
     g.add_argument("--vertical-stiffness", metavar="N_PER_M", type=float,
                    help="measured vertical stiffness at --load, N/m")
     g.add_argument("--footprint-length", metavar="M", type=float,

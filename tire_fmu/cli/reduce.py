@@ -9,7 +9,7 @@ import numpy as np
 
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.io_model import OUTPUTS as OUTPUT_NAMES
-from ..core.parameters import ParameterError
+from ..core.parameters import DEFAULT_LOAD_N, ParameterError
 from ..core.reduction import ReductionSettings, reduce
 from .commands import command_help
 from .common import (
@@ -22,6 +22,7 @@ from .common import (
     add_output_options,
     add_speed_options,
     add_tire_options,
+    make_folder,
     model_from_args,
     operating_point_values,
     output_file,
@@ -31,6 +32,7 @@ from .common import (
     range_problem,
     table,
     write_plot,
+    writing,
 )
 
 
@@ -103,7 +105,7 @@ def settings_from_args(args: argparse.Namespace) -> ReductionSettings:
 
 def _add_model_options(p: argparse.ArgumentParser) -> None:
     add_mesh_option(p)
-    add_contact_options(p, "default: from the load")
+    add_contact_options(p, DEFAULT_LOAD_N)  # the road reaches the tire through its footprint
     add_speed_options(p)
     add_tire_options(p)
 
@@ -159,8 +161,8 @@ def register(subparsers) -> None:
         "(docs/native.md).",
     )
     p.add_argument("out", metavar="OUT", type=Path,
-                   help="file to write (.npz, .mat or .fmu; for .fmu also an existing folder "
-                   "to hold TireModalNative.fmu)")
+                   help="file to write (.npz, .mat or .fmu; with --format fmu also a folder "
+                   "to hold TireModalNative.fmu, created if missing)")
     p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
                    help="file format (default: from the extension of OUT)")
     _add_model_options(p)
@@ -261,7 +263,8 @@ def run_export(args: argparse.Namespace) -> Output:
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
     reduced = reduce(model, settings)
-    path = (save_npz if fmt == "npz" else save_mat)(reduced, out)
+    with writing("OUT", out):
+        path = (save_npz if fmt == "npz" else save_mat)(reduced, out)
     output = Output(text=_report_text(reduced, model), data={**reduced.summary(),
                                                              "file": str(path)})
     output.written.append(path)
@@ -305,8 +308,10 @@ def _export_native_fmu(args: argparse.Namespace, out: Path) -> Output:
                     "contact_zone_length": op.contact_zone_length_m,
                     "linear_contact": args.linear_contact}
     platforms = tuple(args.platform) if args.platform else None
+    make_folder("OUT", out)
     try:
-        path = build_native_fmu(out, start_values, platforms=platforms)
+        with writing("OUT", out):
+            path = build_native_fmu(out, start_values, platforms=platforms)
     except NativeBuildError as error:
         raise CliError(f"OUT = {str(out)!r}: {error}") from error
     import zipfile
@@ -316,8 +321,9 @@ def _export_native_fmu(args: argparse.Namespace, out: Path) -> Output:
     summary = contact.summary()
     data = {"file": str(path), "binaries": binaries,
             "start_values": start_values, "model_at_start_values": summary}
-    text = (f"wrote {path} (binaries: {', '.join(binaries) or 'none, sources only'}); at its "
-            f"start values the FMU builds {summary['ring_modes']} of "
+    # the path itself is reported once, on stderr, with the other commands' files
+    text = (f"native FMU, binaries: {', '.join(binaries) or 'none, sources only'}; at its "
+            f"start values it builds {summary['ring_modes']} of "
             f"{summary['ring_modes_total']} ring modes, a {summary['patch_length_m'] * 100:.3g} "
             f"cm footprint at {summary['load_n']:.6g} N")
     output = Output(text=text, data=data)

@@ -12,6 +12,7 @@ from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
 from ..core.studies import ROUNDING_LEVEL, convergence_study, patch_sweep
 from .commands import command_help
 from .common import (
+    LOAD_ZERO,
     Output,
     add_contact_options,
     add_mesh_option,
@@ -36,12 +37,14 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "modes",
         help=command_help("modes"),
-        description="Modal analysis of the ring tire. At rest: real modes labelled by order, "
+        description="Modal analysis of the ring tire, by default undeformed (no load) as the "
+        "paper tabulates it; --load gives the loaded tire's split pairs. At rest: real modes "
+        "labelled by order, "
         "in/out-of-phase and (with a patch) symmetric/antisymmetric about the patch centre. "
         "Rolling (--speed > 0): complex ground-frame modes with signed order and direction.",
     )
     add_mesh_option(p)
-    add_contact_options(p, "default 0: the undeformed tire")
+    add_contact_options(p, 0.0)  # the paper's modes start from the undeformed tire
     add_speed_options(p)
     p.add_argument("--max-frequency", metavar="HZ", type=float, default=300.0,
                    help="highest frequency listed in Hz (default 300)")
@@ -71,7 +74,9 @@ def register(subparsers) -> None:
         "--patch-length shows the paper's prescribed patch (Figs. 17-19).",
     )
     group = p.add_mutually_exclusive_group(required=True)
-    group.add_argument("--load", metavar="N", type=float, help="static vertical load in N")
+    group.add_argument("--load", metavar="N", type=float,
+                       help=f"static vertical load in N (no default: give --load, --deflection "
+                       f"or --patch-length; {LOAD_ZERO})")
     group.add_argument("--deflection", metavar="M", type=float,
                        help="rim deflection in m: the load that makes it")
     group.add_argument("--patch-length", metavar="M", type=float,

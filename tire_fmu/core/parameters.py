@@ -151,18 +151,34 @@ class FieldSpec:
         return f"{left}{self.low:g}, {self.high:g}] {self.unit}".rstrip()
 
 
+#: Lower bounds that admit every real tire with room to spare and keep the arithmetic away
+#: from underflow (a mass of 1e-300 kg/m made every frequency overflow, and the critical speed
+#: read 0 m/s). The lightest tires, 23 mm road-bicycle tires, carry about 0.05 kg/m of tread
+#: and less of sidewall; masses from 1e-6 kg/m leave room for the limit studies of a massless
+#: sidewall (1e-5 kg/m must run, issue 20) while 1e-300 is refused. Tread rubber (E >= 1 MPa, at least 2 cm wide,
+#: at most 3 cm thick) is at least 7e5 N/m^2 stiff per metre: k_cw from 1e4 N/m^2. Tires run
+#: at 0.3 bar and more: the sidewall pressure law holds from 1e4 Pa (0.1 bar) up, for the
+#: pressure it is referred to and the one it scales to (below, it leaves the sidewall almost
+#: without stiffness: at 1e-300 Pa the critical speed read 0 m/s).
+MIN_MASS_KG_M = 1e-6
+MIN_CONTACT_STIFFNESS_N_M2 = 1e4
+MIN_LAW_PRESSURE_PA = 1e4
+
 TIRE_FIELDS: dict[str, FieldSpec] = {
     spec.name: spec
     for spec in (
         FieldSpec("R", "m", "tread (belt) radius", 0.1, 3.0),
         FieldSpec("b", "m", "tread width", 0.01, 2.0),
         FieldSpec("inflation_pressure", "Pa", "inflation pressure p0", 0.0, 3.0e6, True),
-        FieldSpec("rhoA", "kg/m", "tread mass per metre of circumference", 0.0, 1.0e4),
-        FieldSpec("m_s", "kg/m", "sidewall mass per metre of circumference", 0.0, 1.0e4),
+        FieldSpec("rhoA", "kg/m", "tread mass per metre of circumference", MIN_MASS_KG_M, 1.0e4,
+                  True),
+        FieldSpec("m_s", "kg/m", "sidewall mass per metre of circumference", MIN_MASS_KG_M,
+                  1.0e4, True),
         FieldSpec("k_r1", "N/m^2", "tread-sidewall radial stiffness per metre", 0.0, 1.0e12),
         FieldSpec("k_r2", "N/m^2", "sidewall-rim radial stiffness per metre", 0.0, 1.0e12),
         FieldSpec("EI", "N*m^2", "tread bending stiffness", 0.0, 1.0e8),
-        FieldSpec("k_cw", "N/m^2", "contact-patch radial stiffness per metre", 0.0, 1.0e13),
+        FieldSpec("k_cw", "N/m^2", "contact-patch radial stiffness per metre",
+                  MIN_CONTACT_STIFFNESS_N_M2, 1.0e13, True),
         FieldSpec("alpha", "1/s", "mass-proportional damping coefficient", 0.0, 1.0e3, True),
         FieldSpec("beta", "s", "stiffness-proportional damping coefficient", 0.0, 1.0e-1, True),
         FieldSpec(
@@ -188,8 +204,9 @@ TIRE_FIELDS: dict[str, FieldSpec] = {
             "reference_pressure",
             "Pa",
             "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)",
-            0.0,
+            MIN_LAW_PRESSURE_PA,
             3.0e6,
+            True,
         ),
     )
 }
@@ -211,16 +228,21 @@ def tire_problems(values: Mapping[str, Any]) -> list[Problem]:
     return problems
 
 
+#: What the pressure-law check says (printf, so the native FMU renders the same).
+PRESSURE_LAW_ALLOWED = "at least %g Pa, or sidewall_pressure_exponent = 0"
+PRESSURE_LAW_REASON = ("with sidewall_pressure_exponent = %g the pressure law would leave the "
+                       "sidewall almost without stiffness")
+
+
 def _pressure_law_problems(values: Mapping[str, Any]) -> list[Problem]:
     defaults = {f.name: f.default for f in fields(TireParameters)}
     exponent = float(values.get("sidewall_pressure_exponent",
                                 defaults["sidewall_pressure_exponent"]))
     pressure = float(values.get("inflation_pressure", defaults["inflation_pressure"]))
-    if exponent > 0.0 and pressure == 0.0:
+    if exponent > 0.0 and pressure < MIN_LAW_PRESSURE_PA:
         return [Problem("inflation_pressure", pressure, "Pa",
-                        "> 0 Pa, or sidewall_pressure_exponent = 0",
-                        f"with sidewall_pressure_exponent = {exponent:g} the pressure law would "
-                        "leave the sidewall without stiffness")]
+                        PRESSURE_LAW_ALLOWED % MIN_LAW_PRESSURE_PA,
+                        PRESSURE_LAW_REASON % exponent)]
     return []
 
 

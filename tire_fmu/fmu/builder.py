@@ -17,6 +17,12 @@ with an escaped character, cannot return fmi2Error for a slave, reports every re
 (needs a C compiler) as the FMU's linux64 binary, in front of that wrapper, which it ships as
 ``binaries/linux64/pythonfmu-export.so``; see that file for what it changes and why. The win64
 binary is pythonfmu's wrapper as it is (docs/fmu.md says what that host then gets).
+
+The FMU appears at its destination only when pythonfmu's packaging, the guard and the model
+description are done and fmpy's validation passed (:mod:`tire_fmu.publish`): a build that fails
+or is interrupted leaves a previous FMU there as it was, and concurrent builds of one path
+each publish a whole FMU. The last entry of a completed FMU is its build record
+(:func:`build_record`), which tells a finished FMU from pythonfmu's output alone.
 """
 
 from __future__ import annotations
@@ -35,6 +41,7 @@ from xml.etree import ElementTree
 
 import tire_fmu
 
+from ..publish import published_file
 from .interface import BAKED_PARAMETERS_FILE, CAPABILITIES, fmu_variables, unit_definitions
 
 MODEL_IDENTIFIER = "TireModal"
@@ -49,6 +56,8 @@ _SLAVE_SOURCE = Path(__file__).with_name("slave.py")
 #: The FMU's linux64 binary: pythonfmu_guard.c, in front of pythonfmu's wrapper, shipped as
 GUARD_SOURCE = "pythonfmu_guard.c"
 WRAPPER_FILE = "pythonfmu-export.so"  # the name the guard loads, beside itself
+#: Written last into every FMU this module completes (see :func:`build_record`).
+BUILD_RECORD = "resources/tire_fmu_build.json"
 GUARD_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wall", "-Wextra",
                # its exit handler must stay mapped, and its calls must stay its own
                "-Wl,-z,nodelete", "-Wl,-Bsymbolic")
@@ -113,17 +122,19 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
     dest = Path(dest)
     dest.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="pythonfmu_build_") as staging:
-        script = Path(staging) / f"{module_name}.py"
+        staging = Path(staging)
+        script = staging / f"{module_name}.py"
         shutil.copyfile(slave_source, script)
         try:
-            fmu = Path(FmuBuilder.build_FMU(script, dest=dest,
-                                            project_files=list(project_files),
-                                            **capabilities))
+            # pythonfmu's own FMU stays private: it lacks the completed model description and
+            # the guard, and only the finished, validated FMU may appear at ``dest``
+            built = Path(FmuBuilder.build_FMU(script, dest=staging / "pythonfmu" / dest.name,
+                                              project_files=list(project_files),
+                                              **capabilities))
         finally:
             _forget_build_imports(script)
-    with tempfile.TemporaryDirectory(prefix="pythonfmu_guard_") as staging:
         try:
-            guard = compile_guard(Path(staging))
+            guard = compile_guard(staging / "guard")
         except FmuBuildError as error:
             # still a working FMU, with pythonfmu's own wrapper and its failure modes
             # (docs/fmu.md, "The win64 binary"): better than none
@@ -131,12 +142,13 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                           f"the guard (fmi2Error statuses, the exit fix), see docs/fmu.md",
                           GuardMissingWarning, stacklevel=2)
             guard = None
-        complete_fmu(fmu, capabilities, units, real_starts, guard)
-    if validate:
-        problems = validation_problems(fmu)
-        if problems:
-            raise FmuBuildError(f"{fmu} does not validate: " + "; ".join(problems))
-    return fmu
+        with published_file(dest) as partial:
+            complete_fmu(built, capabilities, units, real_starts, guard, target=partial)
+            if validate:
+                problems = validation_problems(partial)
+                if problems:
+                    raise FmuBuildError(f"{dest} does not validate: " + "; ".join(problems))
+    return dest
 
 
 def _stage_project(folder: Path) -> list[Path]:
@@ -182,6 +194,7 @@ def compile_guard(folder: Path) -> Path:
     if not sys.platform.startswith("linux"):
         raise FmuBuildError(f"the FMU's linux64 binary is compiled on Linux, and this is "
                             f"{sys.platform}")
+    folder.mkdir(parents=True, exist_ok=True)
     source = folder / GUARD_SOURCE
     source.write_bytes(resources.files(__package__).joinpath(GUARD_SOURCE).read_bytes())
     for header in ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"):
@@ -201,27 +214,48 @@ def compile_guard(folder: Path) -> Path:
 
 
 def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
-                 real_starts: dict[str, float] | None = None, guard: Path | None = None
-                 ) -> None:
+                 real_starts: dict[str, float] | None = None, guard: Path | None = None,
+                 target: str | Path | None = None) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`;
     with ``guard``, that library becomes the linux64 binary and pythonfmu's wrapper moves to
-    ``binaries/linux64/pythonfmu-export.so``."""
+    ``binaries/linux64/pythonfmu-export.so``. The last entry written is the build record
+    (:func:`build_record`). Written to ``target``, or in place of ``fmu`` without one."""
     fmu = Path(fmu)
-    rewritten = fmu.with_suffix(".fmu.tmp")
-    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(rewritten, "w",
-                                                          zipfile.ZIP_DEFLATED) as target:
+    if target is None:
+        with published_file(fmu) as partial:
+            complete_fmu(fmu, capabilities, units, real_starts, guard, partial)
+        return
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w",
+                                                          zipfile.ZIP_DEFLATED) as archive:
         for item in source.infolist():
             data = source.read(item.filename)
+            if item.filename == BUILD_RECORD:
+                continue  # a record of an earlier completion: written anew below
             if item.filename == "modelDescription.xml":
                 data = complete_model_description(data, capabilities, units, real_starts)
             elif guard is not None and re.fullmatch(r"binaries/linux64/[^/]+\.so",
                                                     item.filename):
                 wrapper = zipfile.ZipInfo(f"binaries/linux64/{WRAPPER_FILE}", item.date_time)
                 wrapper.external_attr = item.external_attr
-                target.writestr(wrapper, data, compress_type=zipfile.ZIP_DEFLATED)
+                archive.writestr(wrapper, data, compress_type=zipfile.ZIP_DEFLATED)
                 data = guard.read_bytes()
-            target.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
-    rewritten.replace(fmu)
+            archive.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
+        record = {"built_by": f"tire_fmu {tire_fmu.__version__}", "guard": guard is not None}
+        archive.writestr(BUILD_RECORD, json.dumps(record) + "\n")
+
+
+def build_record(fmu: str | Path) -> dict | None:
+    """What :func:`complete_fmu` recorded in ``fmu``, or None unless ``fmu`` is a whole zip
+    (every entry's CRC checks) that this builder completed: pythonfmu's FMU on its own, an
+    FMU cut short, or another tool's, have none."""
+    try:
+        with zipfile.ZipFile(fmu) as archive:
+            if archive.testzip() is not None:
+                return None
+            record = json.loads(archive.read(BUILD_RECORD))
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):
+        return None
+    return record if isinstance(record, dict) else None
 
 
 def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str],

@@ -93,6 +93,7 @@ CONSTANTS: dict[str, float | int] = {
     "F_MAX_LIMIT_HZ": free_ring.F_MAX_LIMIT_HZ,
     "N_MODES_LIMIT": free_ring.N_MODES_LIMIT,
     "MIN_ROLLING_SPEED_M_S": parameters.MIN_ROLLING_SPEED_M_S,
+    "MIN_LAW_PRESSURE_PA": parameters.MIN_LAW_PRESSURE_PA,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -109,9 +110,9 @@ MESSAGES: dict[str, str] = {
     # tire data (TIRE_FIELDS): name, value text, range text, description
     "FIELD_NOT_FINITE": "%s = %s: must be a finite number in %s (%s)",
     "FIELD_RANGE": "%s = %s: must be in %s (%s)",
-    "PRESSURE_LAW": "inflation_pressure = 0 Pa: must be > 0 Pa, or sidewall_pressure_exponent = "
-                    "0 (with sidewall_pressure_exponent = %g the pressure law would leave the "
-                    "sidewall without stiffness)",
+    # the pressure law (inflation_pressure as a value text, the floor, the exponent)
+    "PRESSURE_LAW": (f"inflation_pressure = %s: must be {parameters.PRESSURE_LAW_ALLOWED} "
+                     f"({parameters.PRESSURE_LAW_REASON})"),
     # operating point
     "ELEMENTS_RANGE": f"n_elements = %d: must be an integer in [%d, %d] "
                       f"({parameters.ELEMENTS_REASON})",

@@ -32,6 +32,7 @@ import tire_fmu
 from ..fmu.interface import CAPABILITIES as SHARED_CAPABILITIES
 from ..fmu.interface import FmuVariable, fmu_variables, unit_definitions
 from ..fmu.spec import LOG_CATEGORIES, c_header
+from ..publish import published_file
 
 DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
 #: The C files of the FMU, in compile order, and the headers they include.
@@ -321,24 +322,24 @@ def build_native_fmu(out: str | Path, start_values: dict | None = None,
                            staging / "binaries" / name)
         (staging / "modelDescription.xml").write_bytes(
             model_description(table, guid, model_identifier))
-        pack(staging, out)
-    if validate:
-        problems = validation_problems(out)
-        if problems:
-            raise NativeBuildError(f"{out} does not validate: " + "; ".join(problems))
+        # published only once packed and validated: a failed or interrupted build leaves
+        # ``out`` as it was, and concurrent builds of one path never share a file
+        with published_file(out) as partial:
+            pack(staging, partial)
+            if validate:
+                problems = validation_problems(partial)
+                if problems:
+                    raise NativeBuildError(f"{out} does not validate: " + "; ".join(problems))
     return out
 
 
 def pack(folder: Path, fmu: Path) -> None:
-    """Zip the FMU's folder, the model description first; written beside and moved into
-    place, so a failed build never leaves a half-written FMU."""
-    partial = fmu.with_name(fmu.name + ".partial")
+    """Zip the FMU's folder into ``fmu``, the model description first."""
     files = sorted(p for p in folder.rglob("*") if p.is_file())
     files.sort(key=lambda p: p.name != "modelDescription.xml")
-    with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
+    with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as archive:
         for path in files:
             archive.write(path, path.relative_to(folder).as_posix())
-    partial.replace(fmu)
 
 
 def validation_problems(fmu: str | Path) -> list[str]:

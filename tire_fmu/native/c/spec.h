@@ -39,6 +39,7 @@
 #define SPEC_F_MAX_LIMIT_HZ 10000000.0
 #define SPEC_N_MODES_LIMIT 100000
 #define SPEC_MIN_ROLLING_SPEED_M_S 0.001
+#define SPEC_MIN_LAW_PRESSURE_PA 10000.0
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -143,17 +144,17 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
     {"R", "m", "tread (belt) radius", "(0.1, 3] m", 0.1, 3.0, 0},
     {"b", "m", "tread width", "(0.01, 2] m", 0.01, 2.0, 0},
     {"inflation_pressure", "Pa", "inflation pressure p0", "[0, 3e+06] Pa", 0.0, 3000000.0, 1},
-    {"rhoA", "kg/m", "tread mass per metre of circumference", "(0, 10000] kg/m", 0.0, 10000.0, 0},
-    {"m_s", "kg/m", "sidewall mass per metre of circumference", "(0, 10000] kg/m", 0.0, 10000.0, 0},
+    {"rhoA", "kg/m", "tread mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1},
+    {"m_s", "kg/m", "sidewall mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1},
     {"k_r1", "N/m^2", "tread-sidewall radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0},
     {"k_r2", "N/m^2", "sidewall-rim radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0},
     {"EI", "N*m^2", "tread bending stiffness", "(0, 1e+08] N*m^2", 0.0, 100000000.0, 0},
-    {"k_cw", "N/m^2", "contact-patch radial stiffness per metre", "(0, 1e+13] N/m^2", 0.0, 10000000000000.0, 0},
+    {"k_cw", "N/m^2", "contact-patch radial stiffness per metre", "[10000, 1e+13] N/m^2", 10000.0, 10000000000000.0, 1},
     {"alpha", "1/s", "mass-proportional damping coefficient", "[0, 1000] 1/s", 0.0, 1000.0, 1},
     {"beta", "s", "stiffness-proportional damping coefficient", "[0, 0.1] s", 0.0, 0.1, 1},
     {"sidewall_shear", "N", "circumferential shear stiffness between neighbouring sidewall masses (0 = the paper's lumped sidewall)", "[0, 1e+09] N", 0.0, 1000000000.0, 1},
     {"sidewall_pressure_exponent", "", "exponent e of the sidewall stiffness law: k_r1, k_r2 and sidewall_shear scale with (inflation_pressure/reference_pressure)^e (0 = off, the paper's pressure-free sidewall)", "[0, 3]", 0.0, 3.0, 1},
-    {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "(0, 3e+06] Pa", 0.0, 3000000.0, 0},
+    {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1},
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
@@ -170,7 +171,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_REASON "%s (%s)"
 #define SPEC_MSG_FIELD_NOT_FINITE "%s = %s: must be a finite number in %s (%s)"
 #define SPEC_MSG_FIELD_RANGE "%s = %s: must be in %s (%s)"
-#define SPEC_MSG_PRESSURE_LAW "inflation_pressure = 0 Pa: must be > 0 Pa, or sidewall_pressure_exponent = 0 (with sidewall_pressure_exponent = %g the pressure law would leave the sidewall without stiffness)"
+#define SPEC_MSG_PRESSURE_LAW "inflation_pressure = %s: must be at least %g Pa, or sidewall_pressure_exponent = 0 (with sidewall_pressure_exponent = %g the pressure law would leave the sidewall almost without stiffness)"
 #define SPEC_MSG_ELEMENTS_RANGE "n_elements = %d: must be an integer in [%d, %d] (the 5-point bending stencil needs at least 8 nodes around the ring; meshes above 1600 cost too much time and memory to build)"
 #define SPEC_MSG_NOT_NONNEGATIVE "%s = %s: must be a finite number >= 0 %s"
 #define SPEC_MSG_MIN_ROLLING_SPEED "speed = %s: must be 0 or at least %g m/s (slower is at rest to rounding, and the road would take days to cross the patch)"

@@ -165,8 +165,10 @@ static int plain_problems(const double* values, Problems* p)
         }
     }
     if (tire_problems == 0 && values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT] > 0.0 &&
-        values[SPEC_VR_INFLATION_PRESSURE] == 0.0) {
-        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
+        values[SPEC_VR_INFLATION_PRESSURE] < SPEC_MIN_LAW_PRESSURE_PA) {
+        value_text(values[SPEC_VR_INFLATION_PRESSURE], "Pa", text, sizeof text);
+        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, text, SPEC_MIN_LAW_PRESSURE_PA,
+                values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
     }
     {
         double n = values[SPEC_VR_N_ELEMENTS];
