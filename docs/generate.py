@@ -1,4 +1,4 @@
-"""Rewrite the generated sections of README.md and docs/*.md: ``python3 docs/generate.py``.
+"""Rewrite the generated parts of README.md and docs/*.md: ``python3 docs/generate.py``.
 
 A generated section sits between two markers and is never edited by hand:
 
@@ -6,20 +6,30 @@ A generated section sits between two markers and is never edited by hand:
     ...
     <!-- end generated: NAME -->
 
-``NAME`` picks a function below. Two kinds:
+and so does a generated value inside a line of prose (a number, with its unit, or a message
+quoted from a run):
 
-- computed from the code now, cheaply (the FMU variable table): always current;
+    ... the largest stable step is <!-- value: NAME -->7.76 ms<!-- /value --> for ...
+
+``NAME`` picks a function below (``spec:CONSTANT`` is the shared constant of
+``tire_fmu/fmu/spec.py``, ``spec:CONSTANT:percent`` the same fraction in per cent). Two kinds:
+
+- computed from the code now, cheaply (the FMU variable table, defaults, limits, messages of
+  the Python FMU run in plain Python): always current;
 - measured, read from the recorded results in ``docs/measured/*.json`` that the benchmarks
   write with ``--record`` (each file holds the command that produced it, the date and the
   machine's load). To refresh them, run the command quoted in the section, then this script.
 
 ``python3 docs/generate.py --check`` rewrites nothing and exits 1 naming every stale section
-(``tests/test_docs.py`` runs the same check).
+or value (``tests/test_docs.py`` runs the same check). The same test finds numbers typed into
+the prose of :data:`PROSE_CHECKED` (see :func:`typed_numbers`): a number with a unit, or after
+"≈", outside generated parts and code, that is not one of the file's :data:`DEFINITIONS`.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import re
 import sys
@@ -32,8 +42,10 @@ FILES = ("README.md", "docs/fmu.md", "docs/native.md", "docs/vehicle_demo.md",
          "docs/theory.md")
 SECTION = re.compile(r"(<!-- generated: (?P<name>[\w-]+) -->\n)(?P<body>.*?)"
                      r"(<!-- end generated: (?P=name) -->)", re.S)
+VALUE = re.compile(r"(<!-- value: (?P<name>[\w:-]+) -->)(?P<body>[^\n]*?)(<!-- /value -->)")
 
 GENERATORS: dict[str, Callable[[], str]] = {}
+VALUES: dict[str, Callable[[], str]] = {}
 
 
 def generator(name: str):
@@ -42,6 +54,29 @@ def generator(name: str):
         return function
 
     return register
+
+
+def value(name: str):
+    def register(function):
+        VALUES[name] = function
+        return function
+
+    return register
+
+
+def value_text(name: str) -> str:
+    """The text of the generated value ``name``."""
+    if name.startswith("spec:"):
+        from tire_fmu.fmu.spec import CONSTANTS
+
+        _, constant, *style = name.split(":")
+        if constant not in CONSTANTS:
+            raise KeyError(f"unknown constant {constant!r} in value {name!r}")
+        number = CONSTANTS[constant]
+        return f"{100 * number:g} %" if style == ["percent"] else f"{number:g}"
+    if name not in VALUES:
+        raise KeyError(f"unknown generated value {name!r}; known: {sorted(VALUES)}")
+    return VALUES[name]()
 
 
 class StaleRecord(RuntimeError):
@@ -197,13 +232,15 @@ def demo_contact_events() -> str:
 @generator("demo-agreement")
 def demo_agreement() -> str:
     from vehicle_demo.quarter_car import RIDE_LABELS
+    from vehicle_demo.transfer import COHERENCE_MIN, GAIN_FLOOR
 
     data, summary = _demo_summary()
     settings = summary["settings"]
     lines = [f"Agreement of the co-simulation (N = {settings['n_elements']}, h = "
              f"{settings['step_s']:g} s, speed {settings['tf_speed_m_s']:g} m/s) with the car on "
-             "the full unreduced ring model, over the lines where the coherence exceeds 0.95 "
-             "and the reference exceeds 1 % of its peak:", "",
+             f"the full unreduced ring model, over the lines where the coherence exceeds "
+             f"{COHERENCE_MIN:g} and the reference exceeds {100 * GAIN_FLOOR:g} % of its peak:",
+             "",
              "| transfer function | max deviation | lines compared | compared up to |",
              "|---|---|---|---|"]
     for name, a in summary["agreements"].items():
@@ -379,12 +416,627 @@ def reduction_meshes() -> str:
               f"the target, {100 * cut['uncut_error']:.2f} % with {cut['uncut_states']}.", "",
               _computed(data)]
     return "\n".join(lines)
+# -- README: a fit that recovers a known tire ----------------------------------------------
+
+#: The README's example: GL073A's table fitted from a start far from GL073A.
+README_FIT = ("fit", "tire_fmu/data/tires/GL073A_modes.csv", "--free", "m_s,k_r1,k_r2,EI",
+              "--tire", "m_s=7", "--tire", "k_r1=9e6", "--tire", "k_r2=3e6", "--tire",
+              "EI=40")
+
+
+@generator("readme-fit")
+def readme_fit() -> str:
+    import contextlib
+    import io
+    import os
+
+    from tire_fmu.cli import main
+    from tire_fmu.core import TireParameters, analytic_modes
+    from tire_fmu.measurements import read_modes
+
+    start = os.getcwd()
+    buffer = io.StringIO()
+    try:
+        os.chdir(ROOT)
+        with contextlib.redirect_stdout(buffer):
+            code = main([*README_FIT, "--json"])
+        modes = read_modes(README_FIT[1])
+    finally:
+        os.chdir(start)
+    if code != 0:
+        raise StaleRecord(f"tire-fmu {' '.join(README_FIT)} failed")
+    fit = json.loads(buffer.getvalue())
+    truth = TireParameters()
+    starting = TireParameters(**{p["name"]: p["start"] for p in fit["parameters"]})
+    paper = [analytic_modes(starting, [m.order]) for m in modes]
+    first = max(abs((a.in_phase_hz[0] if m.branch == "in" else a.out_of_phase_hz[0])
+                    / m.frequency_hz - 1) for a, m in zip(paper, modes))
+    command = " ".join(README_FIT[:4]) + " \\\n    " + " ".join(README_FIT[4:])
+    lines = ["```bash", f"tire-fmu {command}", "```", "",
+             "| parameter | start | fitted | GL073A |", "|---|---|---|---|"]
+    for p in fit["parameters"]:
+        lines.append(f"| {p['name']} [{p['unit']}] | {p['start']:.4g} | {p['value']:.6g} | "
+                     f"{getattr(truth, p['name']):.6g} |")
+    lines += ["", f"The start's frequencies are up to {100 * first:.0f} % off the table's; the "
+              f"fit ends at a largest residual of {fit['max_abs_residual_percent']:.1g} % "
+              f"({fit['evaluations']} evaluations, rank {fit['rank']} of "
+              f"{len(fit['parameters'])}). Computed by `docs/generate.py` running that command "
+              "(`--json`)."]
+    return "\n".join(lines)
+
+
+# -- values in the prose --------------------------------------------------------------------
+
+
+def _format_time(seconds: float) -> str:
+    return f"{seconds * 1e3:.3g} ms" if seconds < 0.1 else f"{seconds:.3g} s"
+
+
+@functools.cache
+def _demo_model():
+    """The demo's tire model (N = 100, the car's load, at rest), as the demo builds it."""
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+    from vehicle_demo.quarter_car import QuarterCarParameters
+
+    return build_model(TireParameters(), OperatingPoint(
+        n_elements=100, load_n=QuarterCarParameters().static_tire_load_n))
+
+
+def _settings():
+    from vehicle_demo.demo import DemoSettings
+
+    return DemoSettings()
+
+
+def _resonance(summary: dict, name: str) -> dict:
+    for r in summary["resonances"]:
+        if r["resonance"] == name:
+            return r
+    raise StaleRecord(f"the recorded demo has no resonance {name!r}")
+
+
+@value("demo-f-max")
+def _demo_f_max() -> str:
+    return f"{_settings().excitation.f_max_hz:g} Hz"
+
+
+@value("demo-deviation-band")
+def _demo_deviation_band() -> str:
+    from vehicle_demo.plots import DEVIATION_BAND_DB
+
+    return f"±{DEVIATION_BAND_DB:g} dB"
+
+
+@value("demo-coherence-drawn")
+def _demo_coherence_drawn() -> str:
+    from vehicle_demo.plots import COHERENCE_SHOWN_BELOW
+
+    return (f"only if a line's coherence is below {COHERENCE_SHOWN_BELOW:g} (otherwise the "
+            "note under the figure gives its lowest value, \"(not drawn)\")")
+
+
+@value("demo-road-run")
+def _demo_road_run() -> str:
+    s = _settings()
+    return f"a class-{s.road_class} road at {s.road_speed_m_s:g} m/s"
+
+
+@value("demo-cleat")
+def _demo_cleat() -> str:
+    s = _settings()
+    return (f"a {s.cleat_shape} {s.cleat_height_m * 1e3:g} mm × {s.cleat_length_m * 1e3:g} mm "
+            f"cleat at {s.cleat_speed_m_s:g} m/s")
+
+
+@value("demo-events-speed")
+def _demo_events_speed() -> str:
+    return f"{_settings().events_speed_m_s:g} m/s"
+
+
+@value("demo-step")
+def _demo_step() -> str:
+    return f"{_settings().step_s:g} s"
+
+
+@value("demo-multisine-rms")
+def _demo_multisine_rms() -> str:
+    return f"{_settings().excitation.rms_velocity_m_s:g} m/s"
+
+
+@value("demo-lines")
+def _demo_lines() -> str:
+    from vehicle_demo.demo import DemoSettings
+
+    full, quick = DemoSettings().excitation, DemoSettings.quick().excitation
+    return (f"from {full.f_min_hz:g} to {full.f_max_hz:g} Hz (T = {full.period_s:g} s, "
+            f"{1 / full.period_s:g} Hz lines; quick mode {quick.period_s:g} s)")
+
+
+@value("demo-averages")
+def _demo_averages() -> str:
+    from vehicle_demo.demo import DemoSettings
+
+    return (f"{DemoSettings().excitation.average_periods} averages; quick "
+            f"{DemoSettings.quick().excitation.average_periods}")
+
+
+@value("demo-fade-in")
+def _demo_fade_in() -> str:
+    return f"{_settings().road_fade_in_s:g} s"
+
+
+@value("sweep-multisine")
+def _sweep_multisine() -> str:
+    from vehicle_demo.sweep import SweepSettings
+
+    ex = SweepSettings().excitation
+    seconds = ex.period_s * (ex.settle_periods + ex.average_periods)
+    return f"a {seconds:g} s multisine ({1 / ex.period_s:g} Hz lines)"
+
+
+@value("tire-mode-min")
+def _tire_mode_min() -> str:
+    from vehicle_demo.transfer import TIRE_MODE_MIN_HZ
+
+    return f"{TIRE_MODE_MIN_HZ:g} Hz"
+
+
+@value("identification-rule")
+def _identification_rule() -> str:
+    from vehicle_demo import transfer as t
+
+    low, high = t.IDENTIFICATION_BAND_HZ
+    hop_low, hop_high = t.WHEEL_HOP_BAND_HZ
+    return (f"over {low:g}–{high:g} Hz; body bounce is the pole below "
+            f"{t.BODY_BOUNCE_MAX_HZ:g} Hz with ζ < {t.BODY_BOUNCE_MAX_ZETA:g}, wheel hop the "
+            f"pole of {hop_low:g}–{hop_high:g} Hz with ζ < {t.WHEEL_HOP_MAX_ZETA:g}")
+
+
+@value("iso-band")
+def _iso_band() -> str:
+    from vehicle_demo.road import ISO_N_MAX_CYCLES_PER_M, ISO_N_MIN_CYCLES_PER_M
+
+    return f"{ISO_N_MIN_CYCLES_PER_M:g}–{ISO_N_MAX_CYCLES_PER_M:g} cycles/m"
+
+
+@value("iso-slope")
+def _iso_slope() -> str:
+    from vehicle_demo.road import N0_CYCLES_PER_M, WAVINESS
+
+    return f"n0 = {N0_CYCLES_PER_M:g} cycles/m and w = {WAVINESS:g}"
+
+
+@value("iso-class-a")
+def _iso_class_a() -> str:
+    from vehicle_demo.road import ISO_8608_GD_N0_M3
+
+    ratio = ISO_8608_GD_N0_M3["B"] / ISO_8608_GD_N0_M3["A"]
+    return f"{ISO_8608_GD_N0_M3['A']:g} m³ for A, ×{ratio:g} per class"
+
+
+@value("quarter-car")
+def _quarter_car() -> str:
+    from vehicle_demo.quarter_car import QuarterCarParameters
+
+    car = QuarterCarParameters()
+    return (f"body {car.body_mass_kg:g} kg, wheel + axle {car.wheel_mass_kg:g} kg (without the "
+            f"tire), suspension {car.suspension_stiffness_n_per_m / 1e3:g} kN/m and "
+            f"{car.suspension_damping_n_s_per_m / 1e3:g} kN·s/m")
+
+
+@value("quarter-car-load")
+def _quarter_car_load() -> str:
+    from vehicle_demo.quarter_car import QuarterCarParameters
+
+    return f"{QuarterCarParameters().static_tire_load_n:.0f} N"
+
+
+@value("sidewall-band")
+def _sidewall_band() -> str:
+    from tire_fmu.core import TireParameters
+
+    return f"{TireParameters().sidewall_band_hz:.0f} Hz"
+
+
+@value("node-arc-n100")
+def _node_arc() -> str:
+    return f"{_demo_model().grid.node_arc_m * 100:.3g} cm at N = 100"
+
+
+@value("rim-feedthrough")
+def _rim_feedthrough() -> str:
+    from tire_fmu.core.io_model import build_io_model
+
+    io = build_io_model(_demo_model())
+    return f"{-io.d_disp[0, 0] / 1e6:.3g} MN/m and {-io.e[0, 0] / 1e3:.3g} kN·s/m"
+
+
+@value("contact-feedthrough")
+def _contact_feedthrough() -> str:
+    from tire_fmu.core.io_model import build_io_model
+
+    io = build_io_model(_demo_model())
+    return (f"{io.d_disp[2, 1:].sum():.3g} N/m on height and {io.e[2, 1:].sum():.3g} N·s/m on "
+            "velocity, the pushing nodes' springs and dampers at the default load, N = 100")
+
+
+@value("patch-filter")
+def _patch_filter() -> str:
+    """First null of the road filter of the footprint's nodes (weighted by their springs) at
+    1 m/s; it scales with V, so L = V / f_null."""
+    import numpy as np
+
+    from tire_fmu.core.contact import road_windows
+
+    model = _demo_model()
+    patch = model.patch
+    windows = road_windows(patch.zone, patch.deflection_m, 1.0)
+    weights = patch.node_stiffness_n_per_m  # contact force per unit road under each node
+    freqs = np.linspace(0.01, 50.0, 50001)
+    gain = np.abs(weights @ windows.frequency_response(2 * np.pi * freqs)) / weights.sum()
+    first = np.flatnonzero((gain[1:-1] < gain[:-2]) & (gain[1:-1] <= gain[2:]))[0] + 1
+    length = 1.0 / freqs[first]
+    data, summary = _demo_summary()
+    hop = _resonance(summary, "wheel hop")["f_reference_hz"]
+    return (f"L = {length * 100:.2g} cm at the default load, N = 100: the null falls to wheel "
+            f"hop, {hop:.3g} Hz, at {hop * length:.2g} m/s")
+
+
+@value("demo-spring-wheel-hop")
+def _demo_spring_wheel_hop() -> str:
+    _, summary = _demo_summary()
+    r = _resonance(summary, "wheel hop")
+    excess = r["f_analytic_massless_hz"] / r["f_reference_hz"] - 1
+    return f"{100 * excess:.2g} % above the reference's"
+
+
+@value("demo-first-tire-mode")
+def _demo_first_tire_mode() -> str:
+    _, summary = _demo_summary()
+    return f"{_resonance(summary, 'tire mode 1')['f_reference_hz']:.3g} Hz in the rim load"
+
+
+@value("demo-body-fall")
+def _demo_body_fall() -> str:
+    _, summary = _demo_summary()
+    fall = _row(summary, "road -> body acceleration (full model): fall from its peak")
+    return f"{fall:.0f} dB from its peak to {summary['settings']['excitation']['f_max_hz']:g} Hz"
+
+
+@value("demo-damping")
+def _demo_damping() -> str:
+    _, summary = _demo_summary()
+    damping = _row(summary, "tire equivalent damping (low-frequency")
+    change = _row(summary, "tire equivalent damping: largest change")
+    return (f"{damping:.1f} N·s/m at N = {summary['settings']['n_elements']}; the model's "
+            f"damping is stiffness-proportional, so Im K_dyn/ω stays within {change:.2g} % of "
+            "it up to wheel hop")
+
+
+@value("demo-rim-side-mass")
+def _demo_rim_side_mass() -> str:
+    import math
+
+    from tire_fmu.core import TireParameters
+
+    _, summary = _demo_summary()
+    tire = TireParameters()
+    total = (tire.rhoA + tire.m_s) * 2 * math.pi * tire.R
+    return (f"m = {_row(summary, 'tire mass moving with the rim'):.2f} kg: part of its "
+            f"{total:.1f} kg")
+
+
+@value("demo-wheel-hop-shift")
+def _demo_wheel_hop_shift() -> str:
+    _, summary = _demo_summary()
+    r = _resonance(summary, "wheel hop")
+    return (f"{r['f_analytic_massless_hz']:.2f} Hz (massless tire) to "
+            f"{r['f_analytic_hz']:.2f} Hz")
+
+
+@value("demo-zetas")
+def _demo_zetas() -> str:
+    _, summary = _demo_summary()
+    body, wheel = (_resonance(summary, n)["zeta_reference"] for n in ("body bounce",
+                                                                       "wheel hop"))
+    return f"ζ = {body:.3f} and {wheel:.3f} on the reference"
+
+
+@value("demo-radius")
+def _demo_radius() -> str:
+    import math
+
+    _, summary = _demo_summary()
+    h = summary["settings"]["step_s"]
+    radius = _row(summary, "coupling: spectral radius at h (Gauss-Seidel)")
+    body = _resonance(summary, "body bounce")
+    decay = math.exp(-body["zeta_reference"] * 2 * math.pi * body["f_reference_hz"] * h)
+    return (f"At h = {h:g} s it equals e^{{−ζωh}} of body bounce to "
+            f"{abs(radius - decay):.0e}: the coupling adds no growth")
+
+
+@value("demo-stable-steps")
+def _demo_stable_steps() -> str:
+    _, summary = _demo_summary()
+    gs = _row(summary, "coupling: largest stable step (Gauss-Seidel)")
+    jacobi = _row(summary, "coupling: largest stable step (Jacobi)")
+    return f"**{_format_time(gs)}** for Gauss-Seidel and **{_format_time(jacobi)}** for Jacobi"
+
+
+# -- the coupling's accuracy (benchmarks/bench_coupling.py) ---------------------------------
+
+_RESPONSES = ("body_acc", "wheel_acc", "rim_load", "contact_force")
+
+
+def _coupling_cases(**match) -> list[dict]:
+    data = record("bench_coupling")
+    cases = [c for c in data["results"]["cases"]
+             if all(c[k] == v for k, v in match.items())]
+    if not cases:
+        raise StaleRecord(f"docs/measured/bench_coupling.json has no case {match}: run "
+                          f"{data['command']}")
+    return cases
+
+
+def _worst(case: dict, name: str) -> tuple[float, float]:
+    a = case["agreements"][name]
+    return a["max_deviation_db"], a["worst_frequency_hz"]
+
+
+@generator("coupling-accuracy")
+def coupling_accuracy() -> str:
+    from vehicle_demo.plots import DEVIATION_BAND_DB
+    from vehicle_demo.quarter_car import RIDE_LABELS
+    from vehicle_demo.transfer import GAIN_FLOOR
+
+    data = record("bench_coupling")
+    rest = _coupling_cases(speed_m_s=0.0, read_after_inputs=True)
+    n, lines = rest[0]["n_elements"], rest[0]["line_spacing_hz"]
+    steps = sorted({c["step_s"] for c in rest})
+    names = [RIDE_LABELS[r].replace("road → ", "") for r in _RESPONSES]
+    out = [f"Largest deviation from the full model (N = {n}, {lines:g} Hz lines, speed 0), dB:",
+           "", "| h | scheme | " + " | ".join(names) + " |", "|---|---|" + "---|" * len(names)]
+    for h in steps:
+        for case in (c for c in rest if c["step_s"] == h):
+            out.append(f"| {h:g} s | {case['scheme']} | "
+                       + " | ".join(f"{_worst(case, r)[0]:.2g}" for r in _RESPONSES) + " |")
+    gauss = [c for c in rest if c["scheme"] == "gauss-seidel"]
+    within = [c["step_s"] for c in gauss
+              if all(_worst(c, r)[0] <= DEVIATION_BAND_DB for r in _RESPONSES)]
+    default = next(c for c in gauss if c["step_s"] == _settings().step_s)
+    ride = [r for r in _RESPONSES if r != "body_acc"]
+    body_db, body_hz = _worst(default, "body_acc")
+    body_top = default["agreements"]["body_acc"]["f_max_compared_hz"]
+    where = ", where it has fallen to that floor" if body_hz >= 0.9 * body_top else ""
+    out += ["", f"So h = {default['step_s']:g} s keeps wheel acceleration, rim load and "
+            f"contact force within {max(_worst(default, r)[0] for r in ride):.2g} dB to "
+            f"{rest[0]['agreements']['wheel_acc']['f_max_compared_hz']:g} Hz, and "
+            f"{max(within):g} s is the largest step of the table that keeps every ride "
+            f"transfer function within the {DEVIATION_BAND_DB:g} dB band. Body acceleration "
+            f"is compared only where it exceeds {100 * GAIN_FLOOR:g} % of its peak (up to "
+            f"{body_top:g} Hz); its "
+            f"largest deviation is {body_db:.2g} dB at {body_hz:g} Hz{where}.", "",
+            f"Measured with `{data['command']}` on {data['recorded']} (results of the "
+            "computation, the same on any machine)."]
+    return "\n".join(out)
+
+
+@generator("coupling-read-order")
+def coupling_read_order() -> str:
+    data = record("bench_coupling")
+    out = ["| case | h | contact force, tire read after the new inputs | read before them |",
+           "|---|---|---|---|"]
+    for speed in (0.0, max(c["speed_m_s"] for c in data["results"]["cases"])):
+        (before,) = _coupling_cases(speed_m_s=speed, read_after_inputs=False)
+        h = before["step_s"]
+        (after,) = _coupling_cases(speed_m_s=speed, read_after_inputs=True, step_s=h,
+                                   scheme=before["scheme"])
+        cells = [f"{db:.2g} dB (at {hz:g} Hz)" for db, hz in
+                 (_worst(after, "contact_force"), _worst(before, "contact_force"))]
+        out.append(f"| {speed:g} m/s, N = {before['n_elements']} | {h:g} s | {cells[0]} | "
+                   f"{cells[1]} |")
+    out += ["", f"Largest deviation of road → contact force from the full model. Measured with "
+            f"`{data['command']}` on {data['recorded']}."]
+    return "\n".join(out)
+
+
+@value("coupling-at-speed")
+def _coupling_at_speed() -> str:
+    cases = sorted(_coupling_cases(read_after_inputs=True, speed_m_s=20.0),
+                   key=lambda c: -c["step_s"])
+    contact = " and ".join(
+        f"{_worst(c, 'contact_force')[0]:.2g} dB near {_worst(c, 'contact_force')[1]:g} Hz at "
+        f"h = {c['step_s']:g} s" for c in cases)
+    others = max(_worst(c, r)[0] for c in cases for r in _RESPONSES if r != "contact_force")
+    return (f"at {cases[0]['speed_m_s']:g} m/s, N = {cases[0]['n_elements']}, road → contact "
+            f"force deviates from the full model by up to {contact}; body acceleration, wheel "
+            f"acceleration and rim load stay within {others:.2g} dB at either step")
+
+
+# -- theory ----------------------------------------------------------------------------------
+
+@value("io-windows-example")
+def _io_windows_example() -> str:
+    import warnings
+
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+    from tire_fmu.core.io_model import build_io_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # 96 % of the critical speed: the paper's Fig. 18
+        io = build_io_model(build_model(TireParameters(), OperatingPoint(
+            patch_length_m=0.204, speed_m_s=40.84)))
+    w = io.road_windows
+    spans = ", ".join(f"{a * 1e3:.2f}–{b * 1e3:.2f}" for a, b in zip(w.early_s, w.late_s))
+    return (f"{io.n_inputs} with the 20.4 cm patch at 40.84 m/s: windows {spans} ms after "
+            "the front")
+
+
+@value("rim-fx-rolling")
+def _rim_fx_rolling() -> str:
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+
+    model = build_model(TireParameters(), OperatingPoint(speed_m_s=20.0))
+    statics = model.patch.static_outputs()
+    return (f"{statics['rim_Fx']:.1f} N at 20 m/s and the default load, "
+            f"{100 * -statics['rim_Fx'] / statics['rim_Fz']:.2f} % of it")
+
+
+# -- docs/fmu.md: what the Python FMU logs, from a run of its slave ---------------------------
+
+MESSAGE_ELEMENTS = 40  # the mesh of the runs: every message is the same on any mesh but N
+
+
+@functools.cache
+def _fmu_messages() -> dict[str, list[str]]:
+    """What the Python FMU's slave logs in each case of the failure table, as a host prints it
+    ("[status] text"), driven in plain Python the way pythonfmu's wrapper drives it."""
+    import warnings
+
+    from tire_fmu.core.contact_dynamics import INPUT_NAMES
+    from tire_fmu.fmu.slave import TireModal
+    from tire_fmu.fmu.spec import CONSTANTS
+
+    def new():
+        return TireModal(instance_name="tire", resources=".", visible=False)
+
+    def said(slave, status_at_least=1):
+        out = [f"[{int(m.status)}] " + m.msg.replace("%%", "%").replace("##", "#")
+               for m in slave.log_queue if int(m.status) >= status_at_least]
+        slave.log_queue.clear()
+        return out
+
+    def vr(slave, name):
+        return slave._index[name]
+
+    def initialised(**parameters):
+        slave = new()
+        slave.setup_experiment(0.0)
+        slave.enter_initialization_mode()
+        parameters.setdefault("n_elements", MESSAGE_ELEMENTS)
+        for name, value in parameters.items():
+            setter = {int: slave.set_integer, bool: slave.set_boolean}.get(type(value),
+                                                                            slave.set_real)
+            setter([vr(slave, name)], [value])
+        slave.exit_initialization_mode()
+        return slave
+
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for case, parameters in (("parameters", {"R": -1.0}), ("load", {"load": 1e7}),
+                                 ("speed", {"speed": 500.0}), ("m_s", {"m_s": 1e-6, "k_r2": 1e11, "beta": 0.1}),
+                                 ("k_r2", {"k_r2": 0.01}), ("speed-warning", {"speed": 90.0})):
+            out[case] = said(initialised(**parameters))
+        slave = new()
+        slave.setup_experiment(float("nan"))
+        out["setup"] = said(slave)
+        slave = initialised()
+        said(slave)
+        slave.exit_initialization_mode()
+        out["order"] = said(slave)
+        slave.terminate()
+        slave.do_step(0.0, 1e-3)
+        out["order"] += said(slave)
+        slave = initialised(speed=CONSTANTS["MIN_ROLLING_SPEED_M_S"])
+        said(slave)
+        slave.do_step(0.0, 1e-4)
+        out["delay"] = said(slave)
+        slave = initialised()
+        said(slave)
+        slave.set_real([vr(slave, n) for n in INPUT_NAMES], [float("nan"), 0.0, 0.0, 0.0])
+        slave.do_step(0.0, 1e-3)
+        out["input"] = said(slave)
+        slave.get_real([vr(slave, "rim_Fz")])
+        out["outputs"] = said(slave)
+        slave = initialised()
+        said(slave)
+        slave.do_step(0.0, 1e-3)
+        slave.do_step(1e-3, 0.0)
+        out["step-size"] = said(slave)
+        slave.do_step(0.5, 1e-3)
+        out["time"] = said(slave)
+        slave.set_real([vr(slave, "load")], [1.0])
+        out["fixed"] = said(slave)
+        slave.get_real([999])
+        out["reference"] = said(slave)
+    return out
+
+
+def _message(case: str, index: int = 0, strip: str = "", clip: str = "") -> str:
+    """One logged message as inline code; ``strip`` drops a prefix, ``clip`` cuts the text
+    after that phrase (the rest is "...)")."""
+    messages = _fmu_messages()[case]
+    if len(messages) <= index:
+        raise StaleRecord(f"the slave logged {messages} in case {case!r}")
+    text = messages[index]
+    if strip and text.startswith(strip):
+        text = text[len(strip):]
+    if clip:
+        text = text[:text.index(clip) + len(clip)] + "...)"
+    return f"`{text}`"
+
+
+@value("fmu-msg-parameters")
+def _msg_parameters() -> str:
+    first = _message("parameters")
+    echo = re.sub(r"\(1 problem\(s\): .*\); reset", "(1 problem(s): ...); reset",
+                  _message("parameters", 1))
+    return f"{first}, then {echo}"
+
+
+@value("fmu-msg-load-speed")
+def _msg_load_speed() -> str:
+    strip = "[3] parameter problem 1/1: "
+    return f"{_message('load', strip=strip)}, {_message('speed', strip=strip)}"
+
+
+@value("fmu-msg-precision")
+def _msg_precision() -> str:
+    strip = "[3] parameter problem 1/1: "
+    return (f"{_message('m_s', strip=strip, clip='may span at most 1e+10 (')}; "
+            f"{_message('k_r2', strip=strip, clip='weaker than the stiffest term, ')}")
+
+
+for _case in ("speed-warning", "setup", "delay", "input", "outputs", "step-size", "time",
+              "fixed", "reference"):
+    value(f"fmu-msg-{_case}")(functools.partial(_message, _case))
+
+
+@value("fmu-msg-order")
+def _msg_order() -> str:
+    return f"{_message('order')}; {_message('order', 1)}"
+
+
+@value("mesh-size-cost")
+def _mesh_size_cost() -> str:
+    data = record("bench_mesh_size")
+    results = data["results"]
+    largest = [c for c in results["cases"] if c["n_elements"] == results["max_elements"]]
+    if not largest:
+        raise StaleRecord(f"{data['command']} did not measure N = {results['max_elements']}")
+    parts = [f"{_format_time(c['fmu_init_s'])} at "
+             + ("rest" if c["speed_m_s"] == 0 else f"{c['speed_m_s']:g} m/s") for c in largest]
+    peak = max(c["fmu_init_peak_mb"] for c in largest)
+    machine = data["machine"]
+    return (f"at that mesh the FMU's initialisation took {' and '.join(parts)}, with a peak "
+            f"of {peak / 1024:.2g} GB, measured with `{data['command']}` on {data['recorded']} "
+            f"({machine['cores']} cores shared with other work, load average "
+            f"{machine['load_average_start']:g}/{machine['load_average_end']:g} at start/end)")
+
+
+@value("road-reach")
+def _road_reach() -> str:
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+
+    model = build_model(TireParameters(), OperatingPoint(n_elements=100, speed_m_s=20.0))
+    return f"{model.patch.road.horizon_s * 1e3:.3g} ms at N = 100 and 20 m/s"
 
 
 # -- rewriting ----------------------------------------------------------------------------------
 
 def render(text: str) -> tuple[str, list[str]]:
-    """The text with every generated section regenerated, and the names it holds."""
+    """The text with every generated section and value regenerated, and the names it holds."""
     names = []
 
     def replace(match):
@@ -394,20 +1046,81 @@ def render(text: str) -> tuple[str, list[str]]:
         names.append(name)
         return f"{match.group(1)}{GENERATORS[name]().rstrip()}\n{match.group(4)}"
 
-    return SECTION.sub(replace, text), names
+    def replace_value(match):
+        name = match.group("name")
+        names.append(name)
+        return f"{match.group(1)}{value_text(name)}{match.group(4)}"
+
+    text = SECTION.sub(replace, text)
+    return VALUE.sub(replace_value, text), names
 
 
 def stale_sections(files=FILES) -> list[str]:
-    """'file: section' for every section whose text is not what the generator gives."""
+    """'file: name' for every section or value whose text is not what its generator gives."""
     stale = []
     for name in files:
         path = ROOT / name
         current = path.read_text()
         fresh, _ = render(current)
-        for old, new in zip(SECTION.finditer(current), SECTION.finditer(fresh)):
-            if old.group("body") != new.group("body"):
-                stale.append(f"{name}: {old.group('name')}")
+        for pattern in (SECTION, VALUE):
+            for old, new in zip(pattern.finditer(current), pattern.finditer(fresh)):
+                if old.group("body") != new.group("body"):
+                    stale.append(f"{name}: {old.group('name')}")
     return stale
+
+
+# -- numbers typed into prose -------------------------------------------------------------------
+
+#: Files whose prose may not hold a measured-looking number that is not generated.
+PROSE_CHECKED = ("docs/vehicle_demo.md", "docs/fmu.md")
+#: Numbers these files state as definitions (of a standard, a method, a test), not as
+#: results: exact phrases, each with where it is defined.
+DEFINITIONS: dict[str, tuple[str, ...]] = {
+    "docs/vehicle_demo.md": (
+        "95 %",  # the confidence of Welch's band in road_psd.png (demo.py: chi2 0.025/0.975)
+    ),
+    "docs/fmu.md": (
+        "FMI 2.0",  # the standard
+        "core to 1e-12",  # the tolerance of tests/test_tire_files.py's comparison
+    ),
+}
+_NUMBER = r"[-−±]?\d+(?:[ ,]\d{3})*(?:\.\d+)?(?:e[-+]?\d+)?"
+_UNIT = (r"(?:[kMG]?Hz|[mµu]?s|min|kg|[kMG]?N(?:·s|\*m)?(?:/m(?:\^2|²)?)?|dB|%|[mk]?m/s²?|"
+         r"km/h|[mck]?m³?|[kMG]B|bar|[kM]?Pa|rad/s|cycles/m|variables)")
+#: A number with a unit, a number after "≈" or "~", or a bare number that looks computed:
+#: three or more digits, a decimal point or an exponent (not a mesh "N = 100" or an order
+#: "n = 4", not ISO 8608, not a version such as 0.7.0).
+MEASURED_LOOKING = re.compile(
+    rf"(?<![\w.]){_NUMBER}(?:\s?[-–]\s?{_NUMBER})?\s?{_UNIT}(?![\w/²³^])"
+    rf"|[≈~]\s?{_NUMBER}"
+    r"|(?<![\w.,-])(?<!N = )(?<!n = )(?<!ISO )(?<!§)(?:\d+\.\d+(?:e[-+]?\d+)?|\d+e[-+]?\d+|\d{3,})"
+    r"(?!\w|\.\d)")
+_NOT_PROSE = (
+    re.compile(r"^```.*?^```", re.S | re.M),  # code blocks
+    SECTION,
+    VALUE,
+    re.compile(r"<!--.*?-->", re.S),  # comments
+    re.compile(r"`[^`\n]*`"),  # inline code: names, commands, quoted messages
+)
+
+
+def typed_numbers(name: str, text: str | None = None) -> list[str]:
+    """Measured-looking numbers typed into the prose of file ``name``: a number followed by a
+    unit (Hz, s, N, kg, dB, %, m/s, ...) or after "≈"/"~", outside code, generated sections
+    and values, that is not one of the file's :data:`DEFINITIONS`. Each is 'file:line: text'.
+    """
+    text = (ROOT / name).read_text() if text is None else text
+    for pattern in _NOT_PROSE:  # blank out, keeping the line breaks for the line numbers
+        text = pattern.sub(lambda m: re.sub(r"[^\n]", " ", m.group(0)), text)
+    allowed = DEFINITIONS.get(name, ())
+    found = []
+    for number, line in enumerate(text.splitlines(), 1):
+        defined = [(m.start(), m.end()) for phrase in allowed
+                   for m in re.finditer(re.escape(phrase), line)]
+        for match in MEASURED_LOOKING.finditer(line):
+            if not any(a <= match.start() and match.end() <= b for a, b in defined):
+                found.append(f"{name}:{number}: {match.group(0).strip()}")
+    return found
 
 
 def main(argv=None) -> int:
@@ -421,7 +1134,11 @@ def main(argv=None) -> int:
             stale = stale_sections()
             for item in stale:
                 print(f"stale: {item} (run python3 docs/generate.py)", file=sys.stderr)
-            return 1 if stale else 0
+            typed = [x for name in PROSE_CHECKED for x in typed_numbers(name)]
+            for item in typed:
+                print(f"typed number: {item} (generate it: see docs/generate.py)",
+                      file=sys.stderr)
+            return 1 if stale or typed else 0
         for name in FILES:
             path = ROOT / name
             text, names = render(path.read_text())

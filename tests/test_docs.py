@@ -1,5 +1,6 @@
-"""The docs stay true: generated sections equal what docs/generate.py makes of the code and of
-the recorded benchmark results, and the README's fmpy example runs cleanly."""
+"""The docs stay true: generated sections and values equal what docs/generate.py makes of the
+code and of the recorded benchmark results, no measured-looking number is typed into the
+checked prose, and the README's fmpy example runs cleanly."""
 
 from __future__ import annotations
 
@@ -26,13 +27,83 @@ def test_generated_sections_are_current():
     assert generate.stale_sections() == [], "run python3 docs/generate.py"
 
 
-def test_every_section_has_a_generator_and_every_generator_a_section():
-    generate = _generate()
+def _used_names(generate, files=None) -> set[str]:
     used = set()
-    for name in generate.FILES:
+    for name in files or generate.FILES:
         _, names = generate.render((ROOT / name).read_text())
         used |= set(names)
-    assert used == set(generate.GENERATORS)
+    return used
+
+
+def test_every_section_has_a_generator_and_every_generator_a_section():
+    generate = _generate()
+    used = {name for name in _used_names(generate) if not name.startswith("spec:")}
+    assert used == set(generate.GENERATORS) | set(generate.VALUES)
+
+
+def test_no_measured_number_is_typed_into_the_checked_prose():
+    generate = _generate()
+    typed = [x for name in generate.PROSE_CHECKED for x in generate.typed_numbers(name)]
+    assert typed == [], "generate these (docs/generate.py): " + "; ".join(typed)
+
+
+def test_every_definition_allowed_in_prose_is_in_its_file():
+    generate = _generate()
+    for name, phrases in generate.DEFINITIONS.items():
+        text = (ROOT / name).read_text()
+        for phrase in phrases:
+            assert phrase in text, (name, phrase)
+
+
+@pytest.mark.parametrize("name, typed", [
+    ("docs/vehicle_demo.md", "the tire's damping is 215 N·s/m"),
+    ("docs/vehicle_demo.md", "with m ≈ 39 kg"),
+    ("docs/vehicle_demo.md", "(ζ ≈ 0.16)"),
+    ("docs/vehicle_demo.md", "the largest stable step is **7.4 ms**"),
+    ("docs/vehicle_demo.md", "wheel hop from 12.7 Hz to 11.9 Hz"),
+    ("docs/fmu.md", "`n_elements` stops at 1000"),
+    ("docs/fmu.md", "and about a minute and 1 GB rolling"),
+])
+def test_a_number_typed_into_prose_is_found(name, typed):
+    generate = _generate()
+    text = (ROOT / name).read_text() + f"\nA sentence added by hand: {typed}.\n"
+    found = generate.typed_numbers(name, text)
+    assert len(found) >= 1 and all(x.startswith(f"{name}:{text.count(chr(10))}:")
+                                   for x in found), found
+
+
+def test_numbers_in_code_generated_values_and_definitions_are_not_typed():
+    generate = _generate()
+    text = ("Run `tire-fmu modes --speed 20` (N = 100, n = 4, ISO 8608, §4.5, pythonfmu 0.7.0): "
+            "<!-- value: demo-f-max -->300 Hz<!-- /value -->, Welch's 95 % band.\n"
+            "```\nh = 1e-4 s\n```\n")
+    assert generate.typed_numbers("docs/vehicle_demo.md", text) == []
+
+
+def test_the_numbers_the_issue_found_typed_are_generated():
+    """docs/vehicle_demo.md's damping, rim-side mass, wheel-hop shift, stable steps and damping
+    ratios, and docs/fmu.md's mesh limit and variable count, come from records and code."""
+    generate = _generate()
+    demo = _used_names(generate, ["docs/vehicle_demo.md"])
+    assert {"demo-damping", "demo-rim-side-mass", "demo-wheel-hop-shift", "demo-stable-steps",
+            "demo-zetas", "demo-coherence-drawn"} <= demo
+    fmu = _used_names(generate, ["docs/fmu.md"])
+    assert {"spec:MAX_ELEMENTS", "mesh-size-cost", "fmu-msg-reference"} <= fmu
+    from tire_fmu.fmu.interface import fmu_variables
+
+    assert f"TireModal has {len(fmu_variables())} variables" in generate.value_text(
+        "fmu-msg-reference")
+
+
+def test_a_hand_edited_value_is_found(tmp_path, monkeypatch):
+    generate = _generate()
+    (tmp_path / "docs").mkdir()
+    text = (ROOT / "docs" / "fmu.md").read_text()
+    edited = re.sub(r"(<!-- value: spec:MAX_ELEMENTS -->)\d+", r"\g<1>1000", text, count=1)
+    assert edited != text
+    (tmp_path / "docs" / "fmu.md").write_text(edited)
+    monkeypatch.setattr(generate, "ROOT", tmp_path)
+    assert generate.stale_sections(["docs/fmu.md"]) == ["docs/fmu.md: spec:MAX_ELEMENTS"]
 
 
 def test_recorded_results_say_how_they_were_measured():

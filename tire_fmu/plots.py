@@ -123,7 +123,10 @@ def plot_convergence(result, path: Path) -> Path:
         ax.set_ylabel("natural frequency [Hz]")
         ax.set_title(f"{name}: FDM (o) and exact eq. 12 (dotted)", fontsize=10)
         ax.grid(alpha=0.3)
-    axes[0].legend(fontsize=7, ncol=2, loc="lower right")
+    # the orders' legend goes below the panels: inside, it hid the lowest orders' curves
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=min(len(labels), 13), fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.0))
     ax = axes[2]
     for phase, style in (("in", "o-"), ("out", "s--")):
         error = np.abs(result.relative_error(phase)) * 100.0
@@ -154,7 +157,8 @@ def plot_convergence(result, path: Path) -> Path:
         f"FDM convergence, undeformed tire at rest (N = {_span(counts)}, "
         f"patch length 0 cm, speed 0 m/s, orders n = {_span(result.orders)})"
     )
-    fig.tight_layout()
+    rows = -(-len(labels) // 13)
+    fig.tight_layout(rect=(0, 0.05 * rows, 1, 1))
     return _save(fig, plt, path)
 
 
@@ -402,13 +406,20 @@ def plot_fit(result, path: Path) -> Path:
 
 
 def plot_footprint(model, patch, path: Path) -> Path:
-    """The static contact: line pressure per zone node against road position, and the
-    tread near the contact (rim frame, radial scale in mm) on the flat road."""
+    """The static contact: line pressure per zone node, and the tread near the contact (rim
+    frame, radial scale in mm) on the flat road, both against the x of the static tread
+    nodes, so a node's pressure stands above the node (a pushing node lies on the road, where
+    its ray meets it; the others sit above the road, nearer the centre than their rays' road
+    points)."""
     plt = _pyplot()
     zone = patch.zone
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True,
                                       gridspec_kw={"height_ratios": [1, 1.3]})
-    x = zone.road_positions_m(patch.deflection_m) * 1e3
+    radius, height = zone.grid.radius_m, zone.grid.radius_m - patch.deflection_m
+    w = (patch.footprint.tread_displacement_m if patch.footprint is not None
+         else np.zeros(zone.size))
+    r = radius + w
+    x = -r * np.sin(zone.theta) * 1e3
     pressure = patch.forces_n / zone.grid.node_arc_m / 1e3
     pushing = pressure > 0
     top.vlines(x[pushing], 0, pressure[pushing], color="tab:blue", lw=3)
@@ -422,14 +433,10 @@ def plot_footprint(model, patch, path: Path) -> Path:
                   f"{patch.deflection_m * 1e3:.3g} mm, length {patch.length_m * 100:.3g} cm "
                   f"(N = {model.n_elements}, V = {model.speed_m_s:g} m/s)", fontsize=9)
     # tread on its ray at R + w from the rim centre, R - δ above the road
-    radius, height = zone.grid.radius_m, zone.grid.radius_m - patch.deflection_m
     theta = np.linspace(zone.theta[0], zone.theta[-1], 200)
     bottom.plot(-radius * np.sin(theta) * 1e3, (height - radius * np.cos(theta)) * 1e3,
                 "--", color="0.6", label="undeformed tread")
-    w = (patch.footprint.tread_displacement_m if patch.footprint is not None
-         else np.zeros(zone.size))
-    r = radius + w
-    bottom.plot(-r * np.sin(zone.theta) * 1e3, (height - r * np.cos(zone.theta)) * 1e3,
+    bottom.plot(x, (height - r * np.cos(zone.theta)) * 1e3,
                 "o-", color="tab:blue", ms=4, label="tread nodes (static)")
     bottom.axhline(0.0, color="k", lw=1.5, label="road")
     bottom.set_xlabel("x along the road [mm] (forward)")

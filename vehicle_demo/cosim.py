@@ -4,7 +4,7 @@ Coupling (default ``"gauss-seidel"``), over each communication step t_k -> t_k +
 
 1. the tire gets the wheel state at t_k (``rim_z`` = z_w, ``rim_vz`` = ż_w: it ramps the
    rim with that velocity over the step) and the road at t_k (height and velocity at the
-   leading edge of the patch), steps, and returns its total rim force F_{k+1};
+   front of its contact zone), steps, and returns its total rim force F_{k+1};
 2. the quarter car gets ``rim_Fz`` = F_k and ``rim_Fz_rate`` = (F_{k+1} - F_k)/h, i.e. the tire
    force linearly interpolated over the step (first-order hold), steps exactly, and returns
    the wheel and body state at t_{k+1}.
@@ -19,10 +19,11 @@ comparison. :mod:`vehicle_demo.coupling` gives the step-size limit and the error
 
 After each step the master sets the tire's inputs of the new communication point (wheel state
 and road) and only then reads its outputs: the tire recomputes its direct feedthrough with
-them. That matters for the contact force, whose feedthrough from the road (about 1e8 N/m on
-height and 1.7e4 N·s/m on velocity at the default load) nearly cancels its modal part: read
-with the velocity the step ramped with, a step old, it is off by an O(h) error of 4 dB near
-70 Hz at h = 1e-4 s; read with the new inputs the error is O(h²).
+them. That matters for the contact force, whose feedthrough from the road (the contact springs
+and dampers of the pushing nodes) nearly cancels its modal part: read with the velocity the
+step ramped with, a step old (``read_after_inputs=False``, for comparison), it is off by an
+O(h) error; read with the new inputs the error is O(h²) (docs/vehicle_demo.md quotes both from
+benchmarks/bench_coupling.py).
 
 Both FMUs start in static equilibrium: the tire's ``load`` is set to the car's weight
 (m_b + m_w)·g, which the quarter car subtracts from the total rim force it receives.
@@ -267,7 +268,7 @@ class QuarterCarCoSimulation:
 
     def __init__(self, fmus: FmuPaths, car: QuarterCarParameters | None = None,
                  tire_parameters: Mapping | None = None, step_s: float = DEFAULT_STEP_S,
-                 scheme: str = "gauss-seidel"):
+                 scheme: str = "gauss-seidel", read_after_inputs: bool = True):
         if scheme not in SCHEMES:
             raise ValueError(f"scheme = {scheme!r}: must be one of {SCHEMES}")
         if not (step_s > 0 and math.isfinite(step_s)):
@@ -279,6 +280,7 @@ class QuarterCarCoSimulation:
                              "body mass instead (QuarterCarParameters.with_static_load)")
         self.step_s = float(step_s)
         self.scheme = scheme
+        self.read_after_inputs = bool(read_after_inputs)
         self.tire = FmuInstance(fmus.tire, "tire")
         try:
             self.car_fmu = FmuInstance(fmus.quarter_car, "quarter_car")
@@ -302,7 +304,7 @@ class QuarterCarCoSimulation:
 
     def run(self, road_z_m, road_vz_m_s, start_time: float = 0.0,
             progress: Callable[[int], None] | None = None) -> CoSimResult:
-        """Co-simulate with the road (leading edge) sampled at t_k = start + k·h.
+        """Co-simulate with the road (at the tire's zone front) sampled at t_k = start + k·h.
 
         ``progress(n)`` is called with the steps done since its last call.
         """
@@ -325,6 +327,7 @@ class QuarterCarCoSimulation:
         n = road_z.size - 1
         h = self.step_s
         gauss_seidel = self.scheme == "gauss-seidel"
+        read_after_inputs = self.read_after_inputs
 
         def refs(fmu, names):
             return (fmi2ValueReference * len(names))(*[fmu.vr(x) for x in names])
@@ -375,13 +378,18 @@ class QuarterCarCoSimulation:
                     u_c[0], u_c[1] = force, 0.0
                     status = c_set(cc, car_in, 2, u_c) | t_step(ct, t, h, fmi2True)
                     status |= c_step(cc, t, h, fmi2True)
+                    if not read_after_inputs:
+                        status |= t_get(ct, tire_out, 3, y_t)
                 status |= c_get(cc, car_out, 5, y_c)
+                if not read_after_inputs:  # the flag of the step's end, inputs not yet new
+                    status |= t_get_flag(ct, tire_flag, 1, y_flag)
                 # the inputs of t_{k+1}, then the tire's outputs for them: its feedthrough
                 # (contact damper on the road velocity, sidewall on the rim's) is then current
                 u_t[0], u_t[1] = y_c[0], y_c[1]
                 u_t[2], u_t[3] = road_z_list[k + 1], road_vz_list[k + 1]
-                status |= t_set(ct, tire_in, 4, u_t) | t_get(ct, tire_out, 3, y_t)
-                status |= t_get_flag(ct, tire_flag, 1, y_flag)
+                status |= t_set(ct, tire_in, 4, u_t)
+                if read_after_inputs:
+                    status |= t_get(ct, tire_out, 3, y_t) | t_get_flag(ct, tire_flag, 1, y_flag)
                 if status > 1:  # an OR of statuses exceeds 1 iff one was discard or worse
                     raise CoSimError(f"an FMI call returned {_STATUS[min(status, 4)]} or worse")
                 row = out_address + (k + 1) * row_bytes
@@ -414,8 +422,10 @@ class QuarterCarCoSimulation:
 
 def cosimulate(fmus: FmuPaths, road_z_m, road_vz_m_s, car: QuarterCarParameters | None = None,
                tire_parameters: Mapping | None = None, step_s: float = DEFAULT_STEP_S,
-               scheme: str = "gauss-seidel", progress=None) -> CoSimResult:
+               scheme: str = "gauss-seidel", progress=None,
+               read_after_inputs: bool = True) -> CoSimResult:
     """One co-simulation with fresh FMU instances (see :class:`QuarterCarCoSimulation`)."""
-    with QuarterCarCoSimulation(fmus, car, tire_parameters, step_s, scheme) as sim:
+    with QuarterCarCoSimulation(fmus, car, tire_parameters, step_s, scheme,
+                                read_after_inputs) as sim:
         return sim.run(road_z_m, road_vz_m_s, progress=progress)
 

@@ -53,6 +53,7 @@ class DemoSettings:
     road_class: str = "C"
     road_speed_m_s: float = 20.0
     road_duration_s: float = 4.0
+    road_fade_in_s: float = 0.5  # the ISO road starts level: no step at t = 0
     cleat_height_m: float = 0.03
     cleat_length_m: float = 0.10
     cleat_shape: str = "rounded"
@@ -287,7 +288,15 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
         speed_m_s=settings.tf_speed_m_s))
     low = tire_low_frequency(model)
     modes = quarter_car_modes(car, model)
-    limit = stability_limit(car, reduce(model, report=False))
+    reduced = reduce(model, report=False)
+    limit = stability_limit(car, reduced)
+    limit_jacobi = stability_limit(car, reduced, "jacobi")
+    # how far Im K_dyn/ω strays from its low-frequency limit (the spring-damper's c) up to
+    # wheel hop
+    below_hop = np.linspace(ex.f_min_hz, modes.wheel_hop.frequency_hz, 40)
+    k_dyn = -full_tire_two_port(model, below_hop).rim[0]
+    damping_change = float(np.max(np.abs(k_dyn.imag / (2 * np.pi * below_hop)
+                                         / low.damping_n_s_per_m - 1.0)))
 
     # -- transfer functions by co-simulation ------------------------------------------------
     tire_parameters = {"n_elements": settings.n_elements, "speed": settings.tf_speed_m_s}
@@ -322,7 +331,8 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
 
     # -- road runs --------------------------------------------------------------------------
     road, spectrum = iso8608_road(settings.road_class, settings.road_speed_m_s,
-                                  settings.road_duration_s, h, seed=1, fade_in_s=0.5)
+                                  settings.road_duration_s, h, seed=1,
+                                  fade_in_s=settings.road_fade_in_s)
     def road_run(profile, speed_m_s, what, figure):
         """Co-simulate one road profile at its speed and plot rim load and contact force."""
         parameters = {"n_elements": settings.n_elements, "speed": speed_m_s}
@@ -372,6 +382,12 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
         ("tire mass moving with the rim (road held)", low.rim_side_mass_kg, "kg"),
         ("coupling: spectral radius at h (Gauss-Seidel)", limit.radius_at_default, "-"),
         ("coupling: largest stable step (Gauss-Seidel)", limit.max_stable_step_s, "s"),
+        ("coupling: largest stable step (Jacobi)", limit_jacobi.max_stable_step_s, "s"),
+        ("tire equivalent damping: largest change of Im K_dyn / w up to wheel hop",
+         100 * damping_change, "%"),
+        ("road -> body acceleration (full model): fall from its peak to f_max",
+         float(20 * np.log10(np.abs(full_fine["body_acc"]).max()
+                             / abs(full_fine["body_acc"][-1]))), "dB"),
         ("transfer-function run: real-time factor (wall / simulated)",
          tf_run.real_time_factor, "-"),
         ("transfer-function run: contact lost", 100 * tf_run.contact_lost_fraction, "%"),

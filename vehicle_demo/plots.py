@@ -52,6 +52,8 @@ def _with_gaps(x, positions):
 #: multisine gives coherence 1 to within 1e-3, and four flat panels say nothing (the note
 #: under the figure gives the lowest value instead).
 COHERENCE_SHOWN_BELOW = 0.99
+#: Half-width of the shaded band of the deviation panels: the acceptance limit, dB.
+DEVIATION_BAND_DB = 1.0
 
 
 def plot_bode(estimate, full, spring, agreements, path, title: str = "") -> Path:
@@ -99,8 +101,8 @@ def plot_bode(estimate, full, spring, agreements, path, title: str = "") -> Path
                      ms=2, label="not compared")
         dev.semilogx(estimate.freqs_hz[compared], deviation[compared], ".",
                      color=COLOURS["cosim"], ms=2, label="compared")
-        dev.axhspan(-1, 1, color="#2ca02c", alpha=0.08, lw=0)
-        dev.set_ylim(-1.5, 1.5)
+        dev.axhspan(-DEVIATION_BAND_DB, DEVIATION_BAND_DB, color="#2ca02c", alpha=0.08, lw=0)
+        dev.set_ylim(-1.5 * DEVIATION_BAND_DB, 1.5 * DEVIATION_BAND_DB)
         if coh is not None:
             coh.semilogx(estimate.freqs_hz, estimate.coherence[name], ".",
                          color=COLOURS["cosim"], ms=2)
@@ -128,11 +130,15 @@ def plot_bode(estimate, full, spring, agreements, path, title: str = "") -> Path
         fig.suptitle(title, fontsize=12, y=0.995)
     fig.tight_layout(rect=(0, 0.025, 1, 0.93))
     note = ("compared: lines with coherence > 0.95 and |H| above 1 % of the reference's peak; "
-            "shaded band ±1 dB (the acceptance limit)")
+            f"shaded band ±{DEVIATION_BAND_DB:g} dB (the acceptance limit)")
     if not with_coherence:
         note += f"; coherence ≥ {np.floor(lowest * 1e4) / 1e4:.4f} at every line (not drawn)"
     fig.text(0.5, 0.004, note, ha="center", fontsize=10, color="0.3")
     return _save(fig, path)
+
+
+#: Colour of the intervals in which the tire FMU reports in_contact = false.
+LOST_CONTACT_COLOUR = "#ffb3b3"
 
 
 def _shade_lost_contact(ax, time, in_contact):
@@ -141,7 +147,8 @@ def _shade_lost_contact(ax, time, in_contact):
         return False
     edges = np.flatnonzero(np.diff(np.r_[0, lost.astype(int), 0]))
     for start, stop in zip(edges[::2], edges[1::2]):
-        ax.axvspan(time[start], time[min(stop, len(time) - 1)], color="#ffb3b3", lw=0)
+        ax.axvspan(time[start], time[min(stop, len(time) - 1)], color=LOST_CONTACT_COLOUR,
+                   lw=0)
     return True
 
 
@@ -154,7 +161,8 @@ def plot_road_run(result, path, title: str = "") -> Path:
     lost = False
     for ax in (road, force, acc):
         lost = _shade_lost_contact(ax, t, result.in_contact) or lost
-    road.plot(t, 1e3 * result.road_z_m, color="0.5", lw=1, label="road height (leading edge)")
+    road.plot(t, 1e3 * result.road_z_m, color="0.5", lw=1,
+              label="road height (contact zone front)")
     road.plot(t, 1e3 * result.wheel_z_m, color=COLOURS["cosim"], lw=1, label="wheel")
     road.plot(t, 1e3 * result.body_z_m, color="#2ca02c", lw=1.4, label="body")
     road.set_ylabel("displacement [mm]")
@@ -249,8 +257,11 @@ def plot_contact_events(events, runs, path, title: str = "") -> Path:
     fig, axes = plt.subplots(4, len(names), figsize=(5 * len(names), 10), sharex="col",
                              gridspec_kw={"height_ratios": [0.7, 1.2, 1.2, 0.8]},
                              squeeze=False)
+    from matplotlib.patches import Patch
+
     styles = {"unilateral": dict(color=COLOURS["cosim"], lw=1.2, ls="-"),
               "linear": dict(color="#d62728", lw=1.0, ls="--")}
+    shaded = False
     for col, name in enumerate(names):
         profile = events[name]
         road, rim, contact, length = axes[:, col]
@@ -262,7 +273,7 @@ def plot_contact_events(events, runs, path, title: str = "") -> Path:
             contact.plot(run.time_s, 1e-3 * run.contact_Fz_n, **style)
             length.plot(run.time_s, 100 * run.contact_length_m, **style)
             if law == "unilateral":
-                _shade_lost_contact(contact, run.time_s, run.in_contact)
+                shaded = _shade_lost_contact(contact, run.time_s, run.in_contact) or shaded
         contact.axhline(0.0, color="k", lw=0.8)
         for ax in axes[:, col]:
             ax.grid(True, alpha=0.3)
@@ -272,7 +283,11 @@ def plot_contact_events(events, runs, path, title: str = "") -> Path:
     axes[2, 0].set_ylabel("contact force [kN]")
     axes[3, 0].set_ylabel("footprint length [cm]")
     handles, labels = axes[1, 0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=2, fontsize=10,
+    if shaded:
+        handles.append(Patch(color=LOST_CONTACT_COLOUR, lw=0))
+        labels.append("shaded: the unilateral contact's tread is off the road "
+                      "(in_contact = false)")
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=10,
                bbox_to_anchor=(0.5, -0.01))
     if title:
         fig.suptitle(title, fontsize=12)

@@ -1,7 +1,7 @@
 """The quarter car and its frequency-domain references.
 
 Coordinates are deviations from static equilibrium, z up: body z_b, wheel z_w, road z_r
-(at the leading edge of the contact patch). Gravity on body and wheel is balanced by the
+(at the front of the tire's contact zone). Gravity on body and wheel is balanced by the
 suspension preload and the tire's static load (m_b + m_w)·g, so only deviations appear:
 
     m_b z̈_b = -k_s (z_b - z_w) - c_s (ż_b - ż_w)
@@ -35,7 +35,7 @@ from .vehicle_demo_quarter_car_dynamics import (  # noqa: F401 -- the car is def
     two_mass_state_space,
 )
 
-#: Names of the ride responses, all per unit road height at the leading edge of the patch.
+#: Names of the ride responses, all per unit road height at the front of the contact zone.
 RIDE_OUTPUTS = ("body_acc", "wheel_acc", "rim_load", "contact_force")
 RIDE_UNITS = {"body_acc": "(m/s²)/m", "wheel_acc": "(m/s²)/m", "rim_load": "N/m",
               "contact_force": "N/m"}
@@ -82,7 +82,7 @@ def analytic_frequencies(params: QuarterCarParameters, tire_stiffness_n_per_m: f
 
 @dataclass(frozen=True, eq=False)
 class TireTwoPort:
-    """Tire FRFs per unit rim displacement and per unit road height (leading edge).
+    """Tire FRFs per unit rim displacement and per unit road height (at the zone front).
 
     Rows follow :data:`tire_fmu.core.io_model.OUTPUTS`: rim_Fz (force on the rim, up),
     rim_Fx, contact_Fz (road on tire, up), deflection.
@@ -111,8 +111,8 @@ def spring_damper_two_port(stiffness_n_per_m: float, damping_n_s_per_m: float, f
                            static_load_n: float, road_delay_s: float = 0.0) -> TireTwoPort:
     """A massless point-contact tire: F = k (z_r(t - τ) - z_w) + c (ż_r(t - τ) - ż_w).
 
-    τ puts the point contact at the patch centre (half the patch length over the speed) where
-    the ring model measures the road at the leading edge.
+    τ puts the point contact at the contact centre, where the ring model measures the road at
+    the front of its contact zone.
     """
     freqs_hz = np.asarray(freqs_hz, dtype=float)
     omega = 2 * np.pi * freqs_hz
@@ -158,8 +158,8 @@ def tire_low_frequency(model) -> TireLowFrequency:
     stiffness K_dyn(ω) = -H_rim(ω) (road held still).
 
     The damping is the limit Im K_dyn/ω as ω → 0. With the model's stiffness-proportional
-    material damping (β = 1.1e-4 s) it is about 215 N·s/m, and it stays within 0.5 % of that
-    up to wheel hop; the spring-damper reference uses this value.
+    material damping it stays close to that up to wheel hop (the demo records how close, and
+    docs/vehicle_demo.md quotes it); the spring-damper reference uses this value.
     """
     y0, y1, y2 = _low_frequency_series(model)
     # K_dyn = -H_rim = -y0 - iω y1 + ω² y2 = k + iωc - ω²m

@@ -41,7 +41,7 @@ class RoadError(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class RoadSignal:
-    """Road height and velocity at the leading edge of the patch at t_k = k·step."""
+    """Road height and velocity at the front of the tire's contact zone at t_k = k·step."""
 
     time_s: np.ndarray
     height_m: np.ndarray

@@ -6,13 +6,15 @@ height falls as 1/f, like a road's) and Schroeder phases for a low crest factor.
 ``settle_periods`` let the transient die out; Welch's averages then use one period per
 segment with a rectangular window, so every excited line falls on an FFT bin without leakage.
 
-Estimator: H1 = S_xy / S_xx with x the road height at the leading edge of the patch and y each
-ride output, and the coherence |S_xy|² / (S_xx S_yy), from ``scipy.signal.csd``/``welch``.
+Estimator: H1 = S_xy / S_xx with x the road height at the front of the tire's contact zone
+and y each ride output, and the coherence |S_xy|² / (S_xx S_yy), from ``scipy.signal.csd``
+and ``welch``.
 
-Resonances: body bounce and wheel hop are heavily damped (ζ ≈ 0.28 and 0.16), so their peaks
-sit away from the natural frequencies; they are identified as poles instead, by a common-
-denominator rational fit (Sanathanan-Koerner iterations) of the body and wheel displacement
-transmissibilities over 0.5-20 Hz. Tire modes are light (ζ ~ 2 %) and are read as peaks.
+Resonances: body bounce and wheel hop are heavily damped (docs/vehicle_demo.md gives ζ), so
+their peaks sit away from the natural frequencies; they are identified as poles instead, by a
+common-denominator rational fit (Sanathanan-Koerner iterations) of the body and wheel
+displacement transmissibilities over IDENTIFICATION_BAND_HZ. Tire modes are light (ζ ~ 2 %)
+and are read as peaks.
 """
 
 from __future__ import annotations
@@ -28,6 +30,15 @@ from .quarter_car import RIDE_OUTPUTS, QuarterCarModes, RideResponse
 #: Where the acceptance compares co-simulation with the reference.
 COHERENCE_MIN = 0.95
 GAIN_FLOOR = 0.01  # of the reference's peak over the band
+#: Where body bounce and wheel hop are looked for (identify_body_and_wheel): the band of the
+#: fit, and the frequency and damping ranges of each mode's pole.
+IDENTIFICATION_BAND_HZ = (0.5, 20.0)
+BODY_BOUNCE_MAX_HZ = 3.0
+BODY_BOUNCE_MAX_ZETA = 0.7
+WHEEL_HOP_BAND_HZ = (3.0, 30.0)
+WHEEL_HOP_MAX_ZETA = 0.5
+#: Tire modes are the most prominent rim-load peaks above this (tire_mode_peaks).
+TIRE_MODE_MIN_HZ = 25.0
 
 
 @dataclass(frozen=True)
@@ -203,7 +214,7 @@ def fit_rational(freqs_hz: np.ndarray, responses: list[np.ndarray], n_poles: int
 
     Two poles more than the car has and a generous numerator absorb what is not a car mode:
     the tire's mass and, at speed, the contact patch's averaging of the road (the road
-    reaches the patch nodes over L/V, a filter with its first null near V/L: 18 Hz at 5 m/s).
+    reaches the patch nodes over L/V, a filter with its first null near V/L).
     """
     freqs_hz = np.asarray(freqs_hz, dtype=float)
     scale = 2 * np.pi * math.sqrt(freqs_hz.min() * freqs_hz.max())
@@ -235,17 +246,19 @@ def fit_rational(freqs_hz: np.ndarray, responses: list[np.ndarray], n_poles: int
 
 
 def identify_body_and_wheel(freqs_hz, body_acc, wheel_acc, coherence=None,
-                            band_hz=(0.5, 20.0)) -> tuple[IdentifiedMode, IdentifiedMode]:
+                            band_hz=IDENTIFICATION_BAND_HZ
+                            ) -> tuple[IdentifiedMode, IdentifiedMode]:
     """Body bounce and wheel hop as poles of the displacement transmissibilities Z_b/Z_r =
     A_b/(-ω²) and Z_w/Z_r over ``band_hz`` (points with coherence > 0.95 only).
 
     A road vehicle's modes sit in known ranges, and the fit's extra poles (which absorb the
-    patch filter) are heavily damped, so: body bounce is the pole below 3 Hz with ζ < 0.7,
-    wheel hop the pole of 3-30 Hz with ζ < 0.5; where several qualify, the one contributing
-    most to the body's or the wheel's response (|residue| / decay rate, its peak height).
-    Below about V = L·f_hop (4 m/s here: the patch's averaging puts a null of the road input
-    near wheel hop) the road does not excite the modes cleanly and this may find none: it
-    then raises ValueError rather than return a wrong number.
+    patch filter) are heavily damped, so: body bounce is the pole below BODY_BOUNCE_MAX_HZ
+    with ζ < BODY_BOUNCE_MAX_ZETA, wheel hop the pole in WHEEL_HOP_BAND_HZ with ζ <
+    WHEEL_HOP_MAX_ZETA; where several qualify, the one contributing most to the body's or the
+    wheel's response (|residue| / decay rate, its peak height). Near and below V = L·f_hop
+    (the patch's averaging then puts a null of the road input at wheel hop) the road does not
+    excite the modes cleanly and this may find none: it then raises ValueError rather than
+    return a wrong number.
     """
     freqs_hz = np.asarray(freqs_hz)
     use = (freqs_hz >= band_hz[0]) & (freqs_hz <= band_hz[1])
@@ -257,8 +270,11 @@ def identify_body_and_wheel(freqs_hz, body_acc, wheel_acc, coherence=None,
     poles = fit.poles[(fit.poles.imag > 0) & (fit.poles.real < 0)]
     f_hz, zeta = np.abs(poles) / (2 * np.pi), -poles.real / np.abs(poles)
     found = []
-    for label, j, inside in (("body bounce", 0, (f_hz < 3.0) & (zeta < 0.7)),
-                             ("wheel hop", 1, (f_hz >= 3.0) & (f_hz < 30.0) & (zeta < 0.5))):
+    hop_low, hop_high = WHEEL_HOP_BAND_HZ
+    for label, j, inside in (
+            ("body bounce", 0, (f_hz < BODY_BOUNCE_MAX_HZ) & (zeta < BODY_BOUNCE_MAX_ZETA)),
+            ("wheel hop", 1, (f_hz >= hop_low) & (f_hz < hop_high)
+             & (zeta < WHEEL_HOP_MAX_ZETA))):
         if not inside.any():
             raise ValueError(
                 f"no {label} pole in the fit (poles at {np.round(f_hz, 3)} Hz, ζ "
@@ -302,8 +318,8 @@ def _peak_near(freqs, h, f_centre, rel=0.3) -> tuple[float, float]:
     return float(freqs[i]), float(np.abs(h[i]))
 
 
-def tire_mode_peaks(freqs_hz, h, f_min_hz=25.0, min_prominence_db=1.0, max_peaks=4
-                    ) -> list[tuple[float, float]]:
+def tire_mode_peaks(freqs_hz, h, f_min_hz=TIRE_MODE_MIN_HZ, min_prominence_db=1.0,
+                    max_peaks=4) -> list[tuple[float, float]]:
     """(frequency, gain) of the most prominent local maxima of |h| above ``f_min_hz``."""
     freqs_hz = np.asarray(freqs_hz)
     above = freqs_hz >= f_min_hz

@@ -1,7 +1,7 @@
 """Table of docs/theory.md §8.8: GL073A re-identified for each sidewall shear G.
 
-For each G the paper's analytic table (n <= 8, both branches; tire_fmu/data/tires/
-GL073A_modes.csv) is fitted with m_s, k_r1, k_r2 and b free on the N = 100 mesh, minimax
+For each G the analytic table of tire_fmu/data/tires/GL073A_modes.csv (n = 0-6 and 8, both
+branches) is fitted with m_s, k_r1, k_r2 and b free on the N = 100 mesh, minimax
 (as GL073A_shear.toml was made), then the critical speed is computed on four meshes.
 
 Run:  python3 docs/scripts/shear_tradeoff.py

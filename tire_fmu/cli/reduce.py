@@ -114,9 +114,11 @@ def register(subparsers) -> None:
     p = subparsers.add_parser(
         "frf",
         help=command_help("frf"),
-        description="Frequency response from rim displacement or road height (at the leading "
-        "edge of the patch) to a force or the deflection. With --reduced the reduced model "
-        "built with the reduction settings is overlaid, with its relative error.",
+        description="Frequency response from rim displacement or road height (at the front "
+        "of the contact zone, the fixed stretch of road centred on the contact centre that "
+        "the tread may meet, as the FMU's road_z) to a force or the deflection. With --reduced "
+        "the reduced model built with the reduction settings is overlaid, with its relative "
+        "error.",
     )
     p.add_argument("--input", choices=("road", "rim"), default="road",
                    help="excitation: road height or rim displacement (default road)")

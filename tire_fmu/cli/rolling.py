@@ -220,10 +220,13 @@ def run_speed_sweep(args: argparse.Namespace) -> Output:
     return output
 
 
-EXPLANATION = (
+STANDING_WAVE = (
     "The critical speed is the lowest speed at which a ground-frame frequency of the "
     "undeformed rolling tire reaches zero: a standing wave under the contact patch, which is "
-    "fixed in space. In the paper's model the sidewall is a row of lumped masses between two "
+    "fixed in space. "
+)
+LUMPED_SIDEWALL = (
+    "In the paper's model the sidewall is a row of lumped masses between two "
     "radial springs with no coupling along the circumference, so its band of modes just below "
     "sqrt((k_r1 + k_r2)/m_s)/2π has no wave speed. Seen from the ground each sidewall mode of "
     "order n moves down by κ_n·Ω, and the largest discrete wavenumber κ = 1/δθ = N/2π grows "
@@ -233,6 +236,22 @@ EXPLANATION = (
     "band a wave speed of order sqrt(G/m_s) and a critical speed that converges as N grows; "
     "--tire-file GL073A_shear is the GL073A tire re-identified with it (docs/theory.md §8.8)."
 )
+SHEARED_SIDEWALL = (
+    "This tire's sidewall masses are coupled along the circumference by a shear stiffness "
+    "G = {shear:.4g} N, so its band has a wave speed c = sqrt(G/m_s) = {wave:.4g} m/s. On a "
+    "mesh the critical speed lies above c by about ω_s·R·δθ/2 (ω_s the band frequency): it "
+    "falls as N grows towards c, the tire's own standing-wave speed, not towards zero as with "
+    "the paper's lumped sidewall (docs/theory.md §8.8)."
+)
+
+
+def explanation(tire) -> str:
+    """Why the critical speed is what it is, for this tire's sidewall."""
+    shear = tire.effective_sidewall_shear
+    if shear <= 0.0:
+        return STANDING_WAVE + LUMPED_SIDEWALL
+    return STANDING_WAVE + SHEARED_SIDEWALL.format(shear=shear,
+                                                   wave=float(np.sqrt(shear / tire.m_s)))
 
 
 def run_critical_speed(args: argparse.Namespace) -> Output:
@@ -248,7 +267,7 @@ def run_critical_speed(args: argparse.Namespace) -> Output:
             f"({result.speed_m_s * 3.6:.4g} km/h, Ω = {result.spin_rad_s:.4g} rad/s), "
             f"order {result.order}, branch {result.branch}")
     text = "\n".join([
-        head, "", EXPLANATION, "",
+        head, "", explanation(tire), "",
         table(rows, ["N", "V [m/s]", "V [km/h]", "Ω [rad/s]", "order", "branch"]),
     ])
     return Output(text=text, data=data)

@@ -366,8 +366,10 @@ def _edges(x: np.ndarray, penetration: np.ndarray, active: np.ndarray) -> tuple[
             return float(x[inner])
         p_in, p_out = penetration[inner], penetration[outer]
         # between the two nodes; a neighbour that penetrates without pushing (separating
-        # faster than its spring pushes) puts the edge at the neighbour
-        share = min(p_in / (p_in - p_out), 1.0) if p_in > p_out else 0.0
+        # faster than its spring pushes) puts the edge at the neighbour, and a node that
+        # pushes from above the road (the linear law's two-sided spring and damper) at itself:
+        # the footprint is never shorter than its pushing nodes' span
+        share = min(p_in / (p_in - p_out), 1.0) if p_in > max(p_out, 0.0) else 0.0
         return float(x[inner] + share * (x[outer] - x[inner]))
 
     front = crossing(idx[0], idx[0] - 1)  # x decreases along the zone (front first)

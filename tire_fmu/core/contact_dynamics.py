@@ -317,8 +317,8 @@ class _FastStep:
             pen = sim._s_pen
             a, b, xa, dxa, c, d, xc, dxc = edges
             pa, pb, pc, pd = float(pen[a]), float(pen[b]), float(pen[c]), float(pen[d])
-            front = xa + (min(pa / (pa - pb), 1.0) if pa > pb else 0.0) * dxa
-            rear = xc + (min(pc / (pc - pd), 1.0) if pc > pd else 0.0) * dxc
+            front = xa + (min(pa / (pa - pb), 1.0) if pa > max(pb, 0.0) else 0.0) * dxa
+            rear = xc + (min(pc / (pc - pd), 1.0) if pc > max(pd, 0.0) else 0.0) * dxc
             length = front - rear
         return float(ring[0]), float(ring[1]), contact_fz, float(ring[2]), length
 

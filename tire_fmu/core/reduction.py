@@ -243,7 +243,7 @@ class ReducedModel:
         return modal_frequency_response(self.eigenvalues, self.b, self.c, self.d, self.e, r, omega)
 
     def physical_frequency_response(self, name: str, freqs_hz) -> np.ndarray:
-        """FRF for a unit harmonic of a physical input, "rim" or "road" (leading edge)."""
+        """FRF for a unit harmonic of a physical input, "rim" or "road" (at the zone front)."""
         omega = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
         return self.frequency_response(physical_input(name, self.road_windows, omega), omega)
 

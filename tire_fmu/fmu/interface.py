@@ -117,7 +117,11 @@ def _signals() -> list[FmuVariable]:
         FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["rim_Fz"],
                     "vertical force of the tire on the rim, total (static load + dynamic)"),
         FmuVariable("rim_Fx", "Real", "output", 0.0, OUTPUT_UNITS["rim_Fx"],
-                    "longitudinal force of the tire on the rim (x forward), total"),
+                    "fore-aft force of the tire on the rim (x forward), total: the horizontal "
+                    "projection of the ring's radial forces on the rim; the ring has no "
+                    "tangential tread motion and the contact no friction, so there is no "
+                    "traction, braking or tangential cleat force in it (0 at rest on a flat "
+                    "road)"),
         FmuVariable("contact_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["contact_Fz"],
                     "vertical force of the road on the tire (positive pushing up), total"),
         FmuVariable("deflection", "Real", "output", 0.0, OUTPUT_UNITS["deflection"],

@@ -34,10 +34,17 @@
  *   its Python objects and would crash on the next call), FMU states this FMU did not make,
  *   and a serialization buffer of the wrong size are refused with fmi2Error and a message
  *   instead of being passed on.
+ * - A process without Python. The wrapper needs the Python C API from the process; without
+ *   it fmi2Instantiate is refused with a message and NULL. Some hosts drop both: ecos's
+ *   proxyfmu runs each FMU in a process of its own with a no-op logger, ignores the NULL and
+ *   every later fmi2Error, and showed all outputs as 0.0. So this refusal is also written
+ *   once to stderr, and fmi2GetReal on a NULL component fills its values with NaN (still
+ *   returning fmi2Error), so that a host that reads them anyway gets no plausible zeros.
  */
 
 #define _GNU_SOURCE
 #include <dlfcn.h>
+#include <math.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -92,6 +99,7 @@ static struct {
 static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
 static char load_error[MESSAGE_SIZE];
 static int exit_release_registered;
+static int python_refusal_printed;
 
 /* FMU states handed out (by fmi2GetFMUstate and fmi2DeSerializeFMUstate) and not yet freed:
  * any instance of this FMU may set them, nothing else is passed to the wrapper. */
@@ -420,9 +428,20 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
         say(g, fmi2Error, "fmi2Instantiate refused: this FMU supports co-simulation only");
     } else if ((folder = resource_folder(g, fmuResourceLocation)) != NULL) {
         if (!load_wrapper()) {
-            say(g, fmi2Error, "fmi2Instantiate refused: %s. A pythonfmu FMU runs the host's "
-                "own Python: the host must be a Python process (or have loaded libpython3 "
-                "globally) with the packages in resources/requirements.txt", load_error);
+            static const char *why = "fmi2Instantiate refused: %s. A pythonfmu FMU runs the "
+                "host's own Python: the host must be a Python process (or have loaded "
+                "libpython3 globally) with the packages in resources/requirements.txt";
+            say(g, fmi2Error, why, load_error);
+            pthread_mutex_lock(&lock);
+            int first = !python_refusal_printed;
+            python_refusal_printed = 1;
+            pthread_mutex_unlock(&lock);
+            if (first) { /* for hosts that drop the FMU's log (see the file comment) */
+                fprintf(stderr, "%s: ", instanceName);
+                fprintf(stderr, why, load_error);
+                fputc('\n', stderr);
+                fflush(stderr);
+            }
         } else {
             g->callbacks = g->host;
             g->callbacks.logger = guard_logger;
@@ -517,6 +536,9 @@ fmi2Status fmi2Reset(fmi2Component c)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
+    if (c == NULL && value != NULL) { /* no instance (fmi2Instantiate refused): no values */
+        for (size_t i = 0; i < nvr; i++) value[i] = NAN;
+    }
     BEGIN(c, "fmi2GetReal")
     ARRAYS("fmi2GetReal", nvr, vr, value)
     return finish(g, wrapper.GetReal(g->inner, vr, nvr, value));

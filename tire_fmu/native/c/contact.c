@@ -274,8 +274,10 @@ void footprint_edges(const double* x, const double* penetration, const char* act
             } else {
                 double p_in = penetration[inner], p_out = penetration[outer];
                 /* between the two nodes: a neighbour that penetrates without pushing puts
-                 * the edge at the neighbour */
-                double share = p_in > p_out ? fmin(p_in / (p_in - p_out), 1.0) : 0.0;
+                 * the edge at the neighbour, a node that pushes from above the road (the
+                 * linear law) at itself (contact.py's _edges) */
+                double share = p_in > p_out && p_in > 0.0 ? fmin(p_in / (p_in - p_out), 1.0)
+                                                          : 0.0;
                 *out[e] = x[inner] + share * (x[outer] - x[inner]);
             }
         }
