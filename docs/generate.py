@@ -931,6 +931,8 @@ def _fmu_messages() -> dict[str, list[str]]:
         slave = new()
         slave.setup_experiment(float("nan"))
         out["setup"] = said(slave)
+        slave.setup_experiment(1e16)
+        out["setup-clock"] = said(slave)
         slave = initialised()
         said(slave)
         slave.exit_initialization_mode()
@@ -958,6 +960,14 @@ def _fmu_messages() -> dict[str, list[str]]:
         out["time"] = said(slave)
         slave.set_real([vr(slave, "load")], [1.0])
         out["fixed"] = said(slave)
+        slave = new()
+        slave.setup_experiment(1e12)
+        slave.enter_initialization_mode()
+        slave.set_integer([vr(slave, "n_elements")], [MESSAGE_ELEMENTS])
+        slave.exit_initialization_mode()
+        said(slave)
+        slave.do_step(1e12, 1e-4)
+        out["clock"] = said(slave)
         slave.get_real([999])
         out["reference"] = said(slave)
     return out
@@ -975,6 +985,26 @@ def _message(case: str, index: int = 0, strip: str = "", clip: str = "") -> str:
     if clip:
         text = text[:text.index(clip) + len(clip)] + "...)"
     return f"`{text}`"
+
+
+@value("fmu-msg-setup-clock")
+def _msg_setup_clock() -> str:
+    return _message("setup-clock")
+
+
+@value("fmu-msg-clock")
+def _msg_clock() -> str:
+    return _message("clock")
+
+
+@value("deflection-at-rest")
+def _deflection_at_rest() -> str:
+    """The static deflection and tread compression at the defaults, as the FMU starts."""
+    from tire_fmu.core.contact_dynamics import build_contact_model
+
+    statics = build_contact_model().static_outputs
+    return (f"{statics['deflection'] * 1e3:.2f} mm at the defaults at rest, against "
+            f"{statics['tread_deflection'] * 1e3:.2f} mm of tread compression")
 
 
 @value("fmu-msg-parameters")

@@ -335,11 +335,13 @@ def test_outputs_read_after_non_finite_inputs_are_the_last_steps_with_an_error()
     assert "rim_z = nan" in error and "those of the last step" in error
 
 
-def test_a_communication_point_within_rounding_is_accepted_and_becomes_the_clock():
+def test_a_communication_point_within_rounding_is_accepted_and_the_fmus_clock_goes_on():
+    """The host's t within rounding of the FMU's is that point; the FMU keeps its own clock
+    (it used to take the host's, and with it the host's rounding into the road history)."""
     slave = initialised()
     assert slave.do_step(0.0, 0.1)
-    assert slave.do_step(0.1 * (1 + 1e-12), 0.1)  # within 1e-9 relative: the host's clock
-    assert slave._simulator.time == 0.1 * (1 + 1e-12) + 0.1
+    assert slave.do_step(0.1 * (1 + 1e-12), 0.1)  # within 1e-9 relative
+    assert slave._simulator.time == 0.2
 
 
 def test_lift_off_is_physics_not_a_warning():
@@ -532,9 +534,19 @@ def _bad_states():
                                                                        q=nan_q)),
                             "contact state has non-finite values in q"),
         "nan time": (_with(state, simulator=dataclasses.replace(state.simulator,
-                                                                time=math.nan)),
-                     "contact state has time = nan"),
+                                                                elapsed_s=math.nan)),
+                     "elapsed time = nan"),
         "unknown phase": (_with(state, phase="flying"), "phase = 'flying'"),
+        # issue 19: a state is checked for what it means, not only for its checksum
+        "error phase without its reason": (
+            _with(state, phase=Phase.ERROR, why_not_running=""),
+            "its phase is 'error' without the reason (why_not_running is empty)"),
+        "a start time not its simulator's": (_with(state, start_time=5.0),
+                                             "its start time is 5.0 s, but its simulator "
+                                             "started at 0.0 s"),
+        "outputs not its simulator's": (
+            _with(state, values=tuple(values[:4] + [3e307] + values[5:])),
+            "the outputs it shows, [3e+307,"),
     }
     return named
 
@@ -555,6 +567,27 @@ def test_bad_state_bytes_are_refused_and_leave_the_instance_unchanged(case):
     assert error.startswith("fmi2SetFMUstate refused: ") and fragment in error, error
     assert_unchanged(before, observable(slave))
     assert slave.do_step(2e-3, 1e-3) is True  # it runs on where it was
+
+
+def test_a_state_in_the_error_phase_carries_its_reason_into_every_refusal():
+    """Issue 19: a state in phase "error" was refused with an empty reason. A true one
+    (parameters refused) brings its reason along; an empty one is refused when set, and the
+    FMU never refuses a call without saying why."""
+    broken = initialised(m_s=1e-20)
+    assert broken._phase == Phase.ERROR
+    data = TireModal._fmu_state_to_bytes(broken._get_fmu_state())
+    fresh = new_slave("fresh")
+    fresh._set_fmu_state(TireModal._fmu_state_from_bytes(data))
+    assert not messages(fresh, Fmi2Status.error)
+    assert fresh.do_step(0.0, 1e-3) is False
+    (refusal,) = messages(fresh, Fmi2Status.error)
+    assert refusal.startswith("fmi2DoStep refused: the parameters were refused") and \
+        "m_s = 1e-20 kg/m" in refusal
+    fresh._why_not_running = ""  # however it came about
+    fresh.do_step(0.0, 1e-3)
+    (refusal,) = messages(fresh, Fmi2Status.error)
+    assert refusal == ("fmi2DoStep refused: the FMU is in the error state; reset it or set an "
+                       "FMU state; nothing changed")
 
 
 def test_a_state_whose_parameters_do_not_build_is_refused_unchanged():

@@ -9,7 +9,7 @@ Every host runs the same loop: set road_z, step h = 1e-4 s, read the outputs.
 import json
 import sys
 
-NAMES = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length"]
+NAMES = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"]
 H = 1e-4
 
 

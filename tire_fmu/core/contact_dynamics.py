@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg.blas import dgemv
 
+from . import clock
 from .contact import ContactPatch, RoadWindows, _edges, contact_force
 from .free_ring import FreeRingModel, RingTruncation, free_ring_model
 from .model import TireModel, build_model, check_resolved
@@ -48,19 +49,30 @@ from .road import SAME_POINT_EPS, RoadReader
 from .stepping import phi_functions
 
 LAWS = ("unilateral", "linear")
-OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
+#: deflection: the rim's lowering towards the road at the contact centre (as the static
+#: footprint's); tread_deflection: the tread's compression there relative to the rim
+OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
+                "tread_deflection")
 INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
 #: Largest input magnitudes a step accepts (m, m/s): far beyond any tire's travel, but
 #: finite enough that no product inside a step can overflow.
 MAX_DISPLACEMENT_M = 10.0
 MAX_VELOCITY_M_S = 1000.0
+#: Largest displacement and rate a state may hold (m, m/s): the tread's excursion at the zone
+#: nodes from any one mode, penetrations, the rim and road it saw. A step of an FMU moves the
+#: rim and road at most MAX_DISPLACEMENT_M + MAX_VELOCITY_M_S x 1 s = 1010 m from equilibrium;
+#: these are ten times that (and the rates a thousand times the input limit), so no run within
+#: the inputs' limits reaches them, while a state beyond them is no tire's (1e300 in a mode gave
+#: outputs of 3e307) and a step from it could overflow.
+MAX_STATE_DISPLACEMENT_M = 1e4
+MAX_STATE_VELOCITY_M_S = 1e6
 #: Longest internal step (s); shorter still if the contact frequency asks for it.
 MAX_SUBSTEP_S = 1e-4
 #: The shortest contact sub-step a tire may need (s): GL073A needs 1.8e-4 s (so 0.1 ms), and
 #: 1e-7 s is 1000 sub-steps per 0.1 ms communication step. Stiffer contacts on lighter treads
 #: are refused rather than run for hours (a property test over the ranges found one).
 MIN_SUBSTEP_S = 1e-7
-_STATE_FORMAT = "tire_fmu.contact-state/1"
+_STATE_FORMAT = "tire_fmu.contact-state/2"
 _KERNEL_CACHE_SIZE = 32
 _SOLVE_CACHE_SIZE = 256
 #: Active-set iterations per solve: this many per zone node, plus ACTIVE_SET_EXTRA; then PGS.
@@ -117,7 +129,12 @@ class ContactModel:
 
     @property
     def static_outputs(self) -> dict[str, float]:
-        return {**self.patch.static_outputs(), "contact_length": self.patch.length_m}
+        """The simulator's outputs (OUTPUT_NAMES) at the static footprint."""
+        statics = self.patch.static_outputs()  # the linear model's: "deflection" is the tread's
+        return {"rim_Fz": statics["rim_Fz"], "rim_Fx": statics["rim_Fx"],
+                "contact_Fz": statics["contact_Fz"], "deflection": self.patch.deflection_m,
+                "contact_length": self.patch.length_m,
+                "tread_deflection": statics["deflection"]}
 
     def summary(self) -> dict:
         return {**self.model.summary(), "law": self.settings.law,
@@ -171,6 +188,7 @@ class _Step:
     h: float
     n_sub: int
     last: _Kernel
+    resolved_until_s: float  # clock.resolved_until(h): where the clock stops resolving h
 
 
 @dataclass(frozen=True, eq=False)
@@ -309,7 +327,10 @@ class _FastStep:
 
     def _outputs(self, sim: ContactSimulator, contact_fz: float) -> tuple[float, ...]:
         nz = sim.n_zone
-        ring = sim.static_ring + sim._state[5 * nz + 2:5 * nz + 5]
+        state = sim._state
+        rim_fz, rim_fx, tread = (sim.static_ring + state[5 * nz + 2:5 * nz + 5]).tolist()
+        # ContactSimulator.deflection, in floats
+        deflection = sim.static_deflection + state.item(sim._centre_height) - state.item(3 * nz)
         edges = self.edges
         if edges is None:
             length = sim.contact_length()
@@ -320,7 +341,7 @@ class _FastStep:
             front = xa + (min(pa / (pa - pb), 1.0) if pa > max(pb, 0.0) else 0.0) * dxa
             rear = xc + (min(pc / (pc - pd), 1.0) if pc > max(pd, 0.0) else 0.0) * dxc
             length = front - rear
-        return float(ring[0]), float(ring[1]), contact_fz, float(ring[2]), length
+        return rim_fz, rim_fx, contact_fz, deflection, length, tread
 
     def advance(self, sim: ContactSimulator, z: float, vz: float) -> bool:
         nz = sim.n_zone
@@ -358,8 +379,14 @@ class ContactSimulator:
     """Steps a :class:`ContactModel` from communication point to communication point.
 
     Outputs are totals: rim_Fz, rim_Fx (tire on rim), contact_Fz (road on tire, never
-    negative with the unilateral law), deflection (tread compression at the contact centre
-    relative to the rim) and contact_length (footprint length on the road, m).
+    negative with the unilateral law), deflection (the rim's lowering towards the road at the
+    contact centre: the static footprint's, plus the road's rise under the centre node, less
+    the rim's: it goes negative when the rim lifts clear), contact_length (footprint length
+    on the road, m) and tread_deflection (the tread's compression at the contact centre
+    relative to the rim).
+
+    Its clock is the time since ``start_time`` (:mod:`.clock`): the road history is indexed
+    by it, so a run gives the same outputs whenever it starts; ``time`` is start + elapsed.
 
     The state lives in one real buffer [q as (re, im) pairs, z, ż, Δf(t), Δf(t + h), road
     heights, road slopes, 1] that a step reads with one matrix-vector product. Besides q it
@@ -385,7 +412,13 @@ class ContactSimulator:
         self.x_road = self.zone.road_positions_m(patch.deflection_m)
         statics = contact.static_outputs
         self.static_ring = np.array([statics["rim_Fz"], statics["rim_Fx"],
-                                     statics["deflection"]])
+                                     statics["tread_deflection"]])
+        self.static_deflection = float(statics["deflection"])
+        self._centre = self.zone.centre
+        self._centre_height = 3 * z + 2 + self._centre  # in the state array: seen heights
+        # each mode's largest reach into a zone displacement and rate (for a state's bounds)
+        self._mode_reach = np.abs(ring.c[3:3 + z]).max(axis=0, initial=0.0)
+        self._mode_rate = np.abs(ring.c[3 + z:3 + 2 * z]).max(axis=0, initial=0.0)
         self._w, self._rate = slice(3, 3 + z), slice(3 + z, 3 + 2 * z)
         self.road = RoadReader(contact.windows)
         d, e = ring.d, ring.e
@@ -479,7 +512,9 @@ class ContactSimulator:
 
     # -- state ---------------------------------------------------------------------------
     def reset(self, start_time: float = 0.0) -> None:
-        self.time = float(start_time)
+        self.start_time = float(start_time)
+        self.elapsed_s = 0.0  # time since the start: what the road history is indexed by
+        self._carry_s = 0.0  # what the compensated sum of the steps carries (clock.advance)
         self._buffer[:-1] = 0.0
         self._rw[:-1] = 0.0
         self._fast_run = 0
@@ -493,8 +528,13 @@ class ContactSimulator:
         self._ring_out = np.zeros(3)  # deviation of rim_Fz, rim_Fx, deflection at `time`
         self._last: _Kernel | None = None  # the last substep, whose end _start may re-solve
         self._last_step_s = math.nan
-        self.road.reset()
+        self.road.reset(self.start_time)
         self._values = self._outputs()
+
+    @property
+    def time(self) -> float:
+        """The absolute time: start_time + elapsed_s (what a host's clock shows)."""
+        return self.start_time + self.elapsed_s
 
     @property
     def q(self) -> np.ndarray:
@@ -534,14 +574,24 @@ class ContactSimulator:
                 != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
                 or abs(rim_vz) > MAX_VELOCITY_M_S or abs(road_vz) > MAX_VELOCITY_M_S:
             self._check(h, (rim_z, rim_vz, road_z, road_vz))
-        step = self._kernels.get(h) or self._kernel(h)
+        # clock.resolves(time, h), with the limit cached for the h of a cached step
+        step = self._kernels.get(h)
+        if step is None:
+            if not clock.resolves(self.time, h):
+                self._check(h, (rim_z, rim_vz, road_z, road_vz))
+            step = self._kernel(h)
+        elif not abs(self.start_time + self.elapsed_s) + h < step.resolved_until_s:
+            self._check(h, (rim_z, rim_vz, road_z, road_vz))
         kernel, n_sub = step.last, step.n_sub
         heights, slopes = self._road_h, self._road_v
-        self.road.read(self.time, road_z, road_vz, h, self._s_road)
+        self.road.read(self.elapsed_s, road_z, road_vz, h, self._s_road)
         steady = n_sub == 1 and kernel is self._last
         if steady and self._fast_run >= _FAST_AFTER and self._fast_step(kernel, rim_z, rim_vz):
             self._fast_run += 1
-            self.time += h
+            y = h - self._carry_s  # clock.advance, inlined on the hot path
+            elapsed = self.elapsed_s + y
+            self._carry_s = (elapsed - self.elapsed_s) - y
+            self.elapsed_s = elapsed
             self._last_step_s = h
             return self._values
         before = self.active.copy()
@@ -550,7 +600,7 @@ class ContactSimulator:
         buffer[self._heights], buffer[self._slopes] = heights, slopes
         for i in range(n_sub):
             self._substep(kernel, rim_z + i * kernel.h * rim_vz, rim_vz)
-        self.time += h
+        self.elapsed_s, self._carry_s = clock.advance(self.elapsed_s, self._carry_s, h)
         self._last_step_s = h
         # steps in a row on one kernel that kept their active set: the rule for the fast
         # step, a function of the state alone (so a restored state takes the same path)
@@ -585,10 +635,10 @@ class ContactSimulator:
         if (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M \
                 or abs(road_z) > MAX_DISPLACEMENT_M or abs(rim_vz) > MAX_VELOCITY_M_S \
                 or abs(road_vz) > MAX_VELOCITY_M_S:
-            self._check(1.0, (rim_z, rim_vz, road_z, road_vz))
+            self._check(None, (rim_z, rim_vz, road_z, road_vz))
         heights, slopes = self._road_h, self._road_v
         # recorded like a step's own sample: the step at this point replaces it
-        self.road.read(self.time, road_z, road_vz, self._last_step_s, self._s_road)
+        self.road.read(self.elapsed_s, road_z, road_vz, self._last_step_s, self._s_road)
         last = self._last
         if last is not None and self._fast_run >= _FAST_AFTER:
             if self._fast_map(last).start(self, rim_z, rim_vz):
@@ -597,11 +647,16 @@ class ContactSimulator:
         self._values = self._outputs()
         return self._values
 
-    def _check(self, h: float, values: tuple) -> None:
-        """Raise StepError naming every bad value (h, or an input outside its range)."""
+    def _check(self, h: float | None, values: tuple) -> None:
+        """Raise StepError naming every bad value (h, an input outside its range, or a step
+        the clock does not resolve at the current time; None: no step, the inputs only)."""
         problems = []
-        if not (h > 0.0 and math.isfinite(h)):
+        if h is None:
+            pass
+        elif not (h > 0.0 and math.isfinite(h)):
             problems.append(f"step size h = {h!r} s: must be finite and > 0")
+        elif not clock.resolves(self.time, h):
+            problems.append(clock.resolution_problem(self.time, h))
         for name, value in zip(INPUT_NAMES, values):
             limit, unit = ((MAX_VELOCITY_M_S, "m/s") if name.endswith("vz")
                            else (MAX_DISPLACEMENT_M, "m"))
@@ -740,7 +795,7 @@ class ContactSimulator:
             if abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
                 return step
         n_sub = max(1, math.ceil(h / self.contact.substep_s * (1 - SUBSTEP_SLACK)))
-        step = _Step(h, n_sub, self._make_kernel(h / n_sub))
+        step = _Step(h, n_sub, self._make_kernel(h / n_sub), clock.resolved_until(h))
         if len(self._kernels) >= _KERNEL_CACHE_SIZE:
             self._kernels.pop(next(iter(self._kernels)))
         self._kernels[h] = step
@@ -797,8 +852,15 @@ class ContactSimulator:
     def _outputs(self) -> tuple[float, ...]:
         ring = self.static_ring + self._ring_out
         contact_fz = float(self.cos @ (self.f_static + self.df))
-        return (float(ring[0]), float(ring[1]), contact_fz, float(ring[2]),
-                self.contact_length())
+        return (float(ring[0]), float(ring[1]), contact_fz, self.deflection(),
+                self.contact_length(), float(ring[2]))
+
+    def deflection(self) -> float:
+        """The rim's lowering towards the road at the contact centre at ``time`` (m): the
+        static footprint's, plus the rise of the road under the centre node, less the rim's."""
+        state = self._state
+        return self.static_deflection + state.item(self._centre_height) \
+            - state.item(3 * self.n_zone)
 
     def contact_length(self) -> float:
         """Footprint length on the road (m) at ``time``: between the interpolated edges."""
@@ -810,14 +872,17 @@ class ContactSimulator:
 # -- state ------------------------------------------------------------------------------------
 
 class StateError(ValueError):
-    """Bytes that are not a state of this simulator (format, checksum, shape, values)."""
+    """A state that is not one of this simulator (format, checksum, shape, or what it holds
+    does not mean a state of this tire: see :meth:`ContactSimulator.state_problems`)."""
 
 
 @dataclass(frozen=True, eq=False)
 class ContactState:
     """Everything a :class:`ContactSimulator` needs to resume exactly (copies)."""
 
-    time: float
+    start_time: float
+    elapsed_s: float  # time since the start (the road history's clock)
+    carry_s: float  # the compensation of the elapsed time's sum (clock.advance)
     last_step_s: float  # the communication step whose end the next start re-solves (nan: none)
     q: np.ndarray  # complex modal state
     df: np.ndarray
@@ -836,6 +901,11 @@ class ContactState:
 
     _ARRAYS = ("q", "df", "active", "penetration", "rate", "seen", "ring_out", "history_t",
                "history_z", "history_v", "road_line", "road_run", "fast_run", "outputs")
+    _SCALARS = ("start_time", "elapsed_s", "carry_s", "last_step_s")
+
+    @property
+    def time(self) -> float:
+        return self.start_time + self.elapsed_s
 
     def to_bytes(self) -> bytes:
         """A self-checking byte string: a JSON header (format, scalars, array layout, SHA-256
@@ -843,7 +913,8 @@ class ContactState:
         arrays = {name: np.ascontiguousarray(getattr(self, name)) for name in self._ARRAYS}
         payload = b"".join(a.astype(a.dtype.newbyteorder("<")).tobytes()
                            for a in arrays.values())
-        header = {"format": _STATE_FORMAT, "time": self.time, "last_step_s": self.last_step_s,
+        header = {"format": _STATE_FORMAT,
+                  **{name: getattr(self, name) for name in self._SCALARS},
                   "arrays": {name: [a.dtype.str.replace(">", "<"), list(a.shape)]
                              for name, a in arrays.items()},
                   "sha256": hashlib.sha256(payload).hexdigest()}
@@ -851,6 +922,8 @@ class ContactState:
 
     @classmethod
     def from_bytes(cls, data: bytes) -> ContactState:
+        """The state in ``data``, checked for its format, checksum and finite values (what it
+        means is checked when it is set: ContactSimulator.state_problems)."""
         data = bytes(data)
         head, sep, payload = data.partition(b"\n")
         try:
@@ -859,7 +932,7 @@ class ContactState:
             raise StateError(f"not a tire_fmu contact state: header unreadable ({error})"
                              ) from error
         if not isinstance(header, dict) or header.get("format") != _STATE_FORMAT:
-            raise StateError(f"not a tire_fmu contact state: format "
+            raise StateError(f"not a tire_fmu contact state of this version: format "
                              f"{header.get('format') if isinstance(header, dict) else header!r}")
         if not sep or hashlib.sha256(payload).hexdigest() != header.get("sha256"):
             raise StateError("contact state damaged: its checksum does not match")
@@ -872,53 +945,148 @@ class ContactState:
                 size = count * dtype.itemsize
                 arrays[name] = np.frombuffer(payload, dtype, count, offset).reshape(shape).copy()
                 offset += size
-            time, last = float(header["time"]), float(header["last_step_s"])
+            scalars = {name: float(header[name]) for name in cls._SCALARS}
         except (KeyError, TypeError, ValueError) as error:
             raise StateError(f"contact state damaged: {error}") from error
         if offset != len(payload):
             raise StateError(f"contact state damaged: {len(payload) - offset} bytes too many")
-        if not math.isfinite(time) or not (math.isnan(last) or (last > 0 and
-                                                                  math.isfinite(last))):
-            raise StateError(f"contact state has time = {time!r}, last step = {last!r}")
+        last = scalars["last_step_s"]
+        if not all(math.isfinite(scalars[n]) for n in ("start_time", "elapsed_s", "carry_s")) \
+                or not (math.isnan(last) or (last > 0 and math.isfinite(last))):
+            raise StateError("contact state has start time = {start_time!r}, elapsed time = "
+                             "{elapsed_s!r}, carry = {carry_s!r}, last step = {last_step_s!r}"
+                             .format(**scalars))
         for name, array in arrays.items():
             if array.dtype.kind in "fc" and not np.all(np.isfinite(array)):
                 raise StateError(f"contact state has non-finite values in {name}")
         arrays["active"] = arrays["active"].astype(bool)
-        return cls(time=time, last_step_s=last, **arrays)
+        return cls(**scalars, **arrays)
 
 
 def _state_methods():
     def get_state(self: ContactSimulator) -> ContactState:
         z, vz, heights, slopes = self._seen
         return ContactState(
-            time=self.time, last_step_s=self._last_step_s, q=self._q.copy(), df=self.df.copy(),
+            start_time=self.start_time, elapsed_s=self.elapsed_s, carry_s=self._carry_s,
+            last_step_s=self._last_step_s, q=self._q.copy(), df=self.df.copy(),
             active=self.active.copy(), penetration=self.penetration.copy(),
             rate=self.rate.copy(), seen=np.concatenate([[z, vz], heights, slopes]),
             ring_out=self._ring_out.copy(), **self.road.get_state(),
             fast_run=np.array([self._fast_run], dtype=np.int64),
             outputs=np.array(self._values))
 
-    def set_state(self: ContactSimulator, state: ContactState) -> None:
+    def state_problems(self: ContactSimulator, state: ContactState) -> list[str]:
+        """Everything that makes ``state`` no state of this simulator: empty when it is one.
+
+        Beyond its shapes (the same model), what it holds must mean a state of this tire:
+        a clock that a run reaches (time since the start >= 0 and as its steps sum it, a last
+        step the clock resolves); a road history as the reader keeps it
+        (:meth:`RoadReader.state_problems`); forces that do not pull with the unilateral law;
+        displacements and rates within MAX_STATE_DISPLACEMENT_M and MAX_STATE_VELOCITY_M_S
+        (each mode's reach into the zone, the penetrations, what the contact saw) and forces
+        within what the zone springs give there; and outputs that are the ones the state
+        gives. Every problem is listed.
+        """
         nz = self.n_zone
         expected = {"q": (self.ring.n_modes,), "df": (nz,), "active": (nz,),
                     "penetration": (nz,), "rate": (nz,), "seen": (2 + 2 * nz,),
-                    "ring_out": (3,), "outputs": (len(OUTPUT_NAMES),)}
+                    "ring_out": (3,), "outputs": (len(OUTPUT_NAMES),), "road_run": (1,)}
         wrong = [f"{name} has shape {getattr(state, name).shape}, expected {shape}"
                  for name, shape in expected.items() if getattr(state, name).shape != shape]
         sizes = {state.history_t.shape, state.history_z.shape, state.history_v.shape}
-        if len(sizes) != 1 or len(next(iter(sizes))) != 1:
+        if len(sizes) != 1 or len(next(iter(sizes))) != 1 or state.road_line.ndim != 1:
             wrong.append("the road history arrays differ in shape")
         if wrong:
-            raise StateError("state of another model (build both with the same parameters): "
-                             + "; ".join(wrong))
-        road = RoadReader(self.contact.windows)
-        try:
-            road.set_state({name: getattr(state, name) for name in (
-                "history_t", "history_z", "history_v", "road_line", "road_run")})
-        except ValueError as error:
-            raise StateError(f"state of another model: {error}") from error
+            return ["state of another model (build both with the same parameters): "
+                    + "; ".join(wrong)]
+        problems = []
+        elapsed, last = state.elapsed_s, state.last_step_s
+        if not (elapsed >= 0.0 and abs(state.carry_s) <= math.ulp(elapsed)):
+            problems.append(f"its clock reads {elapsed!r} s since the start with a carry of "
+                            f"{state.carry_s!r} s: a run's clock is >= 0, and its carry below "
+                            "one rounding of it")
+        if math.isnan(last) != (elapsed == 0.0):
+            problems.append(f"its clock reads {elapsed!r} s since the start and its last step "
+                            f"is {last!r} s: only steps advance the clock")
+        elif not math.isnan(last) and not clock.resolves(state.time - last, last):
+            problems.append(f"its last step of {last!r} s ends at t = {state.time!r} s, where "
+                            "the clock does not resolve it")
+        length, rate = MAX_STATE_DISPLACEMENT_M, MAX_STATE_VELOCITY_M_S
+        road = RoadReader(self.contact.windows, origin_s=state.start_time)
+        problems += road.state_problems(
+            {name: getattr(state, name) for name in (
+                "history_t", "history_z", "history_v", "road_line", "road_run")},
+            elapsed, last, MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S)
+        forces = self.f_static + state.df
+        force_bound = self.f_static + self.k * (length + np.abs(self.pen_static)) + self.c * rate
+        if not self.linear and np.any(forces < 0.0):
+            problems.append("its contact forces pull on the tread (the unilateral contact only "
+                            "pushes)")
+        if not np.all(np.abs(forces) <= force_bound):
+            problems.append("its contact forces exceed what the zone springs give at "
+                            f"{length:g} m and {rate:g} m/s")
+        q = np.abs(state.q)
+        seen = state.seen
+        for what, values, bound, unit in (
+                ("the tread's excursion at the zone nodes from a mode", q * self._mode_reach,
+                 length, "m"),
+                ("the tread's rate at the zone nodes from a mode", q * self._mode_rate, rate,
+                 "m/s"),
+                ("its penetrations", state.penetration, length, "m"),
+                ("its penetration rates", state.rate, rate, "m/s"),
+                ("the rim and road positions it saw", np.r_[seen[0], seen[2:2 + nz]], length,
+                 "m"),
+                ("the road rates it saw", seen[2 + nz:], rate, "m/s"),
+                ("the tread deflection it holds", state.ring_out[2:], length, "m")):
+            if not np.all(np.abs(values) <= bound):
+                problems.append(f"{what} reach {float(np.max(np.abs(values))):.3g} {unit}, "
+                                f"beyond the {bound:g} {unit} a state may hold")
+        if not abs(seen[1]) <= MAX_VELOCITY_M_S:
+            problems.append(f"the rim velocity it saw, {float(seen[1])!r} m/s, is beyond the "
+                            f"input limit {MAX_VELOCITY_M_S:g} m/s")
+        if not np.all(np.abs(state.ring_out[:2]) <= force_bound.sum()):
+            problems.append("its rim forces exceed what the zone springs give at "
+                            f"{length:g} m and {rate:g} m/s")
+        if not problems:
+            problems += self._output_problems(state, forces)
+        return problems
+
+    def _output_problems(self: ContactSimulator, state: ContactState, forces) -> list[str]:
+        """The state's outputs against those its own values give (the contact force and the
+        footprint to rounding: the fast step sums them in another order)."""
+        ring = self.static_ring + state.ring_out
+        seen = state.seen
+        deflection = float(self.static_deflection + seen[2 + self._centre] - seen[0])
+        contact = float(self.cos @ forces)
+        front, rear = _edges(self.x_road, state.penetration, forces > 0.0)
+        given = dict(zip(OUTPUT_NAMES, (float(x) for x in state.outputs)))
+        scale = float(np.abs(forces).sum() + np.abs(self.f_static).sum())
+        expected = {"rim_Fz": (float(ring[0]), 0.0), "rim_Fx": (float(ring[1]), 0.0),
+                    "contact_Fz": (contact, 1e-9 * scale), "deflection": (deflection, 0.0),
+                    "contact_length": (front - rear,
+                                       1e-9 * float(self.x_road[0] - self.x_road[-1])),
+                    "tread_deflection": (float(ring[2]), 0.0)}
+        assert tuple(expected) == OUTPUT_NAMES
+        wrong = [f"{name} = {given[name]!r}, but the state gives {value!r}"
+                 for name, (value, tolerance) in expected.items()
+                 if not abs(given[name] - value) <= tolerance]
+        if wrong:
+            return [f"its outputs are not the ones it gives: {'; '.join(wrong)}"]
+        return []
+
+    def set_state(self: ContactSimulator, state: ContactState) -> None:
+        """Continue from ``state``, exactly as the run it was taken from; StateError listing
+        every problem (state_problems) changes nothing."""
+        problems = self.state_problems(state)
+        if problems:
+            raise StateError("; ".join(problems))
+        nz = self.n_zone
+        road = RoadReader(self.contact.windows, origin_s=state.start_time)
+        road.set_state({name: getattr(state, name) for name in (
+            "history_t", "history_z", "history_v", "road_line", "road_run")})
         self.road = road  # checked in full before anything changes
-        self.time = state.time
+        self.start_time, self.elapsed_s = state.start_time, state.elapsed_s
+        self._carry_s = state.carry_s
         self._q[:] = state.q
         self.df = state.df.copy()
         self.active = state.active.copy()
@@ -933,7 +1101,8 @@ def _state_methods():
                       else self._kernel(state.last_step_s).last)
         self._values = tuple(float(v) for v in state.outputs)
 
-    return get_state, set_state
+    return get_state, state_problems, _output_problems, set_state
 
 
-ContactSimulator.get_state, ContactSimulator.set_state = _state_methods()
+(ContactSimulator.get_state, ContactSimulator.state_problems,
+ ContactSimulator._output_problems, ContactSimulator.set_state) = _state_methods()

@@ -13,6 +13,11 @@ however many samples it spans. Once the steps have had one size h for the whole 
 windows, each window end sits at the same fraction of the same lagged interval at every step,
 and a delay line reads them with fixed weights from a ring buffer of samples: a gather and one
 matrix-vector product a step.
+
+Times here are the simulator's time since its start (:mod:`.clock`), so the road under the
+tread does not depend on when the run started. Only the tolerances that decide whether two
+steps are the same step, which a host's clock jitters, are relative to the absolute time
+origin + now: that is where the host's rounding lives.
 """
 
 from __future__ import annotations
@@ -89,14 +94,16 @@ def window_reads(t, z, v, now: float, windows: RoadWindows):
 class RoadReader:
     """Keeps the road history a set of windows needs and reads the road under each node."""
 
-    def __init__(self, windows: RoadWindows, delay_line: bool = True):
+    def __init__(self, windows: RoadWindows, delay_line: bool = True, origin_s: float = 0.0):
         self.windows = windows
         self.delayed = bool(np.any(windows.late_s > 0))
         self.horizon_s = windows.horizon_s
         self.delay_line = delay_line  # False: always read the history (a reference path)
-        self.reset()
+        self.reset(origin_s)
 
-    def reset(self) -> None:
+    def reset(self, origin_s: float = 0.0) -> None:
+        """Forget the history; times are read from now on as time since ``origin_s``."""
+        self.origin_s = float(origin_s)
         self.history_t = np.zeros(0)
         self.history_z = np.zeros(0)
         self.history_v = np.zeros(0)
@@ -122,8 +129,96 @@ class RoadReader:
         return {"history_t": t, "history_z": z, "history_v": v, "road_line": raw,
                 "road_run": np.array([run], dtype=np.int64)}
 
+    def state_problems(self, state: dict[str, np.ndarray], now: float, last_step_s: float,
+                       max_height_m: float, max_rate_m_s: float) -> list[str]:
+        """What makes ``state`` (from :meth:`get_state`) no history this reader could hold at
+        time ``now`` after a last step of ``last_step_s`` (nan: none), with samples of at
+        most the inputs' limits: empty when it could.
+
+        The rules follow from how the history is kept: one sample per communication point, at
+        the step's start; none before the start and none in the future; the newest at the
+        last step's start or at ``now``; every sample but the oldest within the horizon of
+        the newest (older ones are dropped); and while a delay line runs, the history is its
+        buffer, written twice, of exactly the samples it needs at the last step's size.
+        """
+        t, z, v = (np.asarray(state[k], dtype=float) for k in ("history_t", "history_z",
+                                                               "history_v"))
+        raw = np.asarray(state["road_line"], dtype=float)
+        run = int(state["road_run"][0]) if np.size(state["road_run"]) == 1 else None
+        if not self.delayed:
+            if t.size or raw.size:
+                return [f"its road history holds {t.size} samples, but at rest the whole zone "
+                        "reads the road at the instant and keeps none"]
+            return []
+        problems = []
+        slack = SAME_POINT_EPS * (abs(now) + self.horizon_s + 1.0)
+        if not np.all(np.diff(t) > 0.0):
+            problems.append("its road history times do not increase")
+        if t.size:
+            newest = float(t[-1])
+            earliest = now - (last_step_s if math.isfinite(last_step_s) else 0.0)
+            if not earliest - slack <= newest <= now + slack:
+                problems.append(
+                    f"its newest road sample is at {newest!r} s, but the state is at {now!r} s "
+                    f"after a step of {last_step_s!r} s: the road is sampled at each step's "
+                    "start")
+            if t[0] < -slack:
+                problems.append(f"its road history starts at {float(t[0])!r} s, before the "
+                                "start")
+            if t.size > 1 and t[1] < newest - self.horizon_s - slack:
+                problems.append(
+                    f"its road history reaches back {newest - float(t[1]):.6g} s from its newest "
+                    f"sample, beyond the {self.horizon_s:.6g} s the contact zone reads (older "
+                    "samples are dropped)")
+        elif math.isfinite(last_step_s):
+            problems.append("its road history is empty, but a step was taken (each step "
+                            "samples the road at its start)")
+        if not (np.all(np.abs(z) <= max_height_m) and np.all(np.abs(v) <= max_rate_m_s)):
+            problems.append(f"its road samples go beyond the inputs' limits ({max_height_m:g} m, "
+                            f"{max_rate_m_s:g} m/s)")
+        if run is None or not -1 <= run <= t.size:
+            problems.append(f"its count of uniform road samples is {state['road_run']!r}, not "
+                            f"-1 or at most the {t.size} samples it holds")
+        if raw.size:
+            problems += self._line_problems(raw, t, z, v, now, last_step_s, max_height_m,
+                                            max_rate_m_s)
+        return problems
+
+    def _line_problems(self, raw, t, z, v, now, last_step_s, max_height_m, max_rate_m_s):
+        h = float(raw[0]) if raw.size >= 4 else math.nan
+        resolution = SAME_POINT_EPS * (abs(self.origin_s + now) + h)
+        if not (h > 0.0 and math.isfinite(last_step_s) and abs(h - last_step_s) <= resolution):
+            return [f"its road delay line runs at steps of {h!r} s, but its last step was "
+                    f"{last_step_s!r} s (a delay line runs only while the steps keep its size)"]
+        reach = self.horizon_s / h
+        size = _DelayLine.samples_needed(self.windows, h) if reach < raw.size else raw.size
+        if raw.size != 4 + 6 * size:
+            return [f"its road delay line holds {raw.size - 4} values; steps of {h!r} s need "
+                    f"{6 * size}"]
+        start, count, newest = raw[1], raw[2], float(raw[3])
+        buffer = raw[4:]
+        problems = []
+        if not (start == int(start) and 0 <= start < size and count == int(count)
+                and count >= size):
+            problems.append(f"its road delay line's position {start!r} or count {count!r} is "
+                            f"not one of a line of {size} samples")
+            return problems
+        if not np.array_equal(buffer[:3 * size], buffer[3 * size:]):
+            problems.append("its road delay line's two copies differ")
+        rows = (int(start) + np.arange(size)) % size  # newest first
+        line_t = (newest - np.arange(size) * h)[::-1]
+        if not (np.array_equal(t, line_t) and np.array_equal(z, buffer[3 * rows][::-1])
+                and np.array_equal(v, (buffer[3 * rows + 1] / h)[::-1])):
+            problems.append("its road history is not its delay line's")
+        bound = 2 * size * (max_height_m + max_rate_m_s * h / 6.0)
+        if not np.all(np.abs(buffer[2::3]) <= bound):
+            problems.append(f"its road delay line's integrals go beyond {bound:.3g} m·steps, "
+                            "more than samples within the inputs' limits sum to")
+        return problems
+
     def set_state(self, state: dict[str, np.ndarray]) -> None:
-        self.reset()
+        """Restore a state that :meth:`state_problems` found none in (keeps the origin)."""
+        self.reset(self.origin_s)
         self.history_t, self.history_z, self.history_v = (
             np.array(state[k], dtype=float) for k in ("history_t", "history_z", "history_v"))
         run = int(state["road_run"][0])
@@ -132,9 +227,6 @@ class RoadReader:
         if raw.size:
             h = float(raw[0])
             line = _DelayLine(self.windows, h, [], [], [])
-            if raw.size != 4 + line._buffer.size:
-                raise ValueError(f"road delay line of {raw.size - 4} values, expected "
-                                 f"{line._buffer.size}")
             line._start, line._count = int(raw[1]), int(raw[2])
             line.newest_time = float(raw[3])
             line._buffer[:] = raw[4:]
@@ -160,7 +252,10 @@ class RoadReader:
             return
         self._last_read = read
         line = self._line
-        if line is not None and abs(h - self._line_h) <= SAME_POINT_EPS * (abs(now) + h):
+        # what a host's clock resolves at the absolute time: the step sizes it passes jitter
+        # by that much, and a jittered step is the same step
+        resolution = SAME_POINT_EPS * (abs(self.origin_s + now) + h)
+        if line is not None and abs(h - self._line_h) <= resolution:
             line.push(now, z, vz)
             line.read_into(out)
             return
@@ -173,7 +268,6 @@ class RoadReader:
                                             self.history_v, now, self.windows)
             return
         needed = _DelayLine.samples_needed(self.windows, h)
-        resolution = SAME_POINT_EPS * (abs(now) + h)
         t = self.history_t
         if self._uniform_run is None:
             self._uniform_run = _uniform_run(t, h, resolution)

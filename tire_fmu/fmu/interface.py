@@ -50,6 +50,10 @@ MAX_STEP_S = 1.0
 #: At speed the FMU keeps the road's history back to the patch's last node, one sample per
 #: step, and reads it through a delay line of that many steps: at most this many.
 MAX_DELAY_STEPS = 100_000
+#: The most road samples the FMU ever holds: a delay line of MAX_DELAY_STEPS + 2 (the older
+#: sample of the last window end and the newest), or as many recorded one a step over the
+#: same reach, and the current point's; a state holding more is none of the FMU's.
+MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.
@@ -125,11 +129,16 @@ def _signals() -> list[FmuVariable]:
         FmuVariable("contact_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["contact_Fz"],
                     "vertical force of the road on the tire (positive pushing up), total"),
         FmuVariable("deflection", "Real", "output", 0.0, OUTPUT_UNITS["deflection"],
-                    "radial compression of the tread at the contact centre relative to the rim, "
-                    "total"),
+                    "the tire's deflection: how far the rim is lowered towards the road at the "
+                    "contact centre (as for the static footprint), total: the static deflection "
+                    "plus the road's rise under the contact centre less rim_z; negative when "
+                    "the rim is lifted clear of the road"),
         FmuVariable("contact_length", "Real", "output", 0.0, "m",
                     "length of the footprint on the road (between the interpolated edges of the "
                     "nodes that push)"),
+        FmuVariable("tread_deflection", "Real", "output", 0.0, "m",
+                    "radial compression of the tread at the contact centre relative to the rim, "
+                    "total: the deflection less what the contact spring (k_cw) takes there"),
         FmuVariable("in_contact", "Boolean", "output", True, "",
                     "true while at least one tread node pushes on the road"),
     ]

@@ -37,6 +37,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 import tire_fmu
+from tire_fmu.core import clock
 from tire_fmu.core.contact_dynamics import (
     ContactSettings,
     ContactSimulator,
@@ -54,6 +55,7 @@ from tire_fmu.fmu.interface import (
     IN_CONTACT,
     INPUTS,
     MAX_DELAY_STEPS,
+    MAX_HISTORY_SAMPLES,
     MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
@@ -61,7 +63,7 @@ from tire_fmu.fmu.interface import (
     FmuVariable,
     fmu_variables,
 )
-from tire_fmu.fmu.spec import fmu_message
+from tire_fmu.fmu.spec import MESSAGES, fmu_message
 
 #: pythonfmu's variable class for each FMI type of the shared table
 _KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
@@ -193,7 +195,8 @@ class TireModal(Fmi2Slave):
     def _allowed(self, call: str) -> bool:
         if self._phase in ALLOWED[call]:
             return True
-        why = (self._why_not_running if self._phase == Phase.ERROR
+        why = ((self._why_not_running or f"the FMU is {_PHASE_TEXT[Phase.ERROR]}; reset it or "
+                "set an FMU state") if self._phase == Phase.ERROR
                else f"the FMU is {_PHASE_TEXT[self._phase]}")
         return self._refuse(call, why)
 
@@ -219,6 +222,10 @@ class TireModal(Fmi2Slave):
             return
         if not math.isfinite(start_time):
             self._refuse(call, f"startTime = {start_time!r} s: must be finite")
+        elif not clock.resolves(start_time, MAX_STEP_S):
+            self._refuse(call, MESSAGES["START_UNRESOLVED"] % (
+                repr(float(start_time)), clock.resolved_until(MAX_STEP_S) - MAX_STEP_S,
+                MAX_STEP_S))
         elif stop_time is not None and not (math.isfinite(stop_time) and stop_time >= start_time):
             self._refuse(call, f"stopTime = {stop_time!r} s: must be finite and >= startTime "
                          f"= {start_time!r} s")
@@ -264,17 +271,17 @@ class TireModal(Fmi2Slave):
             if problem:
                 return self._refuse_step(current_time, step_size, problem)
             self._checked_h = step_size
-        simulator.time = current_time  # the host's clock is the reference: no drift
+        # the simulator's own clock goes on: the host's t, within rounding of it, would bring
+        # its clock's rounding into the road history (core.clock)
         try:  # the inputs are value references 0-3 (INPUTS); the core checks their range
             outputs = simulator.step_values(step_size, values[0], values[1], values[2],
                                             values[3])
         except StepError as error:
-            simulator.time = now
             return self._refuse_step(current_time, step_size, str(error))
         except Exception as error:  # an escaping exception would be fmi2Fatal
             self._fail(f"the step from t = {current_time!r} s", error)
             return False
-        if not math.isfinite(outputs[0] + outputs[1] + outputs[2] + outputs[3]):
+        if not math.isfinite(outputs[0] + outputs[1] + outputs[2] + outputs[3] + outputs[5]):
             self._fail(f"the step from t = {current_time!r} s",
                        ArithmeticError(f"non-finite outputs {outputs}"))
             return False
@@ -602,6 +609,8 @@ def _decode_state(data: bytes) -> _Snapshot | _InvalidState:
     if not problems and simulator is None and header["phase"] in (Phase.RUNNING,
                                                                    Phase.TERMINATED):
         problems.append(f"phase {header['phase']!r} needs a simulator state and there is none")
+    if not problems:
+        problems += _snapshot_problems(header, simulator)
     if problems:
         return _InvalidState("; ".join(problems))
     values = tuple(float(x) if v.type == "Real" else x
@@ -638,6 +647,40 @@ def _header_problems(header: dict) -> list[str]:
         problem = _state_value_problem(v, value)
         if problem:
             problems.append(problem)
+    return problems
+
+
+def _snapshot_problems(header: dict, simulator: ContactState | None) -> list[str]:
+    """What the FMU's part of a state says against itself and its simulator's part, and
+    what the FMU would never hold (the simulator's part alone is checked when it is set:
+    ContactSimulator.state_problems)."""
+    problems = []
+    phase = header["phase"]
+    if phase == Phase.ERROR and not header["why_not_running"].strip():
+        problems.append("its phase is 'error' without the reason (why_not_running is empty): "
+                        "it would refuse every call without saying why")
+    if not clock.resolves(header["start_time"], MAX_STEP_S):
+        problems.append("its " + MESSAGES["START_UNRESOLVED"] % (
+            repr(float(header["start_time"])), clock.resolved_until(MAX_STEP_S) - MAX_STEP_S,
+            MAX_STEP_S))
+    if simulator is None:
+        return problems
+    if header["start_time"] != simulator.start_time:
+        problems.append(f"its start time is {header['start_time']!r} s, but its simulator "
+                        f"started at {simulator.start_time!r} s")
+    if simulator.history_t.size > MAX_HISTORY_SAMPLES:
+        problems.append(f"its road history holds {simulator.history_t.size} samples; the FMU "
+                        f"keeps at most {MAX_HISTORY_SAMPLES} (one a step, over at most "
+                        f"{MAX_DELAY_STEPS} steps)")
+    if simulator.last_step_s > MAX_STEP_S:
+        problems.append(f"its last step is {simulator.last_step_s!r} s; the FMU takes at most "
+                        f"{MAX_STEP_S:g} s")
+    if phase in (Phase.RUNNING, Phase.TERMINATED):
+        values = header["values"]
+        outputs = [float(x) for x in simulator.outputs]
+        if values[OUTPUTS] != outputs or values[IN_CONTACT] is not (outputs[2] > 0.0):
+            problems.append(f"the outputs it shows, {values[OUTPUTS]} and in_contact = "
+                            f"{values[IN_CONTACT]!r}, are not its simulator's, {outputs}")
     return problems
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 
 from ..core import (
+    clock,
     contact,
     contact_dynamics,
     free_ring,
@@ -37,6 +38,7 @@ from .interface import (
     IN_CONTACT,
     INPUTS,
     MAX_DELAY_STEPS,
+    MAX_HISTORY_SAMPLES,
     MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
@@ -55,6 +57,7 @@ CONSTANTS: dict[str, float | int] = {
     "TIME_REL_TOLERANCE": TIME_REL_TOLERANCE,
     "MAX_STEP_S": MAX_STEP_S,
     "MAX_DELAY_STEPS": MAX_DELAY_STEPS,
+    "MAX_HISTORY_SAMPLES": MAX_HISTORY_SAMPLES,
     "SAME_POINT_EPS": road.SAME_POINT_EPS,
     "LAG_SLACK": road.LAG_SLACK,
     "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,
@@ -64,6 +67,9 @@ CONSTANTS: dict[str, float | int] = {
     # the inputs a step accepts (beyond them a product inside the step could overflow)
     "MAX_DISPLACEMENT_M": contact_dynamics.MAX_DISPLACEMENT_M,
     "MAX_VELOCITY_M_S": contact_dynamics.MAX_VELOCITY_M_S,
+    # what an FMU state may hold (a state is checked for what it means)
+    "MAX_STATE_DISPLACEMENT_M": contact_dynamics.MAX_STATE_DISPLACEMENT_M,
+    "MAX_STATE_VELOCITY_M_S": contact_dynamics.MAX_STATE_VELOCITY_M_S,
     # the contact solve
     "ACTIVE_SET_PER_NODE": contact_dynamics.ACTIVE_SET_PER_NODE,
     "ACTIVE_SET_EXTRA": contact_dynamics.ACTIVE_SET_EXTRA,
@@ -160,6 +166,10 @@ MESSAGES: dict[str, str] = {
                          "modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them "
                          "tractable, or the Python FMU (TireModal.fmu) may solve them",
     "PROBLEM_LINE": "parameter problem %d/%d: %s",
+    # the clock (core.clock): a step it does not resolve, a start time it resolves no step at
+    "CLOCK_RESOLUTION": clock.RESOLUTION_TEMPLATE,
+    "START_UNRESOLVED": "startTime = %s s: must be at most %.4g s in magnitude: beyond it a "
+                        "clock of doubles resolves no step the FMU takes (at most %g s)",
     # the running FMU
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
                  "beyond it are missing; raise contact_zone_length (logged once until the "
@@ -168,7 +178,7 @@ MESSAGES: dict[str, str] = {
 
 #: Serialized FMU states of the native FMU start with these bytes, then this version.
 STATE_MAGIC = "TIREFMUS"
-STATE_VERSION = 1
+STATE_VERSION = 2
 #: Log categories of the native FMU (model description and C), and what each carries.
 LOG_CATEGORIES = {
     "logEvents": "the tread leaving the road and coming back (status OK, information)",

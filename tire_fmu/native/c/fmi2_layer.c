@@ -9,8 +9,9 @@
  * Statuses (docs/native.md): fmi2Error for every refused call (a call the phase does not
  * allow, an unknown value reference or wrong type, setting an output or a fixed parameter after
  * initialisation, a non-finite input, a doStep at another time than the last communication
- * point or with NaN, h <= 0, bad parameters at fmi2ExitInitializationMode, an FMU state that
- * is damaged, of another FMU or holds non-finite values); fmi2Warning from the doStep whose
+ * point or with NaN, h <= 0, a step or start time the clock cannot resolve, bad parameters at
+ * fmi2ExitInitializationMode, an FMU state that is damaged, of another FMU, holds non-finite
+ * values or does not mean a state of this tire); fmi2Warning from the doStep whose
  * footprint first reaches the end of the contact zone; fmi2OK otherwise (losing contact
  * included: it is the physics of a unilateral contact). */
 #include <stdarg.h>
@@ -288,6 +289,14 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
         number(a, startTime);
         log_message(inst, fmi2Error, "fmi2SetupExperiment refused: startTime = %s s: must be "
                     "finite; nothing changed", a);
+        return fmi2Error;
+    }
+    if (!clock_resolves(startTime, SPEC_MAX_STEP_S)) {
+        char text[512];
+        number(a, startTime);
+        snprintf(text, sizeof text, SPEC_MSG_START_UNRESOLVED, a,
+                 clock_resolved_until(SPEC_MAX_STEP_S) - SPEC_MAX_STEP_S, SPEC_MAX_STEP_S);
+        log_message(inst, fmi2Error, "fmi2SetupExperiment refused: %s; nothing changed", text);
         return fmi2Error;
     }
     if (stopTimeDefined && !(stopTime >= startTime)) {
@@ -635,8 +644,21 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
             return fmi2Error;
         }
     }
-    /* the host's clock is the reference: no drift from rounding in t */
-    model_set_time(inst->model, currentCommunicationPoint);
+    if (!clock_resolves(inst->time, communicationStepSize)) {
+        char text[512];
+        double spacing = nextafter(fabs(inst->time) + communicationStepSize, INFINITY)
+                         - (fabs(inst->time) + communicationStepSize);
+        number(t, currentCommunicationPoint);
+        number(h, communicationStepSize);
+        number(now, inst->time);
+        snprintf(text, sizeof text, SPEC_MSG_CLOCK_RESOLUTION, h, now, spacing, spacing,
+                 clock_resolved_until(communicationStepSize));
+        log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
+                    "changed", t, h, text);
+        return fmi2Error;
+    }
+    /* the model's own clock goes on: the host's t, within rounding of it, would bring its
+     * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);
     if (status == MODEL_ERROR) {
         inst->broken = 1;
@@ -890,6 +912,22 @@ static size_t state_problem(const Instance* inst, const unsigned char* bytes, si
                  start);
         return 0;
     }
+    if (!clock_resolves(start, SPEC_MAX_STEP_S)) {
+        char a[40], text[512];
+        number(a, start);
+        snprintf(text, sizeof text, SPEC_MSG_START_UNRESOLVED, a,
+                 clock_resolved_until(SPEC_MAX_STEP_S) - SPEC_MAX_STEP_S, SPEC_MAX_STEP_S);
+        snprintf(why, why_size, "its %s", text);
+        return 0;
+    }
+    if ((phase == PHASE_INSTANTIATED || phase == PHASE_INITIALISATION) && time != start) {
+        char a[40], b[40];
+        number(a, time);
+        number(b, start);
+        snprintf(why, why_size, "its time is %s s before initialisation, not its start time %s "
+                 "s", a, b);
+        return 0;
+    }
     for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
         double v;
         memcpy(&v, bytes + STATE_HEAD + 8 * (size_t)vr, 8);
@@ -917,7 +955,7 @@ static size_t state_problem(const Instance* inst, const unsigned char* bytes, si
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     const unsigned char* bytes = (const unsigned char*)FMUstate;
-    char why[512];
+    char why[1536];
     uint64_t total = 0;
     uint32_t phase, stale;
     double values[SPEC_N_VARIABLES], time, start;
@@ -954,7 +992,8 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
         }
     }
     if (model_size > 0 &&
-        model_state_check(model, model_part, model_size, why, sizeof why) != MODEL_OK) {
+        model_state_check(model, model_part, model_size, values, time, start, why,
+                          sizeof why) != MODEL_OK) {
         if (model != inst->model) model_destroy(model);
         log_message(inst, fmi2Error, "fmi2SetFMUstate refused: %s; nothing changed", why);
         return fmi2Error;

@@ -33,17 +33,20 @@ int model_initialise(Model* model, const double* values, double start_time, doub
 int model_step(Model* model, double h, double* values);
 /* the outputs at model_time for the inputs in values (direct feedthrough) */
 int model_refresh(Model* model, double* values);
+/* the model's clock: start + the compensated sum of its steps (it never takes the host's t) */
 double model_time(const Model* model);
 /* how long the road takes from the zone front to its last node (s; 0 at rest) */
 double model_road_horizon(const Model* model);
-void model_set_time(Model* model, double time);
 /* does the model hold a built simulator for exactly these parameter values? */
 int model_built_for(const Model* model, const double* values);
 /* its part of an FMU state */
 size_t model_state_size(const Model* model);
 void model_state_write(const Model* model, unsigned char* out);
-/* MODEL_OK, or MODEL_ERROR with why (nothing changed then) */
-int model_state_check(const Model* model, const unsigned char* in, size_t size, char* why,
+/* MODEL_OK, or MODEL_ERROR with why (every problem; nothing changed then): the part must
+ * mean a state of this model, at the layer's time and start time, showing the layer's
+ * values as its outputs */
+int model_state_check(const Model* model, const unsigned char* in, size_t size,
+                      const double* values, double time, double start_time, char* why,
                       size_t why_size);
 void model_state_apply(Model* model, const unsigned char* in);
 

@@ -3,7 +3,9 @@
  * Node j sees the window average of the cubic Hermite interpolant of the host's (road_z,
  * road_vz) samples over [t - late_j, t - early_j]. The general path searches the recorded
  * history; once the steps have had one size h for the whole reach of the windows, a delay line
- * reads each window end with fixed weights from a ring buffer of samples. */
+ * reads each window end with fixed weights from a ring buffer of samples. Times are the
+ * simulator's time since its start; the same-step tolerances use origin + now, the host's
+ * absolute clock, whose rounding jitters the steps it passes. */
 #include <string.h>
 
 #include "spec.h"
@@ -375,7 +377,8 @@ int road_read(RoadReader* road, const Memory* mem, double now, double z, double 
         }
         return 0;
     }
-    if (road->line_on && fabs(h - road->line_h) <= SPEC_SAME_POINT_EPS * (fabs(now) + h)) {
+    resolution = SPEC_SAME_POINT_EPS * (fabs(road->origin + now) + h);
+    if (road->line_on && fabs(h - road->line_h) <= resolution) {
         line_push(&road->line, now, z, vz);
         line_read(&road->line, road->n, heights, slopes);
         return 0;
@@ -395,7 +398,6 @@ int road_read(RoadReader* road, const Memory* mem, double now, double z, double 
         return 0;
     }
     needed = samples_needed(w, h);
-    resolution = SPEC_SAME_POINT_EPS * (fabs(now) + h);
     if (road->uniform_run < 0) {
         road->uniform_run = uniform_run(road->t, road->length, h, resolution);
     } else if (appended) {

@@ -250,7 +250,7 @@ static Kernel* step_kernel(Simulator* sim, double h)
         if (sim->kernels[i].h_comm == h) return &sim->kernels[i];
     }
     for (i = 0; i < sim->n_kernels; i++) {
-        if (fabs(h - sim->kernels[i].h_comm) <= SPEC_SAME_POINT_EPS * (fabs(sim->time) + h)) {
+        if (fabs(h - sim->kernels[i].h_comm) <= SPEC_SAME_POINT_EPS * (fabs(sim_time(sim)) + h)) {
             return &sim->kernels[i];
         }
     }
@@ -655,9 +655,23 @@ static void update_outputs(Simulator* sim)
     sim->outputs[0] = sim->static_ring[0] + sim->ring_out[0];
     sim->outputs[1] = sim->static_ring[1] + sim->ring_out[1];
     sim->outputs[2] = contact;
-    sim->outputs[3] = sim->static_ring[2] + sim->ring_out[2];
+    /* the rim's lowering at the contact centre: the static one, the road's rise under the
+     * centre node, less the rim's (the same sum as the core's ContactSimulator.deflection) */
+    sim->outputs[3] = sim->static_deflection + sim->seen_heights[sim->zone->centre] - sim->seen_z;
     sim->outputs[4] = sim_contact_length(sim);
+    sim->outputs[5] = sim->static_ring[2] + sim->ring_out[2];
 }
+
+double sim_time(const Simulator* sim) { return sim->start_time + sim->elapsed; }
+
+double clock_resolved_until(double h)
+{
+    int exponent;
+    frexp(h, &exponent);
+    return ldexp(1.0, exponent + 52);
+}
+
+int clock_resolves(double time, double h) { return fabs(time) + h < clock_resolved_until(h); }
 
 double sim_contact_length(const Simulator* sim)
 {
@@ -682,7 +696,7 @@ int sim_step(Simulator* sim, double h, const double inputs[4])
     Kernel* k = step_kernel(sim, h);
     int i;
     if (k == NULL) return -1;
-    if (road_read(&sim->road, sim->mem, sim->time, inputs[2], inputs[3], h, sim->heights,
+    if (road_read(&sim->road, sim->mem, sim->elapsed, inputs[2], inputs[3], h, sim->heights,
                   sim->slopes) != 0) {
         return -1;
     }
@@ -690,7 +704,11 @@ int sim_step(Simulator* sim, double h, const double inputs[4])
     for (i = 0; i < k->n_sub; i++) {
         if (substep(sim, k, inputs[0] + i * k->h * inputs[1], inputs[1]) != 0) return -1;
     }
-    sim->time += h;
+    {   /* elapsed += h, compensated (core/clock.py: advance) */
+        double y = h - sim->carry, total = sim->elapsed + y;
+        sim->carry = (total - sim->elapsed) - y;
+        sim->elapsed = total;
+    }
     sim->last_step = h;
     sim->has_last = 1;
     update_outputs(sim);
@@ -700,7 +718,7 @@ int sim_step(Simulator* sim, double h, const double inputs[4])
 int sim_outputs_with(Simulator* sim, const double inputs[4])
 {
     double h = sim->has_last ? sim->last_step : NAN;
-    if (road_read(&sim->road, sim->mem, sim->time, inputs[2], inputs[3], h, sim->heights,
+    if (road_read(&sim->road, sim->mem, sim->elapsed, inputs[2], inputs[3], h, sim->heights,
                   sim->slopes) != 0) {
         return -1;
     }
@@ -737,7 +755,9 @@ int sim_restore_last(Simulator* sim)
 void sim_reset(Simulator* sim, double start_time)
 {
     int Z = sim->n_zone, K = sim->ring->n_modes, j;
-    sim->time = start_time;
+    sim->start_time = start_time;
+    sim->elapsed = 0.0;
+    sim->carry = 0.0;
     for (j = 0; j < K; j++) sim->q[j] = cx_make(0.0, 0.0);
     for (j = 0; j < Z; j++) {
         sim->df[j] = 0.0;
@@ -755,6 +775,7 @@ void sim_reset(Simulator* sim, double start_time)
     sim->dft_ok = 0;
     sim->pending = 0;
     road_reset(&sim->road, sim->mem);
+    sim->road.origin = start_time;
     update_outputs(sim);
 }
 
@@ -793,6 +814,7 @@ int sim_init(Simulator* sim, const Memory* mem, const Ring* ring, const Zone* zo
         sim->x_road[j] = -(zone->radius - deflection) * tan(zone->theta[j]);
     }
     sim->static_ring[0] = sim->static_ring[1] = sim->static_ring[2] = 0.0;
+    sim->static_deflection = deflection;
     for (j = 0; j < Z; j++) {
         sim->static_ring[0] += zone->cos[j] * fp->forces[j];
         sim->static_ring[1] += zone->sin[j] * fp->forces[j];

@@ -7,6 +7,7 @@
 #define SPEC_TIME_REL_TOLERANCE 1e-09
 #define SPEC_MAX_STEP_S 1.0
 #define SPEC_MAX_DELAY_STEPS 100000
+#define SPEC_MAX_HISTORY_SAMPLES 100003
 #define SPEC_SAME_POINT_EPS 1.7763568394002505e-15
 #define SPEC_LAG_SLACK 1e-12
 #define SPEC_MAX_SUBSTEP_S 0.0001
@@ -15,6 +16,8 @@
 #define SPEC_KERNEL_CACHE_SIZE 32
 #define SPEC_MAX_DISPLACEMENT_M 10.0
 #define SPEC_MAX_VELOCITY_M_S 1000.0
+#define SPEC_MAX_STATE_DISPLACEMENT_M 10000.0
+#define SPEC_MAX_STATE_VELOCITY_M_S 1000000.0
 #define SPEC_ACTIVE_SET_PER_NODE 2
 #define SPEC_ACTIVE_SET_EXTRA 4
 #define SPEC_PGS_SWEEPS 1000
@@ -46,9 +49,9 @@
 #define SPEC_BLOCK_INPUTS_FIRST 0
 #define SPEC_BLOCK_N_INPUTS 4
 #define SPEC_BLOCK_OUTPUTS_FIRST 4
-#define SPEC_BLOCK_N_OUTPUTS 5
-#define SPEC_BLOCK_IN_CONTACT 9
-#define SPEC_N_VARIABLES 33
+#define SPEC_BLOCK_N_OUTPUTS 6
+#define SPEC_BLOCK_IN_CONTACT 10
+#define SPEC_N_VARIABLES 34
 #define SPEC_VR_RIM_Z 0
 #define SPEC_VR_RIM_VZ 1
 #define SPEC_VR_ROAD_Z 2
@@ -58,30 +61,31 @@
 #define SPEC_VR_CONTACT_FZ 6
 #define SPEC_VR_DEFLECTION 7
 #define SPEC_VR_CONTACT_LENGTH 8
-#define SPEC_VR_IN_CONTACT 9
-#define SPEC_VR_LOAD 10
-#define SPEC_VR_SPEED 11
-#define SPEC_VR_N_ELEMENTS 12
-#define SPEC_VR_F_MAX 13
-#define SPEC_VR_N_MODES 14
-#define SPEC_VR_STATIC_CORRECTION 15
-#define SPEC_VR_ALLOW_SUPERCRITICAL 16
-#define SPEC_VR_CONTACT_ZONE_LENGTH 17
-#define SPEC_VR_LINEAR_CONTACT 18
-#define SPEC_VR_R 19
-#define SPEC_VR_B 20
-#define SPEC_VR_INFLATION_PRESSURE 21
-#define SPEC_VR_RHOA 22
-#define SPEC_VR_M_S 23
-#define SPEC_VR_K_R1 24
-#define SPEC_VR_K_R2 25
-#define SPEC_VR_EI 26
-#define SPEC_VR_K_CW 27
-#define SPEC_VR_ALPHA 28
-#define SPEC_VR_BETA 29
-#define SPEC_VR_SIDEWALL_SHEAR 30
-#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 31
-#define SPEC_VR_REFERENCE_PRESSURE 32
+#define SPEC_VR_TREAD_DEFLECTION 9
+#define SPEC_VR_IN_CONTACT 10
+#define SPEC_VR_LOAD 11
+#define SPEC_VR_SPEED 12
+#define SPEC_VR_N_ELEMENTS 13
+#define SPEC_VR_F_MAX 14
+#define SPEC_VR_N_MODES 15
+#define SPEC_VR_STATIC_CORRECTION 16
+#define SPEC_VR_ALLOW_SUPERCRITICAL 17
+#define SPEC_VR_CONTACT_ZONE_LENGTH 18
+#define SPEC_VR_LINEAR_CONTACT 19
+#define SPEC_VR_R 20
+#define SPEC_VR_B 21
+#define SPEC_VR_INFLATION_PRESSURE 22
+#define SPEC_VR_RHOA 23
+#define SPEC_VR_M_S 24
+#define SPEC_VR_K_R1 25
+#define SPEC_VR_K_R2 26
+#define SPEC_VR_EI 27
+#define SPEC_VR_K_CW 28
+#define SPEC_VR_ALPHA 29
+#define SPEC_VR_BETA 30
+#define SPEC_VR_SIDEWALL_SHEAR 31
+#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 32
+#define SPEC_VR_REFERENCE_PRESSURE 33
 
 typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;
 typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;
@@ -103,6 +107,7 @@ static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {
     {"contact_Fz", SPEC_REAL, SPEC_OUTPUT, 27654.753, "N"},
     {"deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
     {"contact_length", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
+    {"tread_deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
     {"in_contact", SPEC_BOOLEAN, SPEC_OUTPUT, 1.0, ""},
     {"load", SPEC_REAL, SPEC_PARAMETER, 27654.753, "N"},
     {"speed", SPEC_REAL, SPEC_PARAMETER, 0.0, "m/s"},
@@ -158,7 +163,7 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
-#define SPEC_STATE_VERSION 1
+#define SPEC_STATE_VERSION 2
 #define SPEC_N_LOG_CATEGORIES 4
 static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
     "logEvents",
@@ -204,6 +209,8 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_RESOLVED_WHAT_EI "the tread's bending at the mesh's shortest wavelength (fewer n_elements lengthen it)"
 #define SPEC_MSG_RING_NOT_COMPUTED "the native FMU could not compute the free ring's modes for these parameters (the QR iteration of an order did not converge); the fastest modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them tractable, or the Python FMU (TireModal.fmu) may solve them"
 #define SPEC_MSG_PROBLEM_LINE "parameter problem %d/%d: %s"
+#define SPEC_MSG_CLOCK_RESOLUTION "step size h = %s s at t = %s s: shorter than the resolution of the clock there (%.3g s between one double and the next), so the communication points would not advance by h; take steps of at least %.3g s, or run at times below %.4g s (a start time nearer 0)"
+#define SPEC_MSG_START_UNRESOLVED "startTime = %s s: must be at most %.4g s in magnitude: beyond it a clock of doubles resolves no step the FMU takes (at most %g s)"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
 
 #endif

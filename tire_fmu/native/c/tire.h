@@ -153,6 +153,9 @@ typedef struct {
 typedef struct {
     const Windows* windows;
     int n;
+    /* times are since origin (the simulator's start); only the same-step tolerances use
+     * origin + now, the host's absolute clock (road.py) */
+    double origin;
     /* the recorded history (used while no delay line runs) */
     int length, capacity;
     double* t;
@@ -208,8 +211,11 @@ typedef struct {
     char* static_active;
     double* x_road;
     double static_ring[3];
-    /* the state */
-    double time;
+    double static_deflection; /* the rim's lowering at the static footprint */
+    /* the state; its clock is the time since start_time (core/clock.py) */
+    double start_time;
+    double elapsed;   /* the road history's time */
+    double carry;     /* the compensation of elapsed's sum */
     cx* q;            /* K, grouped by order as the ring's modes */
     double* df;       /* force deviation from static at time */
     char* active;
@@ -222,7 +228,7 @@ typedef struct {
     double last_step;  /* the communication step whose end _start re-solves */
     int has_last;
     Kernel* last;
-    double outputs[5];
+    double outputs[6];
     RoadReader road;
     long solver_fallbacks;
     /* derived, rebuilt on demand */
@@ -256,6 +262,10 @@ int sim_outputs_with(Simulator* sim, const double inputs[4]);
 int sim_restore_last(Simulator* sim);
 void sim_settle(Simulator* sim);
 int sim_in_contact(const Simulator* sim);
+double sim_time(const Simulator* sim); /* start_time + elapsed */
+/* whether a clock of doubles resolves the step h from time (core/clock.py: resolves) */
+int clock_resolves(double time, double h);
+double clock_resolved_until(double h);
 int sim_at_zone_edge(const Simulator* sim);
 double sim_contact_length(const Simulator* sim);
 
