@@ -57,6 +57,7 @@ CONSTANTS: dict[str, float | int] = {
     "SAME_POINT_EPS": road.SAME_POINT_EPS,
     "LAG_SLACK": road.LAG_SLACK,
     "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,
+    "MIN_CORRECTED_STEP_S": contact_dynamics.MIN_CORRECTED_STEP_S,
     "SUBSTEP_SLACK": contact_dynamics.SUBSTEP_SLACK,
     "SERIES_LIMIT": stepping.SERIES_LIMIT,
     "KERNEL_CACHE_SIZE": contact_dynamics._KERNEL_CACHE_SIZE,
@@ -157,6 +158,7 @@ MESSAGES: dict[str, str] = {
                          "tractable, or the Python FMU (TireModal.fmu) may solve them",
     "PROBLEM_LINE": "parameter problem %d/%d: %s",
     # the running FMU
+    "SHORT_STEP_CORRECTED": contact_dynamics.SHORT_STEP_TEMPLATE,
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
                  "beyond it are missing; raise contact_zone_length (logged once until the "
                  "footprint is back inside)",

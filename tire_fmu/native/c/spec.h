@@ -10,6 +10,7 @@
 #define SPEC_SAME_POINT_EPS 1.7763568394002505e-15
 #define SPEC_LAG_SLACK 1e-12
 #define SPEC_MAX_SUBSTEP_S 0.0001
+#define SPEC_MIN_CORRECTED_STEP_S 1e-05
 #define SPEC_SUBSTEP_SLACK 1e-12
 #define SPEC_SERIES_LIMIT 0.001
 #define SPEC_KERNEL_CACHE_SIZE 32
@@ -202,6 +203,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_RESOLVED_WHAT_EI "the tread's bending at the mesh's shortest wavelength (fewer n_elements lengthen it)"
 #define SPEC_MSG_RING_NOT_COMPUTED "the native FMU could not compute the free ring's modes for these parameters (the roots of an order did not converge); the fastest modes are %s (stiffness over mass %.3g 1/s^2): %s %s makes them tractable, or the Python FMU (TireModal.fmu) may solve them"
 #define SPEC_MSG_PROBLEM_LINE "parameter problem %d/%d: %s"
+#define SPEC_MSG_SHORT_STEP_CORRECTED "step size h = %s s: must be at least %g s for a ring truncated with static correction (the dropped modes' rate term grows as 1/h); keep every mode, or turn the static correction off, to step shorter"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
 
 #endif

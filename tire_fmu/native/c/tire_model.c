@@ -604,6 +604,11 @@ double model_time(const Model* model) { return model->sim.time; }
 
 double model_road_horizon(const Model* model) { return model->windows.horizon; }
 
+double model_min_step(const Model* model)
+{
+    return model->ring.truncated ? SPEC_MIN_CORRECTED_STEP_S : 0.0;
+}
+
 void model_set_time(Model* model, double time) { model->sim.time = time; }
 
 /* -- the model's part of an FMU state --------------------------------------------------------
