@@ -446,11 +446,15 @@ def main() -> int:
     parser.add_argument("--profile", default="ci", choices=["ci", "long", "verbose"])
     args = parser.parse_args()
     PATH, FOLDER = args.fmu, str(extract(args.fmu))
+    # first: a machine made for a replay fixes FmuMachine.TestCase's settings (hypothesis
+    # caches them), which then run with hypothesis's defaults instead of the profile
+    settings.load_profile(args.profile)
     for why, calls in REPLAYS.items():
         print(f"replaying: {why}", flush=True)
         replay(calls)
-    settings.load_profile(args.profile)
-    FmuMachine.TestCase().runTest()
+    test = FmuMachine.TestCase()
+    assert test.settings.max_examples == settings.default.max_examples, test.settings
+    test.runTest()
     print(f"cases: {CASES[0]} call sequences ({len(REPLAYS)} replayed)")
     print("calls (refused):", ", ".join(f"{what} {n} ({refused})"
                                         for what, (n, refused) in sorted(CALLS.items())))
