@@ -968,6 +968,10 @@ def _fmu_messages() -> dict[str, list[str]]:
         said(slave)
         slave.do_step(1e12, 1e-4)
         out["clock"] = said(slave)
+        slave = initialised(f_max=150.0)
+        said(slave)
+        slave.do_step(0.0, 1e-6)
+        out["short-step"] = said(slave)
         slave.get_real([999])
         out["reference"] = said(slave)
     return out
@@ -990,6 +994,11 @@ def _message(case: str, index: int = 0, strip: str = "", clip: str = "") -> str:
 @value("fmu-msg-setup-clock")
 def _msg_setup_clock() -> str:
     return _message("setup-clock")
+
+
+@value("fmu-msg-short-step")
+def _msg_short_step() -> str:
+    return _message("short-step")
 
 
 @value("fmu-msg-clock")

@@ -20,8 +20,9 @@ ordinary numbers. After every call it checks:
   state before and from the state after gives the same outputs.
 
 It knows the FMU only through its model description and FMI, so any tire FMU with these
-variables can be driven (see FUZZ_TARGETS in tests/test_fmu_fuzz.py). Exit status 0: no
-failure found.
+variables can be driven (see FUZZ_TARGETS in tests/test_fmu_fuzz.py). Before the random
+sequences it replays the ones that failed before (REPLAYS), with the same checks. Exit status
+0: no failure found.
 """
 
 from __future__ import annotations
@@ -89,6 +90,7 @@ settings.register_profile("verbose", parent=settings.get_profile("ci"),
 
 PATH = ""
 CALLS: dict[str, list[int]] = {}  # what -> [calls, refused]: printed at the end of a run
+CASES = [0]  # call sequences run (one FMU instance each), replays included
 
 
 def value_forms(value) -> list[str]:
@@ -107,6 +109,7 @@ class FmuMachine(RuleBasedStateMachine):
 
     def __init__(self):
         super().__init__()
+        CASES[0] += 1
         description = read_model_description(PATH)
         self.variables = {v.name: v for v in description.modelVariables}
         self.parameters = [v for v in description.modelVariables
@@ -392,6 +395,39 @@ class FmuMachine(RuleBasedStateMachine):
         self.fmu.freeInstance()
 
 
+#: Call sequences that failed, found by this fuzz: replayed, rule by rule with the same checks,
+#: before every run (so CI covers them whatever hypothesis draws). Each: why it failed, calls.
+REPLAYS = {
+    "no ring mode kept (f_max = 1e-3 Hz, below the lowest): after 8 steps on one active set, "
+    "BLAS refused the fast step's products on the empty modal state (the Python FMU went to "
+    "its error state)": [
+        ("begin", {"start": 0.0, "mesh": 16, "bad": [("load", 0.0), ("f_max", 1e-3)],
+                   "go": "run"}),
+        ("run_steps", {"n": 11, "h": 1e-4, "seed": 3}),
+        ("get_outputs", {}),
+    ],
+    "a step of 5e-324 s on a ring truncated with static correction: the dropped modes' rate "
+    "term E/h overflowed, the outputs were not finite and both FMUs went to their error state": [
+        ("begin", {"start": 0.0, "mesh": 16, "bad": [("f_max", 150.0)], "go": "run"}),
+        ("do_step", {"h": 5e-324, "offset": 0.0}),
+        ("run_steps", {"n": 3, "h": 1e-4, "seed": 0}),
+        ("get_outputs", {}),
+    ],
+}
+
+
+def replay(calls) -> None:
+    """The calls on a fresh machine, checking as the fuzz does after every call."""
+    machine = FmuMachine()
+    try:
+        for rule, arguments in calls:
+            getattr(machine, rule)(**arguments)
+            if machine.time is not None:
+                machine.outputs_are_finite_when_read()
+    finally:
+        machine.teardown()
+
+
 def same(a, b) -> bool:
     """Equal, with nan equal to nan."""
     if isinstance(a, float) and isinstance(b, float):
@@ -410,8 +446,16 @@ def main() -> int:
     parser.add_argument("--profile", default="ci", choices=["ci", "long", "verbose"])
     args = parser.parse_args()
     PATH, FOLDER = args.fmu, str(extract(args.fmu))
+    # first: a machine made for a replay fixes FmuMachine.TestCase's settings (hypothesis
+    # caches them), which then run with hypothesis's defaults instead of the profile
     settings.load_profile(args.profile)
-    FmuMachine.TestCase().runTest()
+    for why, calls in REPLAYS.items():
+        print(f"replaying: {why}", flush=True)
+        replay(calls)
+    test = FmuMachine.TestCase()
+    assert test.settings.max_examples == settings.default.max_examples, test.settings
+    test.runTest()
+    print(f"cases: {CASES[0]} call sequences ({len(REPLAYS)} replayed)")
     print("calls (refused):", ", ".join(f"{what} {n} ({refused})"
                                         for what, (n, refused) in sorted(CALLS.items())))
     print("no failure found")

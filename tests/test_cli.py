@@ -82,7 +82,11 @@ def test_patch_json_equals_the_models_footprint(capsys, tire):
     data = run_json(capsys, "patch", "--load", "27700")
     fp = build_model(tire, OperatingPoint(load_n=27700)).patch.footprint
     assert data["footprint"]["load_n"] == pytest.approx(27700, rel=1e-12)
-    assert data["footprint"] == pytest.approx(to_jsonable(fp.to_dict()), rel=1e-12)
+    expected = to_jsonable(fp.to_dict())
+    # key by key: pytest.approx refuses a dict of lists from pytest 9 on
+    assert data["footprint"].keys() == expected.keys()
+    for key, value in expected.items():
+        assert data["footprint"][key] == pytest.approx(value, rel=1e-12), key
     assert data["patch_length_m"] == pytest.approx(fp.length_m, rel=1e-12)
     # the inverse: the deflection that footprint needs gives the load back
     again = run_json(capsys, "patch", "--deflection", repr(fp.deflection_m))

@@ -91,6 +91,21 @@ def test_the_former_threshold_option_is_refused_naming_its_replacement(capsys):
     assert "--n-modes = 0" in err
 
 
+@pytest.mark.parametrize("band", ["1,1e100", "1,2e7", "300,1", "-1,300", "1,inf"])
+def test_a_band_outside_the_models_range_is_refused_naming_it(capsys, band):
+    assert main(["reduce", *MODEL, f"--band={band}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--band = " in err and "high <= 1e+07 Hz" in err
+
+
+def test_the_widest_band_allowed_reports_an_error_within_the_modes_budget(capsys):
+    """The dropped modes' contributions bound the error over the band (module doc of
+    reduction): still so at the band's largest allowed end."""
+    data = run_json(capsys, "reduce", *MODEL, "--band", "1,1e7")
+    budget = ReductionSettings().target_error
+    assert 0 < data["report"]["max_relative_error"] <= budget
+
+
 def test_road_input_needs_a_patch(capsys):
     assert main(["frf", "--elements", "40", "--patch-length", "0"]) == 2
     assert "needs a contact patch" in capsys.readouterr().err

@@ -77,6 +77,25 @@ def test_the_report_flags_what_frequencies_cannot_see():
     assert fixed.rank == 5 and not fixed.undetermined
 
 
+def test_fewer_modes_than_free_parameters_leave_a_null_space_the_report_names(tmp_path, capsys):
+    """Two modes cannot pin four parameters: the Jacobian (2 x 4) has a null space of at
+    least two directions, and each parameter in one is reported undetermined."""
+    from tire_fmu.cli import main
+
+    free = ("m_s", "k_r1", "k_r2", "EI")
+    modes = modes_of(TireParameters(), [2])
+    result = fit_tire(modes, free, START)
+    assert result.rank <= len(modes) < len(free)
+    assert len(result.null_directions) == len(free) - result.rank
+    named = set().union(*result.null_directions)
+    assert named and named <= set(result.undetermined)
+    table = tmp_path / "two_modes.csv"
+    table.write_text(modes_text(modes))
+    assert main(["fit", str(table), "--free", ",".join(free), "--json"]) == 0
+    statuses = {p["name"]: p["status"] for p in json.loads(capsys.readouterr().out)["parameters"]}
+    assert {n for n, s in statuses.items() if s == "undetermined"} >= named
+
+
 def test_pressure_and_width_enter_only_as_their_product():
     result = fit_tire(modes_of(TireParameters(), ORDERS), ("b", "inflation_pressure", "k_r1"))
     (direction,) = result.null_directions

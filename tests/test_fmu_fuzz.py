@@ -8,9 +8,11 @@ The CI profile finishes within a minute; a longer run:
     (likewise the native FMU: ``tire-fmu export dist/TireModalNative.fmu``)
 
 Both FMUs are targets: the Python FMU (pythonfmu) and the native C FMU; another FMU with the
-same variables is fuzzed by adding its builder to FUZZ_TARGETS.
+same variables is fuzzed by adding its builder to FUZZ_TARGETS. Every run first replays the
+sequences that failed before (``REPLAYS`` in the driver), so CI covers them deterministically.
 """
 
+import importlib
 import os
 import subprocess
 import sys
@@ -25,6 +27,7 @@ pytest.importorskip("hypothesis")
 pytestmark = pytest.mark.fmu
 
 DRIVER = Path(__file__).with_name("fuzz_fmu.py")
+REPLAYS = importlib.import_module("fuzz_fmu").REPLAYS  # after the skips: it needs fmpy
 TIMEOUT_S = 300  # the CI profile takes well under a minute; a hang fails, it does not stall
 
 
@@ -57,3 +60,4 @@ def test_random_call_sequences_never_crash_the_host_nor_pass_a_bad_value(fuzz_ta
     report = (done.stdout + done.stderr)[-6000:]
     assert done.returncode == 0, f"exit status {done.returncode}:\n{report}"
     assert "no failure found" in done.stdout, report
+    assert done.stdout.count("replaying: ") == len(REPLAYS), report

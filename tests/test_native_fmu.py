@@ -162,6 +162,8 @@ def test_matches_the_python_fmu_through_loss_of_contact(native, python, load, sp
     {"linear_contact": True, "speed": 10.0},
     {"f_max": 150.0, "speed": 10.0},
     {"f_max": 150.0, "static_correction": False},
+    # no mode kept: the Python FMU's fast step refused its empty modal state (the fuzz found it)
+    {"n_elements": 16, "f_max": 1e-3},
     {"n_modes": 40, "speed": 5.0},
     {"n_elements": 60, "contact_zone_length": 0.4, "sidewall_shear": 5e4, "speed": 8.0,
      "sidewall_pressure_exponent": 1.0, "inflation_pressure": 6e5, "load": 20000.0},
@@ -389,6 +391,35 @@ def test_a_step_too_short_for_the_road_history_at_a_crawl_is_refused_as_in_pytho
         instance.free()
     assert reasons[0] == reasons[1]
     assert "step size h = 0.0001 s: must be at least" in reasons[0]
+
+
+def test_a_step_too_short_for_a_truncated_rings_rate_term_is_refused_as_in_python(native,
+                                                                                 python):
+    """A ring truncated with static correction weighs its dropped modes' rate term by 1/h: a
+    step of 5e-324 s made both FMUs' outputs infinite (their error state: the fuzz found it),
+    and below 1e-5 s the contact problem can lose its unique solution. Both refuse such steps
+    in the same words, change nothing, and go on; the full ring steps them."""
+    runs, reasons = [], []
+    for fmu in (native, python):
+        undisturbed, disturbed = _started(fmu, f_max=150.0), _started(fmu, f_max=150.0)
+        a = _continue(undisturbed, 0.0, 60)
+        b = _continue(disturbed, 0.0, 30)
+        for h in (5e-324, 1e-6):
+            assert disturbed.step(0.003, h) == 3
+        reasons.append(disturbed.errors())
+        runs.append((a, np.vstack([b, _continue(disturbed, 0.003, 30)])))
+        full = _started(fmu)
+        assert full.step(0.0, 1e-6) == 0 and full.step(1e-6, 1e-5) == 0
+        for instance in (undisturbed, disturbed, full):
+            instance.free()
+    assert reasons[0] == reasons[1] and len(reasons[0]) == 2
+    assert reasons[0][1].startswith("fmi2DoStep(t = 0.003 s, h = 1e-06 s) refused: step size "
+                                    "h = 1e-06 s: must be at least 1e-05 s for a ring truncated "
+                                    "with static correction")
+    for a, b in runs:
+        assert np.array_equal(a, b)
+    errors = relative_errors(runs[1][0], runs[0][0])
+    assert errors.max() < 1e-9, dict(zip(OUTPUTS, errors))
 
 
 def test_calls_outside_their_phase_are_refused(native):

@@ -2,17 +2,21 @@
 delay line against the history search and against exact window averages, restored states,
 and the step-size jitter hosts produce."""
 
+import re
+
 import numpy as np
 import pytest
 
 from tire_fmu.core import OperatingPoint, TireParameters
 from tire_fmu.core.contact import RoadWindows
 from tire_fmu.core.contact_dynamics import (
+    MIN_CORRECTED_STEP_S,
     ContactSimulator,
     ContactState,
     StepError,
     build_contact_model,
 )
+from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.road import RoadReader, window_reads
 
 
@@ -113,3 +117,67 @@ def test_inputs_out_of_range_are_refused_by_name_and_change_nothing(models):
     with pytest.raises(StepError, match=r"step size h = nan s"):
         sim.step(float("nan"), 0.0, 0.0, 0.0, 0.0)
     assert sim.get_state().to_bytes() == before
+
+
+def test_a_ring_truncated_to_no_modes_takes_the_fast_step_as_the_general_one(monkeypatch):
+    """f_max below the lowest mode keeps none of them (a quasi-static ring): the fast step's
+    products on the empty modal state were refused by BLAS (the fuzz found it through the
+    Python FMU after 11 steps); it gives the general path's outputs."""
+    from tire_fmu.core import contact_dynamics
+
+    model = build_contact_model(TireParameters(), OperatingPoint(n_elements=16),
+                                RingTruncation(f_max_hz=1e-3))
+    assert model.ring.n_modes == 0
+    t = 1e-4 * np.arange(60)
+    w = 2 * np.pi * 20
+    inputs = np.column_stack([1e-4 * np.sin(w * t), 1e-4 * w * np.cos(w * t), 0 * t, 0 * t])
+
+    def run():
+        sim = ContactSimulator(model)
+        rows, longest = [], 0
+        for values in inputs:
+            rows.append(sim.outputs_with(*values))
+            rows.append(sim.step_values(1e-4, *values))
+            longest = max(longest, sim._fast_run)
+        return np.array(rows), sim, longest
+
+    fast, sim, longest = run()
+    assert longest > contact_dynamics._FAST_AFTER + 10  # the fast step ran
+    monkeypatch.setattr(contact_dynamics, "_FAST_AFTER", 10**9)
+    general, sim, _ = run()
+    assert not sim._fast
+    assert np.all(fast[:, 2] > 0)  # in contact throughout: one active set
+    np.testing.assert_allclose(fast, general, rtol=1e-9, atol=1e-9 * model.patch.load_n)
+
+
+def test_a_ring_truncated_with_static_correction_refuses_the_steps_its_rate_term_breaks():
+    """The dropped modes enter with a rate term E that a step weighs as E/h. Below
+    MIN_CORRECTED_STEP_S the step's contact problem loses its unique solution at speed (I - S
+    on the zone stops being positive definite), and at h = 5e-324 s E/h overflowed into
+    non-finite outputs (the fuzz found it in both FMUs). Such steps are refused naming h and
+    change nothing; the full ring, and one without the correction, have no rate term and
+    step any h the clock resolves (at rest: at speed the road's delay line bounds h from
+    below)."""
+    op = OperatingPoint(n_elements=100, speed_m_s=10.0)
+    sim = ContactSimulator(build_contact_model(TireParameters(), op,
+                                               RingTruncation(f_max_hz=150.0)))
+
+    def well_posed(h):
+        a = np.eye(sim.n_zone) - sim._make_kernel(h).interface.s
+        return np.linalg.eigvalsh(a + a.T).min() > 0
+
+    assert well_posed(MIN_CORRECTED_STEP_S) and not well_posed(MIN_CORRECTED_STEP_S / 10)
+    sim.step(1e-4, 1e-3, 0.0, 0.0, 0.0)
+    before = sim.get_state().to_bytes()
+    for h in (5e-324, 1e-9, MIN_CORRECTED_STEP_S / 2):
+        with pytest.raises(StepError, match=rf"^step size h = {re.escape(repr(h))} s: must be "
+                           r"at least 1e-05 s for a ring truncated with static correction"):
+            sim.step(h, 1e-3, 0.0, 0.0, 0.0)
+    assert sim.get_state().to_bytes() == before
+    assert np.all(np.isfinite(sim.step(MIN_CORRECTED_STEP_S, 1e-3, 0.0, 0.0, 0.0)))
+    for truncation in (None, RingTruncation(f_max_hz=150.0, static_correction=False)):
+        other = ContactSimulator(build_contact_model(TireParameters(),
+                                                     OperatingPoint(n_elements=100), truncation))
+        other.step(1e-4, 1e-3, 0.0, 0.0, 0.0)
+        # the shortest step the clock resolves at t = 1e-4 s (shorter ones it refuses)
+        assert np.all(np.isfinite(other.step(1e-15, 1e-3, 0.0, 0.0, 0.0)))

@@ -72,6 +72,18 @@ MAX_SUBSTEP_S = 1e-4
 #: 1e-7 s is 1000 sub-steps per 0.1 ms communication step. Stiffer contacts on lighter treads
 #: are refused rather than run for hours (a property test over the ranges found one).
 MIN_SUBSTEP_S = 1e-7
+#: The shortest step (s) of a ring truncated with static correction. Its dropped modes enter
+#: through their static compliance and a rate term E ṙ, which a step of h weighs as E/h: the
+#: shorter the step, the more the rate term outweighs the compliance, until the step's contact
+#: problem loses its unique solution (from 6e-6 s down, the longest of 40 random tires around
+#: GL073A at up to 15 m/s; 1e-6 s at N = 100, 10 m/s, f_max = 150 Hz) and, below 1e-300 s, E/h
+#: overflows (found by fuzzing both FMUs). The ring with every mode, or without the static
+#: correction, has no rate term and steps any h.
+MIN_CORRECTED_STEP_S = 1e-5
+#: The refusal of a shorter step: h (repr) and the bound.
+SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring truncated with "
+                       "static correction (the dropped modes' rate term grows as 1/h); keep "
+                       "every mode, or turn the static correction off, to step shorter")
 _STATE_FORMAT = "tire_fmu.contact-state/2"
 _KERNEL_CACHE_SIZE = 32
 _SOLVE_CACHE_SIZE = 256
@@ -262,6 +274,9 @@ class _FastStep:
         self.start_rows = np.asfortranarray(np.vstack([np.atleast_2d(x) for x in (
             f1 - f_s * one, comb1[nz:2 * nz], comb1[2 * nz:], z, vz, heights, slopes, ring1,
             change, comb1[:nz], comb1[nz:2 * nz], sim.cos[None, :] @ f1)]))
+        # a ring truncated to no modes has an empty q: BLAS refuses empty vectors, and there
+        # is nothing to read from or to advance (its readout r stays zero)
+        self.ring_modes = sim.ring.n_modes > 0
         self.start_change = slice(5 * nz + 5, 6 * nz + 5)
         self.start_checks = slice(6 * nz + 5, 8 * nz + 5)
         self.start_pattern = np.tile(active, 2).tobytes()
@@ -320,7 +335,8 @@ class _FastStep:
             np.greater(y[self.start_checks], 0.0, out=self.start_signs)
             if self.start_signs.tobytes() != self.start_pattern:
                 return False
-        dgemv(1.0, self.g_f, y[self.start_change], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
+        if self.ring_modes:
+            dgemv(1.0, self.g_f, y[self.start_change], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
         state[:self.new_state] = y[:self.new_state]
         sim._values = self._outputs(sim, float(y[-1]))
         return True
@@ -347,15 +363,17 @@ class _FastStep:
         nz = sim.n_zone
         state, rw = sim._state, sim._rw
         state[5 * nz + 5], state[5 * nz + 6] = z, vz
-        dgemv(1.0, self.base_q, sim._q_pairs, 0.0, rw, 0, 1, 0, 1, 0, 1)
+        if self.ring_modes:
+            dgemv(1.0, self.base_q, sim._q_pairs, 0.0, rw, 0, 1, 0, 1, 0, 1)
         y = self.y
         dgemv(1.0, self.t, rw, 0.0, y, 0, 1, 0, 1, 0, 1)
         if self.check:
             np.greater(y[self.checks], 0.0, out=self.signs)
             if self.signs.tobytes() != self.pattern:
                 return False  # the active set changes: the general path takes this step
-        sim._q *= self.decay
-        dgemv(1.0, self.u, y[self.q_rows], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
+        if self.ring_modes:
+            sim._q *= self.decay
+            dgemv(1.0, self.u, y[self.q_rows], 1.0, sim._q_pairs, 0, 1, 0, 1, 0, 1)
         state[:self.new_state] = y[:self.new_state]
         sim._values = self._outputs(sim, float(y[self.contact_row]))
         return True
@@ -429,6 +447,7 @@ class ContactSimulator:
         d_f = d[:, 1:]
         self._truncated = bool(np.any(d_f) or np.any(e[:, 1:]))
         self._instant = None
+        self.min_step_s = MIN_CORRECTED_STEP_S if self._truncated else 0.0
         if self._truncated:
             m = np.vstack([self.k[:, None] * d_f[self._w] + self.c[:, None] * d_f[self._rate],
                            d_f[self._w], d_f[self._rate]])
@@ -570,8 +589,9 @@ class ContactSimulator:
                     road_vz: float) -> tuple[float, ...]:
         """Advance from ``time`` to ``time + h`` with the inputs given at ``time`` (ramped
         with their rates); returns the total outputs at the new time."""
-        if not (h > 0.0 and math.isfinite(h)) or (rim_z + rim_vz + road_z + road_vz) * 0.0 \
-                != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
+        if not (h > 0.0 and math.isfinite(h)) or h < self.min_step_s \
+                or (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0 \
+                or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
                 or abs(rim_vz) > MAX_VELOCITY_M_S or abs(road_vz) > MAX_VELOCITY_M_S:
             self._check(h, (rim_z, rim_vz, road_z, road_vz))
         # clock.resolves(time, h), with the limit cached for the h of a cached step
@@ -655,6 +675,8 @@ class ContactSimulator:
             pass
         elif not (h > 0.0 and math.isfinite(h)):
             problems.append(f"step size h = {h!r} s: must be finite and > 0")
+        elif h < self.min_step_s:
+            problems.append(SHORT_STEP_TEMPLATE % (repr(h), self.min_step_s))
         elif not clock.resolves(self.time, h):
             problems.append(clock.resolution_problem(self.time, h))
         for name, value in zip(INPUT_NAMES, values):

@@ -450,7 +450,9 @@ def _report(problem: _Problem, x, low, high, criterion, confidence, determined_w
     residuals = problem.residuals(x)
     jac = problem.jacobian(x, low, high)
     m, p = jac.shape
-    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    # the full V: with fewer data than free parameters the null space is the rows of Vᵀ
+    # past the data's count, which the economy SVD leaves out
+    _, s, vt = np.linalg.svd(jac, full_matrices=True)
     rank = int(np.sum(s > RANK_TOLERANCE * s[0])) if s.size and s[0] > 0 else 0
     null = vt[rank:]
     unseen = np.any(np.abs(null) > NULL_SHARE, axis=0) if null.size else np.zeros(p, bool)

@@ -61,6 +61,7 @@ CONSTANTS: dict[str, float | int] = {
     "SAME_POINT_EPS": road.SAME_POINT_EPS,
     "LAG_SLACK": road.LAG_SLACK,
     "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,
+    "MIN_CORRECTED_STEP_S": contact_dynamics.MIN_CORRECTED_STEP_S,
     "SUBSTEP_SLACK": contact_dynamics.SUBSTEP_SLACK,
     "SERIES_LIMIT": stepping.SERIES_LIMIT,
     "KERNEL_CACHE_SIZE": contact_dynamics._KERNEL_CACHE_SIZE,
@@ -171,6 +172,7 @@ MESSAGES: dict[str, str] = {
     "START_UNRESOLVED": "startTime = %s s: must be at most %.4g s in magnitude: beyond it a "
                         "clock of doubles resolves no step the FMU takes (at most %g s)",
     # the running FMU
+    "SHORT_STEP_CORRECTED": contact_dynamics.SHORT_STEP_TEMPLATE,
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
                  "beyond it are missing; raise contact_zone_length (logged once until the "
                  "footprint is back inside)",

@@ -76,7 +76,7 @@ typedef struct {
     int logging_on;
     unsigned categories;  /* bit i: SPEC_LOG_CATEGORIES[i] */
     Phase phase;
-    int broken;           /* an internal failure (out of memory): only a reset helps */
+    const char* broken;   /* an internal failure, what it was (NULL: none): only a reset helps */
     double time, start_time;
     int stale;            /* inputs set since the outputs were computed */
     double values[SPEC_N_VARIABLES];
@@ -138,8 +138,8 @@ static int allowed(Instance* inst, Call call)
 {
     if (inst->broken && call != CALL_RESET && call != CALL_FMU_STATE &&
         call != CALL_SET_DEBUG_LOGGING) {
-        log_message(inst, fmi2Error, "%s refused: the FMU failed earlier (out of memory); "
-                    "reset it or set an FMU state", CALLS[call].name);
+        log_message(inst, fmi2Error, "%s refused: the FMU failed earlier (%s); reset it or "
+                    "set an FMU state", CALLS[call].name, inst->broken);
         return 0;
     }
     if (CALLS[call].phases & (unsigned)inst->phase) return 1;
@@ -406,7 +406,7 @@ static fmi2Status refresh(Instance* inst)
 {
     if (inst->stale && inst->phase == PHASE_RUNNING) {
         if (model_refresh(inst->model, inst->values) != MODEL_OK) {
-            inst->broken = 1;
+            inst->broken = "out of memory";
             return fmi2Error;
         }
         inst->stale = 0;
@@ -643,6 +643,16 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                         reach / SPEC_MAX_DELAY_STEPS, reach, SPEC_MAX_DELAY_STEPS);
             return fmi2Error;
         }
+        if (h_value < model_min_step(inst->model)) {
+            char why[MESSAGE_SIZE];
+            number(t, currentCommunicationPoint);
+            number(h, h_value);
+            snprintf(why, sizeof why, SPEC_MSG_SHORT_STEP_CORRECTED, h,
+                     model_min_step(inst->model));
+            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
+                        "changed", t, h, why);
+            return fmi2Error;
+        }
     }
     if (!clock_resolves(inst->time, communicationStepSize)) {
         char text[512];
@@ -661,7 +671,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
      * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);
     if (status == MODEL_ERROR) {
-        inst->broken = 1;
+        inst->broken = "out of memory";
         return fmi2Error;
     }
     inst->stale = 0;
@@ -673,7 +683,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                 number(t, currentCommunicationPoint);
                 log_message(inst, fmi2Error, "the step from t = %s s gave non-finite outputs; "
                             "reset the FMU or set an FMU state", t);
-                inst->broken = 1;
+                inst->broken = "a step gave non-finite outputs";
                 return fmi2Error;
             }
         }

@@ -37,6 +37,9 @@ int model_refresh(Model* model, double* values);
 double model_time(const Model* model);
 /* how long the road takes from the zone front to its last node (s; 0 at rest) */
 double model_road_horizon(const Model* model);
+/* the shortest step it takes (s): SPEC_MIN_CORRECTED_STEP_S for a ring truncated with static
+ * correction, else 0 */
+double model_min_step(const Model* model);
 /* does the model hold a built simulator for exactly these parameter values? */
 int model_built_for(const Model* model, const double* values);
 /* its part of an FMU state */

@@ -606,6 +606,11 @@ double model_time(const Model* model) { return sim_time(&model->sim); }
 
 double model_road_horizon(const Model* model) { return model->windows.horizon; }
 
+double model_min_step(const Model* model)
+{
+    return model->ring.truncated ? SPEC_MIN_CORRECTED_STEP_S : 0.0;
+}
+
 /* -- the model's part of an FMU state --------------------------------------------------------
  * int32: K, Z, history length, has_last, zone warning armed, in contact; then doubles: start
  * time, elapsed time, its carry, last step, seen z and z', ring_out (3), outputs (6), q (2K),
