@@ -202,3 +202,71 @@ def test_per_order_is_refused_with_a_patch_and_auto_falls_back(tire):
     auto = complex_modes(model, f_max_hz=200)
     dense = complex_modes(model, f_max_hz=200, method="dense")
     np.testing.assert_allclose(auto.eigenvalues, dense.eigenvalues, rtol=1e-11)
+
+
+# -- the critical speed's root finder and scan, without scipy.optimize ---------------------------
+
+def _scipy_critical_speed(tire, n_elements):
+    """The scan as it was written with scipy.optimize.brentq: one spin at a time."""
+    from scipy.optimize import brentq
+
+    from tire_fmu.core.standing_waves import (
+        MAX_SCANNED_SPEED_M_S,
+        ROOT_TOLERANCE,
+        SCAN_POINTS,
+        _margins,
+    )
+
+    orders = np.arange(1, n_elements // 2 + 1)
+    kappa = (disp.order_symbols(orders, n_elements)["d1"] / 1j).real
+    previous = 0.0
+    for spin in np.linspace(0.0, MAX_SCANNED_SPEED_M_S / tire.R, SCAN_POINTS)[1:]:
+        bad = ~(_margins(tire, orders, kappa, n_elements, spin) > 0.0)
+        if bad.any():
+            candidates = []
+            for b, i in np.argwhere(bad):
+                def margin(s, b=b, i=i):
+                    value = _margins(tire, orders[i:i + 1], kappa[i:i + 1], n_elements, s)[b, 0]
+                    return value if np.isfinite(value) else -1.0
+
+                root = brentq(margin, previous, spin, xtol=ROOT_TOLERANCE, rtol=ROOT_TOLERANCE)
+                candidates.append((root, int(orders[i]), ("in", "out")[b]))
+            return min(candidates)
+        previous = spin
+    return (np.inf, None, None)
+
+
+@pytest.mark.parametrize("n_elements", [8, 101, 400])
+@pytest.mark.parametrize("change", [{}, {"sidewall_shear": 1e5}, {"EI": 5.0}, {"k_r2": 1.3e7}])
+def test_critical_speed_is_the_one_scipy_brentq_found_to_the_bit(tire, n_elements, change):
+    from dataclasses import replace
+
+    tire = replace(tire, **change)
+    found = critical_speed(tire, n_elements)
+    assert (found.spin_rad_s, found.order, found.branch) == _scipy_critical_speed(tire,
+                                                                                  n_elements)
+
+
+@pytest.mark.parametrize("f,a,b,tol", [
+    (lambda x: x**3 - 2 * x - 5, 2.0, 3.0, 1e-12),
+    (lambda x: np.cos(x) - x, 0.0, 1.0, 1e-12),
+    (lambda x: np.expm1(x) - 1e-9, -1.0, 4.0, 1e-12),
+    (lambda x: (x - 0.3) ** 3, 0.0, 1.0, 1e-6),  # flat at its root: 49 mixed steps
+    (lambda x: np.sign(x - 1 / 3), 0.0, 1.0, 1e-12),  # a jump, no root: bisection finds it
+    (lambda x: x, 0.0, 1.0, 1e-12),  # a root at an end
+])
+def test_brentq_takes_scipys_steps(f, a, b, tol):
+    from scipy.optimize import brentq as scipy_brentq
+
+    from tire_fmu.core.standing_waves import brentq
+
+    assert brentq(f, a, b, tol, tol) == scipy_brentq(f, a, b, xtol=tol, rtol=tol)
+
+
+def test_brentq_refuses_what_scipy_refuses():
+    from tire_fmu.core.standing_waves import brentq
+
+    with pytest.raises(ValueError, match="different signs"):
+        brentq(lambda x: x * x + 1, -1.0, 1.0, 1e-12, 1e-12)
+    with pytest.raises(RuntimeError, match="100 iterations"):  # scipy: "Failed to converge"
+        brentq(lambda x: (x - 0.3) ** 3, 0.0, 1.0, 1e-12, 1e-12)

@@ -10,47 +10,52 @@ Modules, in the order they build on each other:
 - :mod:`.model`: assembly at an operating point, static vertical stiffness
 - :mod:`.dispersion`, :mod:`.standing_waves`: undeformed rolling ring per order
 - :mod:`.modal`, :mod:`.complex_modal`: modal analysis and mode labels
+
+The names below are imported from their modules on first use (PEP 562), not here: a user of
+one module (the FMU imports the contact simulator and what it builds on) does not pay for the
+modal analysis, scipy.sparse.linalg and the rest of the core at start-up.
 """
 
-from .analytic import AnalyticModes, analytic_modes
-from .complex_modal import complex_modes, modal_analysis
-from .dispersion import Dispersion, dispersion_relation
-from .modal import ModalResult, Mode, real_modes
-from .model import SupercriticalSpeedWarning, TireModel, build_model, undeformed
-from .parameters import (
-    DEFAULT_LOAD_N,
-    TIRE_FIELDS,
-    OperatingPoint,
-    ParameterError,
-    Problem,
-    TireParameters,
-    render,
-    validate,
-)
-from .standing_waves import CriticalSpeed, critical_speed
+from importlib import import_module
 
-__all__ = [
-    "AnalyticModes",
-    "CriticalSpeed",
-    "DEFAULT_LOAD_N",
-    "Dispersion",
-    "ModalResult",
-    "Mode",
-    "OperatingPoint",
-    "ParameterError",
-    "Problem",
-    "SupercriticalSpeedWarning",
-    "TIRE_FIELDS",
-    "TireModel",
-    "TireParameters",
-    "analytic_modes",
-    "build_model",
-    "complex_modes",
-    "critical_speed",
-    "dispersion_relation",
-    "modal_analysis",
-    "real_modes",
-    "render",
-    "undeformed",
-    "validate",
-]
+#: Each public name and the module of the core that defines it.
+_SOURCES = {
+    "AnalyticModes": "analytic",
+    "CriticalSpeed": "standing_waves",
+    "DEFAULT_LOAD_N": "parameters",
+    "Dispersion": "dispersion",
+    "ModalResult": "modal",
+    "Mode": "modal",
+    "OperatingPoint": "parameters",
+    "ParameterError": "parameters",
+    "Problem": "parameters",
+    "SupercriticalSpeedWarning": "model",
+    "TIRE_FIELDS": "parameters",
+    "TireModel": "model",
+    "TireParameters": "parameters",
+    "analytic_modes": "analytic",
+    "build_model": "model",
+    "complex_modes": "complex_modal",
+    "critical_speed": "standing_waves",
+    "dispersion_relation": "dispersion",
+    "modal_analysis": "complex_modal",
+    "real_modes": "modal",
+    "render": "parameters",
+    "undeformed": "model",
+    "validate": "parameters",
+}
+
+__all__ = list(_SOURCES)
+
+
+def __getattr__(name: str):
+    if name not in _SOURCES:
+        # an AttributeError also lets ``from tire_fmu.core import model`` find the submodule
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{_SOURCES[name]}", __name__), name)
+    globals()[name] = value  # found once: later look-ups do not come here
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *__all__])

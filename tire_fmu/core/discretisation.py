@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 #: Central stencils (offset -> coefficient) before division by δθ^order.
 FIRST_DERIVATIVE = {-1: -0.5, 1: 0.5}
@@ -56,6 +59,8 @@ class Grid:
 
 def stencil_matrix(n_nodes: int, stencil: dict[int, float], scale: float = 1.0) -> sp.csr_matrix:
     """Periodic (circulant) sparse matrix with ``(A u)_j = scale·Σ_k c_k u_{j+k}``."""
+    import scipy.sparse as sp  # only the assembled model needs it (see :mod:`.model`)
+
     rows, cols, vals = [], [], []
     index = np.arange(n_nodes)
     for offset, coefficient in stencil.items():

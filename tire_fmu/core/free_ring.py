@@ -32,7 +32,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 
 from .discretisation import Grid
 from .discretisation import symbols as fdm_symbols
@@ -263,11 +262,15 @@ def order_modes(a_n: np.ndarray, real_orders: np.ndarray) -> tuple[np.ndarray, n
     """Eigenvalues (orders, 4) and eigenvectors (orders, 4, 4, columns) of each order's A_n in
     the canonical normalisation and order (:func:`.modal_form.canonical_modes`); a real order
     (n = 0, N/2: ``real_orders``) is the real system Re A_n, whose pairs are exactly conjugate
-    and whose real eigenvalues have real eigenvectors. The native FMU's C builds the same."""
+    and whose real eigenvalues have real eigenvectors. The native FMU's C builds the same.
+
+    numpy's eig (LAPACK's geev, as scipy's) solves each stack in one call."""
+    real_orders = np.asarray(real_orders, dtype=bool)
     values = np.empty(a_n.shape[:2], dtype=complex)
     vectors = np.empty(a_n.shape, dtype=complex)
-    for index, a in enumerate(a_n):
-        values[index], vectors[index] = sla.eig(a.real if real_orders[index] else a)
+    for which, stack in ((real_orders, a_n[real_orders].real), (~real_orders, a_n[~real_orders])):
+        if stack.shape[0]:
+            values[which], vectors[which] = np.linalg.eig(stack)
     return canonical_modes(values, vectors)
 
 

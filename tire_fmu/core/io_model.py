@@ -32,13 +32,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .contact import RoadWindows
 from .model import TireModel
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
 
 OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection")
 OUTPUT_UNITS = {"rim_Fz": "N", "rim_Fx": "N", "contact_Fz": "N", "deflection": "m",
@@ -86,12 +88,16 @@ class InputOutputModel:
 
     def static_gain(self) -> np.ndarray:
         """DC gain from r to y (E ṙ vanishes at DC): y = C x_static + D r."""
+        import scipy.sparse.linalg as spla
+
         u = spla.splu(self.model.stiffness.tocsc()).solve(self.b_disp)
         return self.out_disp @ u + self.d_disp
 
     def frequency_response(self, name: str, freqs_hz) -> np.ndarray:
         """Exact FRF (n_outputs, n_freqs) of the full model for a physical input, second-order
         form: (K - ω²M + iωD) U = (B_z + iωB_v) r, Y = (C_u + iωC_v) U + (D_u + iωE) r."""
+        import scipy.sparse.linalg as spla
+
         omega = 2 * np.pi * np.asarray(freqs_hz, dtype=float)
         r_all = self.physical_input(name, omega)
         m, d, k = self.model.mass, self.model.damping, self.model.stiffness
@@ -120,6 +126,8 @@ def physical_input(name: str, windows: RoadWindows, omega) -> np.ndarray:
 
 def build_io_model(model: TireModel) -> InputOutputModel:
     """Inputs, outputs and the momentum-form state space of a tire model."""
+    import scipy.sparse as sp  # here, so that the FMU can read this module's names cheaply
+
     n = model.n_dof
     t, s = model.translation, model.horizontal
     k_s, d_s = model.structure.stiffness, model.structure.damping

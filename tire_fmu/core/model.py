@@ -23,6 +23,11 @@ stepping with the unilateral law itself is :mod:`.contact_dynamics`.
 Node quantities are line quantities times R·δθ, so matrices are in kg, N·s/m and N/m.
 Damping: material C = αM + βK₀ (K₀ the structure at rest, contact excluded) acting on the
 material rate of w; the contact damper c_j = β·k_j acts on the ground-frame rate of p_j.
+
+:func:`build_model` finds the grid, the static footprint and the critical speed; the sparse
+matrices are assembled when first asked for (:attr:`TireModel.structure` and the matrices
+built on it). The contact simulator and the FMU, which work per order and on the contact
+zone, never ask, and so never import scipy.sparse.
 """
 
 from __future__ import annotations
@@ -31,9 +36,9 @@ import math
 import warnings
 from dataclasses import dataclass, replace
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from .contact import (
     ContactPatch,
@@ -44,7 +49,7 @@ from .contact import (
     prescribed_patch,
     zone_problems,
 )
-from .discretisation import Grid, RingOperators
+from .discretisation import Grid
 from .free_ring import ring_static_gain, zone_compliance
 from .parameters import (
     TIRE_FIELDS,
@@ -54,7 +59,11 @@ from .parameters import (
     TireParameters,
     conditioning_problems,
 )
-from .rotation import RollingTerms, rolling_terms
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+    from .rotation import RollingTerms
 
 #: Fraction of the critical speed above which building a model warns.
 CRITICAL_SPEED_WARNING_FRACTION = 0.8
@@ -88,6 +97,11 @@ def structural_matrices(
     tire: TireParameters, grid: Grid, spin_rad_s: float = 0.0
 ) -> StructuralMatrices:
     """Mass, stiffness and damping of tread + sidewall (no contact), node-scaled."""
+    import scipy.sparse as sp
+
+    from .discretisation import RingOperators
+    from .rotation import rolling_terms
+
     n = grid.n_elements
     ops = RingOperators(grid)
     eye = sp.identity(n, format="csr")
@@ -131,15 +145,27 @@ def horizontal_pattern(grid: Grid) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class TireModel:
-    """The linear ring tire at one operating point (mesh, contact patch, speed)."""
+    """The linear ring tire at one operating point (mesh, contact patch, speed).
+
+    Defined by its fields; the assembled matrices follow from them on first use.
+    """
 
     tire: TireParameters
     grid: Grid
     speed_m_s: float
-    structure: StructuralMatrices
-    contact_stiffness: sp.csr_matrix
     patch: ContactPatch
     critical_speed_m_s: float
+
+    @cached_property
+    def structure(self) -> StructuralMatrices:
+        return structural_matrices(self.tire, self.grid, self.spin_rad_s)
+
+    @cached_property
+    def contact_stiffness(self) -> sp.csr_matrix:
+        """The road springs k_j of the patch on their tread DOFs."""
+        patch = self.patch
+        return _on_tread(self.grid, patch.node_indices,
+                         patch.node_stiffness_n_per_m[patch.contact_positions])
 
     @property
     def n_elements(self) -> int:
@@ -197,6 +223,8 @@ class TireModel:
 
 def _on_tread(grid: Grid, nodes: np.ndarray, values: np.ndarray) -> sp.csr_matrix:
     """A diagonal matrix on the 2N DOFs with ``values`` on the tread DOFs ``nodes``."""
+    import scipy.sparse as sp
+
     diagonal = np.zeros(2 * grid.n_elements)
     diagonal[nodes] = values
     return sp.diags(diagonal, format="csr")
@@ -265,17 +293,11 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
             SupercriticalSpeedWarning,
             stacklevel=2,
         )
-    structure = structural_matrices(tire, grid, speed / tire.R)
-    patch = contact_patch(tire, grid, op)
-    contact = _on_tread(grid, patch.node_indices,
-                        patch.node_stiffness_n_per_m[patch.contact_positions])
     return TireModel(
         tire=tire,
         grid=grid,
         speed_m_s=speed,
-        structure=structure,
-        contact_stiffness=contact,
-        patch=patch,
+        patch=contact_patch(tire, grid, op),
         critical_speed_m_s=critical,
     )
 
@@ -286,8 +308,7 @@ def undeformed(model: TireModel) -> TireModel:
     free = replace(patch, weights=np.zeros_like(patch.weights), deflection_m=0.0, load_n=0.0,
                    length_m=0.0, vertical_stiffness_n_per_m=0.0, footprint=None,
                    forces_n=np.zeros_like(patch.forces_n), centre_compression_m=0.0)
-    return replace(model, contact_stiffness=_on_tread(model.grid, free.node_indices,
-                                                      np.zeros(0)), patch=free)
+    return replace(model, patch=free)
 
 
 #: The fastest eigenvalue of a model over its slowest may be at most this: the slowest modes'

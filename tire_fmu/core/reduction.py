@@ -41,11 +41,9 @@ from typing import Any
 
 import numpy as np
 
-from .balanced import BalancedRealization
 from .contact import RoadWindows
 from .free_ring import F_MAX_LIMIT_HZ
 from .io_model import OUTPUTS, PHYSICAL_INPUTS, InputOutputModel, build_io_model, physical_input
-from .modal import symmetry_bases, two_level_eigenpairs
 from .modal_form import (
     ModalForm,
     diagonalise,
@@ -55,6 +53,9 @@ from .modal_form import (
 )
 from .model import TireModel, check_resolved
 from .parameters import ParameterError, TireParameters
+
+# .modal and .balanced (scipy.sparse.linalg, LAPACK wrappers) are imported by the functions that
+# use them: the FMU reads ReductionSettings from this module at start-up and reduces nothing.
 
 METHODS = ("modal", "balanced")
 
@@ -309,6 +310,8 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
 
 def _resting_decomposition(io: InputOutputModel) -> ModalForm:
     """The resting tire's modes, class by class of the mirror symmetry."""
+    from .modal import symmetry_bases, two_level_eigenpairs
+
     model = io.model
     mass = model.mass.diagonal()
     bases = list(symmetry_bases(model.grid).values())
@@ -529,6 +532,8 @@ def _balanced(decomp: ModalForm, io: InputOutputModel, settings: ReductionSettin
     """Balanced truncation of every mode up to f_max (the rest static) to ``n_states``, or to
     the fewest states whose FRF error over the band meets ``target_error`` (bisection: the
     error falls as states are added; each trial costs one small FRF, no report)."""
+    from .balanced import BalancedRealization
+
     keep = ~settings.above_f_max(decomp.eigenvalues)
     lam, b, c = decomp.eigenvalues[keep], decomp.b[keep], decomp.c[:, keep]
     d = io.d + static_correction_matrix(io, lam, b, c, dc)
