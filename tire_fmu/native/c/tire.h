@@ -19,6 +19,7 @@ typedef struct {
 
 void* mem_alloc(const Memory* mem, size_t count, size_t size);
 void mem_free(const Memory* mem, void* pointer);
+const Memory* mem_default(void); /* calloc and free */
 
 /* -- tire data and operating point ---------------------------------------------------------- */
 typedef struct {

@@ -1,0 +1,333 @@
+"""The step of the tire in plain numpy: the readable reference of ``native/c/kernel.c``.
+
+Both step a :class:`~.contract.StepContract` with the same algorithm; this one writes it with
+dense matrices and no caching, the C with the order structure and caches, and a test holds
+them to 1e-10 of each other. Over a communication step h, split into n equal substeps of at
+most the contract's ``substep_s``:
+
+1. the road under each contact point is read at the current time (its window average of the
+   host's road history, :mod:`.road`);
+2. the contact forces at the current time are solved again for the inputs given now (the last
+   substep's end re-solved: the penetrations move with the inputs' change and with the end
+   forces through that substep's own interface flexibility), or, after a reset, taken from the
+   law at the instant;
+3. each substep advances the modal state exactly with the rim and the force deviations ramped
+   from their values at its start to their values at its end, those end forces solving the
+   law at the end:
+
+       q(t+h) = e^{λh} q + hφ₁ b_rim z + h²φ₂ b_rim ż + h(φ₁-φ₂) B Δf(t) + hφ₂ B Δf(t+h),
+       [σ; p; ṗ](t+h) = base + M f(t+h),  f = max(0, σ) where p > 0 and σ > 0, else 0,
+
+   with σ = k p + c ṗ, a primal-dual active-set iteration warm-started from the last set (and
+   projected Gauss-Seidel should it cycle).
+
+The ring's modes act on the zone nodes (B, C from the order structure written out); the
+contact points read the nodes through the interpolation matrix I (P x Z) and load them through
+Iᵀ, the virtual work of the interpolation.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+
+from .contract import StepContract
+from .road import SAME_POINT_EPS, RoadReader, RoadWindows
+from .stepping import phi_functions
+
+#: Active-set iterations per solve: this many per contact point, plus ACTIVE_SET_EXTRA; then PGS.
+ACTIVE_SET_PER_NODE = 2
+ACTIVE_SET_EXTRA = 4
+#: Projected Gauss-Seidel fallback: sweeps, and the relative change that ends it.
+PGS_SWEEPS = 1000
+PGS_TOLERANCE = 1e-13
+#: A step within this relative distance of a multiple of the substep needs no extra substep.
+SUBSTEP_SLACK = 1e-12
+
+
+class _Interface:
+    """One substep length h: the modal step coefficients and the contact interface
+    [σ; p; ṗ] = base + M f on the total end forces f (M = [S; W_p; W_r])."""
+
+    def __init__(self, kernel: NumpyKernel, h: float, instant: bool = False):
+        self.h = h
+        k = kernel
+        if instant:  # a truncated ring couples the forces at an instant: its direct terms only
+            w_nodes, r_nodes, out_nodes = k.d_f[k.w_rows], k.d_f[k.r_rows], k.d_f[:3]
+            self.decay = self.g_start = self.g_end = self.g_z = self.g_vz = None
+        else:
+            lam = k.contract.lam
+            phi1, phi2 = phi_functions(lam * h)
+            self.decay = np.exp(lam * h)
+            self.g_start = (h * (phi1 - phi2))[:, None] * k.b_f  # on Δf at the start (nodes)
+            self.g_end = (h * phi2)[:, None] * k.b_f  # on Δf at the end
+            self.g_z = h * phi1 * k.b_rim
+            self.g_vz = h * h * phi2 * k.b_rim
+            per_force = np.real(k.c_ring @ self.g_end) + k.d_f + k.e_f / h  # rows x Z
+            w_nodes, r_nodes, out_nodes = per_force[k.w_rows], per_force[k.r_rows], per_force[:3]
+        interp = k.interp
+        w_p = interp @ w_nodes @ interp.T
+        w_r = interp @ r_nodes @ interp.T
+        self.out_f = out_nodes @ interp.T  # ring outputs per unit end force at the points
+        self.m = np.vstack([k.k[:, None] * w_p + k.c[:, None] * w_r, w_p, w_r])
+        self.pen_const = k.contract.pen_static - w_p @ k.f_static
+        self.rate_const = -w_r @ k.f_static
+
+
+class NumpyKernel:
+    """Steps a contract: the same calls and state as the C kernel (``kernel.h``)."""
+
+    def __init__(self, contract: StepContract, start_time: float = 0.0):
+        self.contract = c = contract
+        n_orders = np.repeat(np.arange(c.n_orders), np.diff(c.order_start))
+        theta = c.zone_offset * (2 * np.pi / c.n_elements)
+        phase = np.exp(1j * np.outer(n_orders, theta))  # (K, Z)
+        self.b_f = c.beta[:, None] * np.conj(phase)  # a node force into each mode
+        z = c.n_zone
+        # ring rows: rim_Fz, rim_Fx, deflection, w (Z), ẇ (Z) on the modal state
+        self.c_ring = np.vstack([c.c_rim, -c.gamma[None, :], (c.gamma[:, None] * phase).T,
+                                 (c.eta[:, None] * phase).T])
+        self.b_rim = c.b_rim
+        self.w_rows, self.r_rows = slice(3, 3 + z), slice(3 + z, 3 + 2 * z)
+        self.d_rim, self.e_rim = c.d[:, 0], c.e[:, 0]
+        self.d_f, self.e_f = c.d[:, 1:], c.e[:, 1:]
+        self.truncated = bool(np.any(self.d_f) or np.any(self.e_f))
+        self.interp = np.zeros((c.n_points, z))
+        np.add.at(self.interp, (np.repeat(np.arange(c.n_points), c.n_support),
+                                c.point_support.ravel()), c.point_weight.ravel())
+        self.k, self.c = c.point_stiffness, c.point_damping
+        self.sec = c.point_sec
+        self.f_static = c.f_static
+        self.static_active = c.f_static > 0
+        self.linear = bool(c.linear)
+        # how the rim's own motion moves each point's penetration and rate at an instant
+        self.pen_rim = self.interp @ self.d_rim[self.w_rows] - self.sec
+        self.rate_rim = self.interp @ self.e_rim[self.r_rows] - self.sec
+        windows = RoadWindows(c.window_early_s, c.window_late_s, 0.0)
+        self.road = RoadReader(windows, delay_line=False)
+        self.horizon_s = windows.horizon_s
+        self._interfaces: dict[float, tuple[int, _Interface]] = {}
+        self._instant = _Interface(self, 0.0, instant=True) if self.truncated else None
+        self.solver_fallbacks = 0
+        self.reset(start_time)
+
+    # -- state ---------------------------------------------------------------------------
+    def reset(self, start_time: float = 0.0) -> None:
+        c = self.contract
+        p = c.n_points
+        self.time = float(start_time)
+        self.q = np.zeros(c.n_modes, dtype=complex)
+        self.df = np.zeros(p)
+        self.active = self.static_active.copy()
+        self.penetration = c.pen_static.copy()
+        self.rate = np.zeros(p)
+        self.seen = (0.0, 0.0, np.zeros(p), np.zeros(p))  # z, ż, heights, slopes
+        self.ring_out = np.zeros(3)
+        self.last: _Interface | None = None
+        self.last_step = math.nan
+        self.road.reset()
+        self.outputs = self._outputs()
+
+    # -- stepping ------------------------------------------------------------------------
+    def interface(self, h: float) -> tuple[int, _Interface]:
+        """The communication step h: (substeps, the substep's interface); a step within
+        rounding of a cached one is that step (hosts jitter h in the last bits)."""
+        for cached_h, entry in self._interfaces.items():
+            if cached_h == h or abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
+                return entry
+        n_sub = max(1, math.ceil(h / self.contract.substep_s * (1 - SUBSTEP_SLACK)))
+        entry = (n_sub, _Interface(self, h / n_sub))
+        self._interfaces[h] = entry
+        return entry
+
+    def _road(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        p = self.contract.n_points
+        out = np.empty(2 * p)
+        self.road.read(self.time, self._road_z, self._road_vz, h, out)
+        return out[:p].copy(), out[p:].copy()
+
+    def step(self, h: float, inputs) -> np.ndarray:
+        """One communication step from ``time`` with the inputs (rim_z, rim_vz, road_z,
+        road_vz) given at ``time``; the outputs at the new time."""
+        z, vz, self._road_z, self._road_vz = (float(x) for x in inputs)
+        n_sub, interface = self.interface(h)
+        heights, slopes = self._road(h)
+        self._start(z, vz, heights, slopes)
+        for i in range(n_sub):
+            heights, slopes = self._substep(interface, z + i * interface.h * vz, vz, heights,
+                                            slopes)
+        self.time += h
+        self.last_step = h
+        self.outputs = self._outputs()
+        return self.outputs.copy()
+
+    def outputs_with(self, inputs) -> np.ndarray:
+        """The outputs at ``time`` for inputs given there; the forces stay re-solved."""
+        z, vz, self._road_z, self._road_vz = (float(x) for x in inputs)
+        heights, slopes = self._road(self.last_step)
+        self._start(z, vz, heights, slopes)
+        self.outputs = self._outputs()
+        return self.outputs.copy()
+
+    def _start(self, z, vz, heights, slopes) -> None:
+        z_seen, vz_seen, heights_seen, slopes_seen = self.seen
+        dz, dvz = z - z_seen, vz - vz_seen
+        pen = self.penetration + self.pen_rim * dz + self.sec * (heights - heights_seen)
+        rate = self.rate + self.rate_rim * dvz + self.sec * (slopes - slopes_seen)
+        self.ring_out = self.ring_out + self.d_rim[:3] * dz + self.e_rim[:3] * dvz
+        interface = self.last if self.last is not None else (
+            self._instant if not self.linear else None)
+        if interface is not None:
+            f_old = self.f_static + self.df
+            base = np.concatenate([self.k * pen + self.c * rate, pen, rate]) - interface.m @ f_old
+            f, combined = self._solve(interface, base)
+            change = f - f_old
+            if self.last is not None:
+                self.q = self.q + interface.g_end @ (self.interp.T @ change)
+            self.ring_out = self.ring_out + interface.out_f @ change
+            p = self.contract.n_points
+            pen, rate = combined[p:2 * p], combined[2 * p:]
+        elif self.linear:
+            f = np.where(self.static_active, self.f_static + self.k * (
+                pen - self.contract.pen_static) + self.c * rate, 0.0)
+        else:
+            push = self.k * pen + self.c * rate
+            f = np.where(pen > 0.0, np.maximum(push, 0.0), 0.0)
+            self.active = f > 0.0
+        self.df = f - self.f_static
+        self.penetration, self.rate = pen, rate
+        self.seen = (z, vz, heights.copy(), slopes.copy())
+
+    def _substep(self, k: _Interface, z, vz, heights, slopes):
+        h = k.h
+        p = self.contract.n_points
+        df_nodes = self.interp.T @ self.df
+        self.q = k.decay * self.q + k.g_start @ df_nodes + k.g_z * z + k.g_vz * vz
+        y = np.real(self.c_ring @ self.q) + self.d_rim * (z + h * vz) + self.e_rim * vz \
+            - self.e_f @ df_nodes / h
+        w_pt, r_pt = self.interp @ y[self.w_rows], self.interp @ y[self.r_rows]
+        pen0 = w_pt - self.sec * (z + h * vz) + self.sec * (heights + h * slopes) + k.pen_const
+        rate0 = r_pt - self.sec * vz + self.sec * slopes + k.rate_const
+        base = np.concatenate([self.k * pen0 + self.c * rate0, pen0, rate0])
+        f, combined = self._solve(k, base)
+        df_end = f - self.f_static
+        self.q = self.q + k.g_end @ (self.interp.T @ df_end)
+        self.ring_out = y[:3] + k.out_f @ df_end
+        self.df = df_end
+        self.penetration, self.rate = combined[p:2 * p], combined[2 * p:]
+        heights = heights + h * slopes  # the road ramps on into the next substep
+        self.seen = (z + h * vz, vz, heights.copy(), slopes.copy())
+        self.last = k
+        return heights, slopes
+
+    def _solve(self, k: _Interface, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Total end forces with [σ; p; ṗ] = base + M f and the law (two-sided springs on the
+        static footprint's points for the linear law), and base + M f."""
+        p = self.contract.n_points
+        s = k.m[:p]
+        if self.linear:
+            f = self._active_forces(s, self.static_active, base[:p])
+            return f, base + k.m @ f
+        active = self.active
+        for _ in range(ACTIVE_SET_PER_NODE * p + ACTIVE_SET_EXTRA):
+            f = self._active_forces(s, active, base[:p])
+            combined = base + k.m @ f
+            new = (combined[p:2 * p] > 0.0) & (combined[:p] > 0.0)
+            if np.array_equal(new, active):
+                self.active = active
+                return np.maximum(f, 0.0), combined
+            active = new
+        f = self._fallback(k, base)
+        return f, base + k.m @ f
+
+    @staticmethod
+    def _active_forces(s: np.ndarray, active: np.ndarray, sigma0: np.ndarray) -> np.ndarray:
+        f = np.zeros(sigma0.size)
+        if active.any():
+            block = np.eye(int(active.sum())) - s[np.ix_(active, active)]
+            f[active] = np.linalg.solve(block, sigma0[active])
+        return f
+
+    def _fallback(self, k: _Interface, base: np.ndarray) -> np.ndarray:
+        """Projected Gauss-Seidel on the same law, for an active set that cycles."""
+        self.solver_fallbacks += 1
+        p = self.contract.n_points
+        s, w_p = k.m[:p], k.m[p:2 * p]
+        f = np.maximum(self.f_static + self.df, 0.0)
+        for _ in range(PGS_SWEEPS):
+            previous = f.copy()
+            for j in range(p):
+                pen_j = base[p + j] + w_p[j] @ f
+                rest = base[j] + s[j] @ f - s[j, j] * f[j]
+                f[j] = max(0.0, rest / (1.0 - s[j, j])) if pen_j > 0.0 else 0.0
+            if np.max(np.abs(f - previous)) <= PGS_TOLERANCE * max(1.0, float(np.max(np.abs(f)))):
+                break
+        self.active = f > 0.0
+        return f
+
+    # -- outputs -------------------------------------------------------------------------
+    def _outputs(self) -> np.ndarray:
+        c = self.contract
+        forces = self.f_static + self.df
+        ring = c.static_ring_out + self.ring_out
+        return np.array([ring[0], ring[1], float(c.point_cos @ forces), ring[2],
+                         self.contact_length()])
+
+    def contact_length(self) -> float:
+        """Footprint length on the road (m): between the edges where the penetration,
+        interpolated between the outermost pushing point and its neighbour, crosses zero."""
+        from .contact import _edges
+
+        front, rear = _edges(self.contract.point_x_road, self.penetration,
+                             (self.f_static + self.df) > 0.0)
+        return front - rear
+
+    @property
+    def forces(self) -> np.ndarray:
+        return self.f_static + self.df
+
+    def at_zone_edge(self) -> bool:
+        forces = self.forces
+        return bool(forces[0] > 0.0 or forces[-1] > 0.0)
+
+    # -- the state as bytes: the layout of kernel.c ------------------------------------------
+    def state_bytes(self) -> bytes:
+        c = self.contract
+        t, z, v = self.road.history()
+        has_last = self.last is not None
+        head = [self.time, self.last_step if has_last else 0.0, self.seen[0], self.seen[1],
+                *self.ring_out, *self.outputs]
+        return b"".join([
+            struct.pack("<4i", c.n_modes, c.n_points, t.size, int(has_last)),
+            struct.pack(f"<{len(head)}d", *head),
+            np.ascontiguousarray(self.q).view("<f8").tobytes(),
+            *(np.asarray(x, "<f8").tobytes() for x in (
+                self.df, self.penetration, self.rate, self.seen[2], self.seen[3], t, z, v)),
+            self.active.astype(np.uint8).tobytes()])
+
+    def set_state_bytes(self, data: bytes) -> None:
+        """Restore bytes of :meth:`state_bytes` (or of the C kernel); checked by the caller."""
+        c = self.contract
+        k, p = c.n_modes, c.n_points
+        _, _, history, has_last = struct.unpack_from("<4i", data, 0)
+        doubles = np.frombuffer(data, "<f8", 12 + 2 * k + 5 * p + 3 * history, 16)
+        head, rest = doubles[:12], doubles[12:]
+        self.time = float(head[0])
+        self.last_step = float(head[1]) if has_last else math.nan
+        self.ring_out = head[4:7].copy()
+        self.outputs = head[7:12].copy()
+        self.q = rest[:2 * k].copy().view(complex)
+        arrays = rest[2 * k:].reshape(-1)
+        take = [arrays[i * p:(i + 1) * p].copy() for i in range(5)]
+        self.df, self.penetration, self.rate = take[0], take[1], take[2]
+        self.seen = (float(head[2]), float(head[3]), take[3], take[4])
+        hist = arrays[5 * p:]
+        self.road.reset()
+        self.road.history_t = hist[:history].copy()
+        self.road.history_z = hist[history:2 * history].copy()
+        self.road.history_v = hist[2 * history:].copy()
+        flags = np.frombuffer(data, np.uint8, p, len(data) - p)
+        self.active = flags.astype(bool)
+        self.last = self.interface(self.last_step)[1] if has_last else None

@@ -1,0 +1,247 @@
+"""The compiled step kernel (``native/c/kernel.c``) from Python, through ctypes.
+
+The Python FMU and :class:`~tire_fmu.core.contact_dynamics.ContactSimulator` step the tire
+with the same C as the native FMU: the contract the Python core built is handed to
+``kernel_new`` once, and each communication step is one call of ``kernel_step`` with the four
+inputs and five outputs in preallocated arrays. The library is compiled from the package's C
+(the kernel, the road reader, the numerics) with the machine's C compiler: by the FMU builder
+into the FMU (``binaries/<platform>/tire_kernel.so``), or on first use here into a cache folder
+keyed by the sources' hash, so a changed source is never run stale.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..core.contract import StepContract
+from .contract import to_ctypes
+
+#: The C files of the kernel library, and what they include.
+KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c")
+KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h")
+KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
+LIBRARY_NAME = "tire_kernel"
+N_INPUTS, N_OUTPUTS = 4, 5
+_WHY_SIZE = 512
+
+
+class KernelUnavailable(RuntimeError):
+    """No compiled kernel here (no C compiler, or the library does not load)."""
+
+
+def _c_folder() -> Path:
+    from .builder import c_folder
+
+    return Path(str(c_folder()))
+
+
+def sources_digest() -> str:
+    """A hash of the kernel's C: the cache key, and what an FMU's library was built from."""
+    digest = hashlib.sha256()
+    folder = _c_folder()
+    for name in KERNEL_SOURCES + KERNEL_HEADERS:
+        digest.update(name.encode() + b"\0" + (folder / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def compiler() -> str | None:
+    cc = os.environ.get("CC", "").split() or ["gcc"]
+    return shutil.which(cc[0]) and cc[0]
+
+
+def compile_kernel(destination: Path, compiler_command: str | None = None) -> Path:
+    """Compile the kernel library to ``destination`` (a file path); KernelUnavailable when
+    there is no C compiler or it fails (with its output)."""
+    command = compiler_command or compiler()
+    if command is None:
+        raise KernelUnavailable("no C compiler found (install gcc, or set CC)")
+    folder = _c_folder()
+    destination = Path(destination)
+    destination.parent.mkdir(parents=True, exist_ok=True)
+    handle, partial = tempfile.mkstemp(prefix=destination.name + ".", suffix=".partial",
+                                       dir=destination.parent)
+    os.close(handle)
+    try:
+        result = subprocess.run(
+            [command, *KERNEL_FLAGS, "-o", partial, *(str(folder / s) for s in KERNEL_SOURCES),
+             "-lm"], capture_output=True, text=True)
+        if result.returncode != 0:
+            raise KernelUnavailable(f"compiling the step kernel failed:\n{result.stderr}")
+        os.replace(partial, destination)
+    finally:
+        if os.path.exists(partial):
+            os.unlink(partial)
+    return destination
+
+
+def _cache_folder() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "tire_fmu"
+
+
+_LOADED: dict[str, ctypes.CDLL] = {}
+
+
+def load_library(path: str | Path | None = None) -> ctypes.CDLL:
+    """The kernel library at ``path``, or the one compiled for this package's sources (made
+    on first use); KernelUnavailable if neither can be had."""
+    if path is None:
+        path = _cache_folder() / f"{LIBRARY_NAME}-{sources_digest()}.so"
+        if not path.exists():
+            try:
+                compile_kernel(path)
+            except OSError:  # no writable cache: a private folder then
+                path = Path(tempfile.mkdtemp(prefix="tire_fmu_kernel_")) / path.name
+                compile_kernel(path)
+    key = str(path)
+    if key not in _LOADED:
+        try:
+            library = ctypes.CDLL(key)
+        except OSError as error:
+            raise KernelUnavailable(f"the step kernel {key} does not load: {error}") from error
+        _declare(library)
+        _LOADED[key] = library
+    return _LOADED[key]
+
+
+def _declare(lib: ctypes.CDLL) -> None:
+    handle, double, p_double = ctypes.c_void_p, ctypes.c_double, ctypes.POINTER(ctypes.c_double)
+    size, p_byte = ctypes.c_size_t, ctypes.POINTER(ctypes.c_ubyte)
+    lib.kernel_new.restype = handle
+    lib.kernel_new.argtypes = [ctypes.c_void_p, double, ctypes.c_char_p, size]
+    lib.kernel_destroy.restype = None
+    lib.kernel_destroy.argtypes = [handle]
+    lib.kernel_reset.restype = None
+    lib.kernel_reset.argtypes = [handle, double]
+    lib.kernel_step.restype = ctypes.c_int
+    lib.kernel_step.argtypes = [handle, double, p_double, p_double]
+    lib.kernel_outputs_with.restype = ctypes.c_int
+    lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
+    lib.kernel_outputs.restype = None
+    lib.kernel_outputs.argtypes = [handle, p_double]
+    lib.kernel_time.restype = double
+    lib.kernel_time.argtypes = [handle]
+    lib.kernel_set_time.restype = None
+    lib.kernel_set_time.argtypes = [handle, double]
+    lib.kernel_horizon.restype = double
+    lib.kernel_horizon.argtypes = [handle]
+    for name in ("kernel_in_contact", "kernel_at_zone_edge"):
+        getattr(lib, name).restype = ctypes.c_int
+        getattr(lib, name).argtypes = [handle]
+    lib.kernel_solver_fallbacks.restype = ctypes.c_long
+    lib.kernel_solver_fallbacks.argtypes = [handle]
+    lib.kernel_forces.restype = None
+    lib.kernel_forces.argtypes = [handle, p_double]
+    lib.kernel_state_size.restype = size
+    lib.kernel_state_size.argtypes = [handle]
+    lib.kernel_state_write.restype = None
+    lib.kernel_state_write.argtypes = [handle, p_byte]
+    lib.kernel_state_check.restype = ctypes.c_int
+    lib.kernel_state_check.argtypes = [handle, p_byte, size, ctypes.c_char_p, size]
+    lib.kernel_state_apply.restype = ctypes.c_int
+    lib.kernel_state_apply.argtypes = [handle, p_byte]
+
+
+class CompiledKernel:
+    """The C kernel stepping one contract: the calls of :class:`~tire_fmu.core.kernel_numpy.
+    NumpyKernel`, each one call into the library."""
+
+    def __init__(self, contract: StepContract, start_time: float = 0.0,
+                 library: ctypes.CDLL | None = None):
+        self.contract = contract
+        self._lib = lib = library or load_library()
+        why = ctypes.create_string_buffer(_WHY_SIZE)
+        struct = to_ctypes(contract)
+        handle = lib.kernel_new(ctypes.byref(struct), float(start_time), why, _WHY_SIZE)
+        if not handle:
+            raise KernelUnavailable(f"the step kernel refused the contract: "
+                                    f"{why.value.decode(errors='replace')}")
+        self._handle = handle
+        self._in = (ctypes.c_double * N_INPUTS)()
+        self._out = (ctypes.c_double * N_OUTPUTS)()
+        self._step = lib.kernel_step
+        self.horizon_s = lib.kernel_horizon(handle)
+
+    def __del__(self):
+        handle, self._handle = getattr(self, "_handle", None), None
+        if handle:
+            self._lib.kernel_destroy(handle)
+
+    def _check(self, status: int, call: str) -> None:
+        if status != 0:
+            raise MemoryError(f"{call}: the step kernel ran out of memory")
+
+    def reset(self, start_time: float = 0.0) -> None:
+        self._lib.kernel_reset(self._handle, float(start_time))
+
+    @property
+    def time(self) -> float:
+        return self._lib.kernel_time(self._handle)
+
+    @time.setter
+    def time(self, value: float) -> None:
+        self._lib.kernel_set_time(self._handle, float(value))
+
+    def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
+        """One communication step; the outputs at the new time as a tuple."""
+        inputs = self._in
+        inputs[0], inputs[1], inputs[2], inputs[3] = z, vz, road_z, road_vz
+        if self._step(self._handle, h, inputs, self._out):
+            self._check(1, "kernel_step")
+        return tuple(self._out)
+
+    def step(self, h: float, inputs) -> np.ndarray:
+        return np.array(self.step_values(h, *inputs))
+
+    def outputs_with(self, inputs) -> np.ndarray:
+        self._in[:] = [float(x) for x in inputs]
+        self._check(self._lib.kernel_outputs_with(self._handle, self._in, self._out),
+                    "kernel_outputs_with")
+        return np.array(self._out[:])
+
+    @property
+    def outputs(self) -> np.ndarray:
+        self._lib.kernel_outputs(self._handle, self._out)
+        return np.array(self._out[:])
+
+    @property
+    def forces(self) -> np.ndarray:
+        out = np.zeros(self.contract.n_points)
+        self._lib.kernel_forces(self._handle, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        return out
+
+    def at_zone_edge(self) -> bool:
+        return bool(self._lib.kernel_at_zone_edge(self._handle))
+
+    @property
+    def solver_fallbacks(self) -> int:
+        return int(self._lib.kernel_solver_fallbacks(self._handle))
+
+    def state_bytes(self) -> bytes:
+        size = self._lib.kernel_state_size(self._handle)
+        buffer = (ctypes.c_ubyte * size)()
+        self._lib.kernel_state_write(self._handle, buffer)
+        return bytes(buffer)
+
+    def state_problem(self, data: bytes) -> str | None:
+        """Why ``data`` is not a state of this kernel, or None."""
+        buffer = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
+        why = ctypes.create_string_buffer(_WHY_SIZE)
+        if self._lib.kernel_state_check(self._handle, buffer, len(data), why, _WHY_SIZE):
+            return why.value.decode(errors="replace")
+        return None
+
+    def set_state_bytes(self, data: bytes) -> None:
+        problem = self.state_problem(data)
+        if problem:
+            raise ValueError(problem)
+        buffer = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
+        self._check(self._lib.kernel_state_apply(self._handle, buffer), "kernel_state_apply")
