@@ -36,7 +36,7 @@ from ..publish import published_file
 
 DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
 #: The C files of the FMU, in compile order, and the headers they include.
-C_SOURCES = ("fmi2_layer.c", "tire_model.c", "ring.c", "contact.c", "road.c", "simulator.c",
+C_SOURCES = ("fmi2_layer.c", "tire_model.c", "ring.c", "contact.c", "road.c", "simulator.c", "memory.c",
              "numerics.c")
 C_HEADERS = ("model.h", "tire.h", "numerics.h", "fmi2Functions.h", "fmi2FunctionTypes.h",
              "fmi2TypesPlatform.h")
