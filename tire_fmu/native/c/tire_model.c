@@ -10,6 +10,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "contract_pack.h"
 #include "model.h"
 #include "spec.h"
 
@@ -31,6 +32,7 @@ struct Model {
     Windows windows;
     double* compliance;
     Simulator sim;
+    TireContract contract;  /* what the step kernel reads */
     int zone_warning_armed;
     int in_contact;
 };
@@ -53,6 +55,7 @@ static void model_clear(Model* model)
 {
     const Memory* mem = &model->host.mem;
     if (model->sim.mem != NULL) sim_free(&model->sim);
+    contract_free(&model->contract, mem);
     footprint_path_free(&model->path, mem);
     footprint_free(&model->footprint, mem);
     windows_free(&model->windows, mem);
@@ -484,6 +487,11 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
                  tire->rhoA, model->linear) != 0) {
         goto memory;
     }
+    if (contract_pack(&model->contract, mem, &model->ring, &model->zone, &model->footprint,
+                      &model->windows, model->compliance, model->footprint.deflection,
+                      model->sim.substep_s, model->linear, speed) != 0) {
+        goto memory;
+    }
     return MODEL_OK;
 memory:
     PROBLEM(p, "out of memory while building the model (N = %d)", n);
@@ -603,6 +611,11 @@ int model_refresh(Model* model, double* values)
 }
 
 double model_time(const Model* model) { return sim_time(&model->sim); }
+
+const TireContract* model_contract(const Model* model)
+{
+    return model->built ? &model->contract : NULL;
+}
 
 double model_road_horizon(const Model* model) { return model->windows.horizon; }
 
