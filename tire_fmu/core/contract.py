@@ -63,8 +63,11 @@ class StepContract:
     n_ring_cols: int = _field("int", doc="columns of d and e: 1 + Z")
     # scalars
     linear: int = _field("int", doc="1: two-sided springs on the static footprint's points")
+    centre_point: int = _field("int", doc="the contact point at the contact centre")
     substep_s: float = _field("float", doc="longest internal step (s)")
     speed_m_s: float = _field("float", doc="rolling speed (m/s)")
+    static_deflection_m: float = _field("float", doc="the rim's static lowering (m)")
+    min_step_s: float = _field("float", doc="shortest step it takes (s), 0 for any")
     # the free ring's modes, grouped by order
     order_start: np.ndarray = _field("int", ("n_orders + 1",), "first mode of each order")
     lam: np.ndarray = _field("complex", ("n_modes",), "eigenvalue (1/s)")
@@ -90,7 +93,8 @@ class StepContract:
     window_early_s: np.ndarray = _field("float", ("n_points",), "road delay, window front (s)")
     window_late_s: np.ndarray = _field("float", ("n_points",), "road delay, window rear (s)")
     # the static state
-    static_ring_out: np.ndarray = _field("float", ("3",), "static rim_Fz, rim_Fx, deflection")
+    static_ring_out: np.ndarray = _field("float", ("3",),
+                                         "static rim_Fz, rim_Fx, tread_deflection")
 
     def __post_init__(self) -> None:
         problems = layout_problems(self)
@@ -166,13 +170,13 @@ CONTRACT_VERSION = int(hashlib.sha256(layout_text().encode()).hexdigest()[:7], 1
 def build_contract(contact) -> StepContract:
     """The contract of a :class:`~.contact_dynamics.ContactModel`: its free ring's modes, the
     static footprint, the road windows. Contact points are the zone nodes themselves."""
-    from .free_ring import ring_modes
+    from .step_limits import MIN_CORRECTED_STEP_S
 
-    model, patch = contact.model, contact.patch
+    model, patch, modes = contact.model, contact.patch, contact.modes
     zone, grid = patch.zone, model.grid
-    modes = ring_modes(model.tire, grid, model.spin_rad_s, zone.nodes,
-                       contact.ring.truncation)
     n_zone = zone.size
+    # a ring truncated with static correction has a rate term a short step breaks
+    truncated = bool(np.any(modes.d[:, 1:]) or np.any(modes.e[:, 1:]))
     offsets = np.rint(zone.theta / grid.dtheta).astype(np.int32)
     cos = np.cos(zone.theta)
     pen_static = (patch.footprint.penetration_m if patch.footprint is not None
@@ -199,8 +203,10 @@ def build_contract(contact) -> StepContract:
         n_elements=grid.n_elements, n_orders=grid.n_elements // 2 + 1,
         n_modes=modes.n_modes, n_zone=n_zone, n_points=n_zone, n_support=1,
         n_ring_rows=3 + 2 * n_zone, n_ring_cols=1 + n_zone,
-        linear=int(contact.settings.law == "linear"), substep_s=float(contact.substep_s),
-        speed_m_s=float(model.speed_m_s), **arrays)
+        linear=int(contact.settings.law == "linear"), centre_point=int(zone.centre),
+        substep_s=float(contact.substep_s), speed_m_s=float(model.speed_m_s),
+        static_deflection_m=float(patch.deflection_m),
+        min_step_s=float(MIN_CORRECTED_STEP_S if truncated else 0.0), **arrays)
 
 
 def _kind(name: str) -> str:

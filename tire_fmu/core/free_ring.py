@@ -316,6 +316,16 @@ class RingModes:
         n_orders = self.n_elements // 2 + 1
         return np.searchsorted(self.orders, np.arange(n_orders + 1)).astype(np.int64)
 
+    def modal_form(self, grid: Grid) -> FreeRingModel:
+        """The same modes as a dense modal form, sorted by natural frequency."""
+        b, c = self.dense(grid.theta[self.zone_nodes])
+        order = np.argsort(np.abs(self.eigenvalues), kind="stable")
+        return FreeRingModel(
+            eigenvalues=self.eigenvalues[order], b=b[order], c=c[:, order], d=self.d,
+            e=self.e, static_gain=self.static_gain, zone_nodes=self.zone_nodes,
+            n_elements=self.n_elements, total_modes=self.total_modes,
+            truncation=self.truncation)
+
     def dense(self, theta_zone: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(b, c) of the modal form on [rim_z, zone forces] and [rim_Fz, rim_Fx, deflection,
         w, ẇ]: the order structure written out."""
@@ -397,10 +407,4 @@ def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
                     truncation: RingTruncation | None = None) -> FreeRingModel:
     """Modal form of the free rolling ring with rim and zone-force inputs (module doc), its
     modes sorted by natural frequency."""
-    modes = ring_modes(tire, grid, spin_rad_s, zone_nodes, truncation)
-    b, c = modes.dense(grid.theta[modes.zone_nodes])
-    order = np.argsort(np.abs(modes.eigenvalues), kind="stable")
-    return FreeRingModel(
-        eigenvalues=modes.eigenvalues[order], b=b[order], c=c[:, order], d=modes.d, e=modes.e,
-        static_gain=modes.static_gain, zone_nodes=modes.zone_nodes, n_elements=grid.n_elements,
-        total_modes=modes.total_modes, truncation=modes.truncation)
+    return ring_modes(tire, grid, spin_rad_s, zone_nodes, truncation).modal_form(grid)

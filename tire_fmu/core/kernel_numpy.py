@@ -33,6 +33,7 @@ import struct
 
 import numpy as np
 
+from . import clock
 from .contract import StepContract
 from .road import SAME_POINT_EPS, RoadReader, RoadWindows
 from .stepping import phi_functions
@@ -45,6 +46,8 @@ PGS_SWEEPS = 1000
 PGS_TOLERANCE = 1e-13
 #: A step within this relative distance of a multiple of the substep needs no extra substep.
 SUBSTEP_SLACK = 1e-12
+#: Communication step sizes whose coefficients are kept (a host varying h evicts the oldest).
+KERNEL_CACHE_SIZE = 32
 
 
 class _Interface:
@@ -117,7 +120,8 @@ class NumpyKernel:
     def reset(self, start_time: float = 0.0) -> None:
         c = self.contract
         p = c.n_points
-        self.time = float(start_time)
+        self.start_time = float(start_time)
+        self.elapsed_s, self.carry_s = 0.0, 0.0
         self.q = np.zeros(c.n_modes, dtype=complex)
         self.df = np.zeros(p)
         self.active = self.static_active.copy()
@@ -127,8 +131,13 @@ class NumpyKernel:
         self.ring_out = np.zeros(3)
         self.last: _Interface | None = None
         self.last_step = math.nan
-        self.road.reset()
+        self.road.reset(self.start_time)
         self.outputs = self._outputs()
+
+    @property
+    def time(self) -> float:
+        """The clock: the start time plus the time since it (core/clock.py)."""
+        return self.start_time + self.elapsed_s
 
     # -- stepping ------------------------------------------------------------------------
     def interface(self, h: float) -> tuple[int, _Interface]:
@@ -139,13 +148,15 @@ class NumpyKernel:
                 return entry
         n_sub = max(1, math.ceil(h / self.contract.substep_s * (1 - SUBSTEP_SLACK)))
         entry = (n_sub, _Interface(self, h / n_sub))
+        if len(self._interfaces) >= KERNEL_CACHE_SIZE:
+            self._interfaces.pop(next(iter(self._interfaces)))
         self._interfaces[h] = entry
         return entry
 
     def _road(self, h: float) -> tuple[np.ndarray, np.ndarray]:
         p = self.contract.n_points
         out = np.empty(2 * p)
-        self.road.read(self.time, self._road_z, self._road_vz, h, out)
+        self.road.read(self.elapsed_s, self._road_z, self._road_vz, h, out)
         return out[:p].copy(), out[p:].copy()
 
     def step(self, h: float, inputs) -> np.ndarray:
@@ -158,10 +169,13 @@ class NumpyKernel:
         for i in range(n_sub):
             heights, slopes = self._substep(interface, z + i * interface.h * vz, vz, heights,
                                             slopes)
-        self.time += h
+        self.elapsed_s, self.carry_s = clock.advance(self.elapsed_s, self.carry_s, h)
         self.last_step = h
         self.outputs = self._outputs()
         return self.outputs.copy()
+
+    def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
+        return tuple(float(x) for x in self.step(h, (z, vz, road_z, road_vz)))
 
     def outputs_with(self, inputs) -> np.ndarray:
         """The outputs at ``time`` for inputs given there; the forces stay re-solved."""
@@ -272,8 +286,11 @@ class NumpyKernel:
         c = self.contract
         forces = self.f_static + self.df
         ring = c.static_ring_out + self.ring_out
-        return np.array([ring[0], ring[1], float(c.point_cos @ forces), ring[2],
-                         self.contact_length()])
+        # deflection: the rim's lowering at the contact centre (the static one, the road's
+        # rise under the centre point, less the rim's); tread_deflection: the ring's own
+        deflection = c.static_deflection_m + self.seen[2][c.centre_point] - self.seen[0]
+        return np.array([ring[0], ring[1], float(c.point_cos @ forces), deflection,
+                         self.contact_length(), ring[2]])
 
     def contact_length(self) -> float:
         """Footprint length on the road (m): between the edges where the penetration,
@@ -297,7 +314,8 @@ class NumpyKernel:
         c = self.contract
         t, z, v = self.road.history()
         has_last = self.last is not None
-        head = [self.time, self.last_step if has_last else 0.0, self.seen[0], self.seen[1],
+        head = [self.start_time, self.elapsed_s, self.carry_s,
+                self.last_step if has_last else 0.0, self.seen[0], self.seen[1],
                 *self.ring_out, *self.outputs]
         return b"".join([
             struct.pack("<4i", c.n_modes, c.n_points, t.size, int(has_last)),
@@ -307,27 +325,194 @@ class NumpyKernel:
                 self.df, self.penetration, self.rate, self.seen[2], self.seen[3], t, z, v)),
             self.active.astype(np.uint8).tobytes()])
 
+    def state_problem(self, data: bytes) -> str | None:
+        """Why ``data`` is no state of this kernel (kernel.c's kernel_state_check), or None."""
+        problems = state_problems(self, data)
+        return "; ".join(problems) if problems else None
+
     def set_state_bytes(self, data: bytes) -> None:
-        """Restore bytes of :meth:`state_bytes` (or of the C kernel); checked by the caller."""
-        c = self.contract
-        k, p = c.n_modes, c.n_points
-        _, _, history, has_last = struct.unpack_from("<4i", data, 0)
-        doubles = np.frombuffer(data, "<f8", 12 + 2 * k + 5 * p + 3 * history, 16)
-        head, rest = doubles[:12], doubles[12:]
-        self.time = float(head[0])
-        self.last_step = float(head[1]) if has_last else math.nan
-        self.ring_out = head[4:7].copy()
-        self.outputs = head[7:12].copy()
+        """Restore bytes of :meth:`state_bytes` (or of the C kernel) that state_problem
+        accepted."""
+        fields = _StateFields(self.contract, data)
+        self.start_time, self.elapsed_s, self.carry_s = fields.start, fields.elapsed, fields.carry
+        self.last_step = fields.last if fields.has_last else math.nan
+        self.ring_out = fields.ring_out.copy()
+        self.outputs = fields.outputs.copy()
+        self.q = fields.q.copy()
+        self.df, self.penetration, self.rate = (x.copy() for x in (
+            fields.df, fields.penetration, fields.rate))
+        self.seen = (fields.seen_z, fields.seen_vz, fields.heights.copy(), fields.slopes.copy())
+        self.road.reset(self.start_time)
+        self.road.history_t, self.road.history_z, self.road.history_v = (
+            x.copy() for x in (fields.t, fields.z, fields.v))
+        self.active = fields.active.copy()
+        self.last = self.interface(self.last_step)[1] if fields.has_last else None
+
+
+#: The state layout (kernel.c): four int32, then doubles, then one byte per contact point.
+_STATE_INTS, _STATE_HEAD = 4, 15
+
+
+class _StateFields:
+    """State bytes read into named fields (the layout of kernel.c's kernel_state_write)."""
+
+    def __init__(self, contract: StepContract, data: bytes):
+        k, p = contract.n_modes, contract.n_points
+        self.modes, self.points, self.history, self.has_last = struct.unpack_from(
+            "<4i", data, 0)
+        count = _STATE_HEAD + 2 * k + 5 * p + 3 * self.history
+        values = np.frombuffer(data, "<f8", count, 4 * _STATE_INTS)
+        self.values = values
+        (self.start, self.elapsed, self.carry, self.last, self.seen_z,
+         self.seen_vz) = (float(x) for x in values[:6])
+        self.ring_out, self.outputs = values[6:9], values[9:15]
+        rest = values[_STATE_HEAD:]
         self.q = rest[:2 * k].copy().view(complex)
-        arrays = rest[2 * k:].reshape(-1)
-        take = [arrays[i * p:(i + 1) * p].copy() for i in range(5)]
-        self.df, self.penetration, self.rate = take[0], take[1], take[2]
-        self.seen = (float(head[2]), float(head[3]), take[3], take[4])
-        hist = arrays[5 * p:]
-        self.road.reset()
-        self.road.history_t = hist[:history].copy()
-        self.road.history_z = hist[history:2 * history].copy()
-        self.road.history_v = hist[2 * history:].copy()
-        flags = np.frombuffer(data, np.uint8, p, len(data) - p)
-        self.active = flags.astype(bool)
-        self.last = self.interface(self.last_step)[1] if has_last else None
+        arrays = rest[2 * k:2 * k + 5 * p].reshape(5, p)
+        self.df, self.penetration, self.rate, self.heights, self.slopes = arrays
+        history = rest[2 * k + 5 * p:].reshape(3, self.history)
+        self.t, self.z, self.v = history
+        self.active = np.frombuffer(data, np.uint8, p, len(data) - p).astype(bool)
+
+
+def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
+    """Everything that makes ``data`` no state of this kernel: its layout (sizes, finite
+    values, flags), then what it means (the same rules as kernel.c's kernel_state_check): a
+    clock a run reaches, a road history as the reader keeps it, contact forces that do not
+    pull, displacements and rates within MAX_STATE_DISPLACEMENT_M and MAX_STATE_VELOCITY_M_S,
+    and outputs that are the ones its own values give."""
+    from .step_limits import (
+        MAX_DELAY_STEPS,
+        MAX_DISPLACEMENT_M,
+        MAX_HISTORY_SAMPLES,
+        MAX_STATE_DISPLACEMENT_M,
+        MAX_STATE_VELOCITY_M_S,
+        MAX_STEP_S,
+        MAX_VELOCITY_M_S,
+    )
+
+    c = kernel.contract
+    k, p = c.n_modes, c.n_points
+    if len(data) < 4 * _STATE_INTS:
+        return [f"its model part is {len(data)} bytes, shorter than its header"]
+    modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
+    if (modes, points) != (k, p):
+        return [f"it holds {modes} modes and {points} contact points, this model {k} and {p}"]
+    if not 0 <= history <= (len(data) - 4 * _STATE_INTS) // 24:
+        return [f"its road history length {history} is impossible"]
+    expected = 4 * _STATE_INTS + 8 * (_STATE_HEAD + 2 * k + 5 * p + 3 * history) + p
+    if len(data) != expected:
+        return [f"its model part is {len(data)} bytes, expected {expected}"]
+    if has_last not in (0, 1):
+        return [f"its has-last flag is {has_last}, not 0 or 1"]
+    s = _StateFields(c, data)
+    bad = np.flatnonzero(~np.isfinite(s.values))
+    if bad.size:
+        return [f"value {int(bad[0])} of its model part is not finite"]
+    if has_last and not s.last > 0.0:
+        return [f"its last step is {s.last:g} s, not > 0"]
+    if np.any(np.frombuffer(data, np.uint8, p, len(data) - p) > 1):
+        return ["its contact flags are not 0 or 1"]
+    problems = []
+    time = s.start + s.elapsed
+    if not (s.elapsed >= 0.0 and abs(s.carry) <= math.nextafter(s.elapsed, math.inf)
+            - s.elapsed):
+        problems.append(f"its clock reads {s.elapsed!r} s since the start with a carry of "
+                        f"{s.carry!r} s: a run's clock is >= 0, and its carry below one "
+                        "rounding of it")
+    last = s.last if has_last else math.nan
+    if bool(has_last) != (s.elapsed != 0.0):
+        problems.append(f"its clock reads {s.elapsed!r} s since the start and its last step "
+                        f"is {last!r} s: only steps advance the clock")
+    elif has_last and not s.last <= MAX_STEP_S:
+        problems.append(f"its last step is {s.last!r} s; the FMU takes at most {MAX_STEP_S:g} s")
+    elif has_last and not clock.resolves(time - s.last, s.last):
+        problems.append(f"its last step of {s.last!r} s ends at t = {time!r} s, where the "
+                        "clock does not resolve it")
+    problems += _history_problems(kernel, s, MAX_HISTORY_SAMPLES, MAX_DELAY_STEPS,
+                                  MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S)
+    length, rate = MAX_STATE_DISPLACEMENT_M, MAX_STATE_VELOCITY_M_S
+    forces = kernel.f_static + s.df
+    bound = kernel.f_static + kernel.k * (length + np.abs(c.pen_static)) + kernel.c * rate
+    if not kernel.linear and np.any(forces < 0.0):
+        problems.append("its contact forces pull on the tread (the unilateral contact only "
+                        "pushes)")
+    if not np.all(np.abs(forces) <= bound):
+        problems.append(f"its contact forces exceed what the contact springs give at "
+                        f"{length:g} m and {rate:g} m/s")
+    size = np.abs(s.q)
+    for what, found, limit, unit in (
+            ("the tread's excursion at the zone nodes from a mode",
+             np.max(size * np.abs(c.gamma), initial=0.0), length, "m"),
+            ("the tread's rate at the zone nodes from a mode",
+             np.max(size * np.abs(c.eta), initial=0.0), rate, "m/s"),
+            ("its penetrations", np.max(np.abs(s.penetration)), length, "m"),
+            ("its penetration rates", np.max(np.abs(s.rate)), rate, "m/s"),
+            ("the rim and road positions it saw",
+             max(abs(s.seen_z), float(np.max(np.abs(s.heights)))), length, "m"),
+            ("the road rates it saw", np.max(np.abs(s.slopes)), rate, "m/s"),
+            ("the tread deflection it holds", abs(s.ring_out[2]), length, "m")):
+        if not found <= limit:
+            problems.append(f"{what} reach {float(found):.3g} {unit}, beyond the {limit:g} "
+                            f"{unit} a state may hold")
+    if not abs(s.seen_vz) <= MAX_VELOCITY_M_S:
+        problems.append(f"the rim velocity it saw, {s.seen_vz!r} m/s, is beyond the input "
+                        f"limit {MAX_VELOCITY_M_S:g} m/s")
+    if not (abs(s.ring_out[0]) <= bound.sum() and abs(s.ring_out[1]) <= bound.sum()):
+        problems.append(f"its rim forces exceed what the contact springs give at {length:g} m "
+                        f"and {rate:g} m/s")
+    if problems:
+        return problems
+    from .contact import _edges
+
+    front, rear = _edges(c.point_x_road, s.penetration, forces > 0.0)
+    scale = float(np.abs(forces).sum() + np.abs(kernel.f_static).sum())
+    expected_out = (c.static_ring_out[0] + s.ring_out[0], c.static_ring_out[1] + s.ring_out[1],
+                    float(c.point_cos @ forces),
+                    c.static_deflection_m + s.heights[c.centre_point] - s.seen_z, front - rear,
+                    c.static_ring_out[2] + s.ring_out[2])
+    tolerance = (0.0, 0.0, 1e-9 * scale, 0.0,
+                 1e-9 * float(c.point_x_road[0] - c.point_x_road[-1]), 0.0)
+    if not all(abs(g - e) <= tol for g, e, tol in zip(s.outputs, expected_out, tolerance)):
+        problems.append("its outputs are not the ones it gives")
+    return problems
+
+
+def _history_problems(kernel: NumpyKernel, s: _StateFields, max_samples: int,
+                      max_steps: int, max_height: float, max_rate: float) -> list[str]:
+    """The road history as the reader keeps it: none at rest; then at most max_samples,
+    times increasing, the newest at the last step's start, none before the start, all but
+    the oldest within the windows' reach, samples within the inputs' limits."""
+    horizon = kernel.horizon_s
+    history = s.history
+    if not kernel.road.delayed:
+        return [f"its road history holds {history} samples, but at rest the whole zone reads "
+                "the road at the instant and keeps none"] if history else []
+    if history > max_samples:
+        return [f"its road history holds {history} samples; the FMU keeps at most "
+                f"{max_samples} (one a step, over at most {max_steps} steps)"]
+    problems = []
+    now, last = s.elapsed, s.last if s.has_last else 0.0
+    slack = SAME_POINT_EPS * (abs(now) + horizon + 1.0)
+    t = s.t
+    if not np.all(np.diff(t) > 0.0):
+        problems.append("its road history times do not increase")
+    if history:
+        newest = float(t[-1])
+        if not (now - last - slack <= newest <= now + slack):
+            problems.append(f"its newest road sample is at {newest!r} s, but the state is at "
+                            f"{now!r} s after a step of {s.last if s.has_last else math.nan!r}"
+                            " s: the road is sampled at each step's start")
+        if t[0] < -slack:
+            problems.append(f"its road history starts at {float(t[0])!r} s, before the start")
+        if history > 1 and t[1] < newest - horizon - slack:
+            problems.append(f"its road history reaches back {newest - float(t[1]):.6g} s from "
+                            f"its newest sample, beyond the {horizon:.6g} s the contact zone "
+                            "reads (older samples are dropped)")
+    elif s.has_last:
+        problems.append("its road history is empty, but a step was taken (each step samples "
+                        "the road at its start)")
+    if not (np.all(np.abs(s.z) <= max_height) and np.all(np.abs(s.v) <= max_rate)):
+        problems.append(f"its road samples go beyond the inputs' limits ({max_height:g} m, "
+                        f"{max_rate:g} m/s)")
+    return problems

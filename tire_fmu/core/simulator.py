@@ -4,34 +4,40 @@ A :class:`~.contact_dynamics.ContactModel` is turned into its :class:`~.contract
 once; a kernel then steps it: the compiled C of ``native/c/kernel.c`` (the one both FMUs run)
 when it can be had, or :class:`~.kernel_numpy.NumpyKernel`, its readable numpy reference. The
 two are the same algorithm and agree to 1e-10; ``backend`` chooses ("auto": compiled if the
-machine can build it, else numpy). This module checks what a caller gives (step sizes,
-input ranges, state bytes) and keeps the API the rest of the package and its users call.
+machine can build it, else numpy, with a :class:`KernelFallbackWarning`). This module checks
+what a caller gives (step sizes, input ranges, state bytes) and keeps the API the rest of the
+package and its users call; the arithmetic is the kernel's.
 
 Outputs are totals: rim_Fz, rim_Fx (tire on rim), contact_Fz (road on tire, never negative
-with the unilateral law), deflection (tread compression at the contact centre relative to the
-rim) and contact_length (footprint length on the road, m).
+with the unilateral law), deflection (the rim's lowering towards the road at the contact
+centre), contact_length (footprint length on the road, m) and tread_deflection (the tread's
+compression at the contact centre relative to the rim).
+
+The clock is the time since the start (:mod:`.clock`): a step the clock cannot resolve at
+the absolute time is refused, and the road history is indexed by the time since the start, so
+the outputs do not depend on when a run starts.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import struct
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from . import clock
 from .contract import StepContract, build_contract
 from .kernel_numpy import NumpyKernel
+from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S, SHORT_STEP_TEMPLATE
 
-OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length")
+OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
+                "tread_deflection")
 INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
-#: Largest input magnitudes a step accepts (m, m/s): far beyond any tire's travel, but
-#: finite enough that no product inside a step can overflow.
-MAX_DISPLACEMENT_M = 10.0
-MAX_VELOCITY_M_S = 1000.0
 BACKENDS = ("auto", "compiled", "numpy")
-_STATE_MAGIC = b"tire_fmu.kernel-state/1"
+_STATE_MAGIC = b"tire_fmu.kernel-state/2"
 
 
 class StepError(ValueError):
@@ -46,23 +52,27 @@ class KernelFallbackWarning(UserWarning):
     """The compiled kernel could not be had: the numpy reference steps instead (slower)."""
 
 
-def make_kernel(contract: StepContract, start_time: float = 0.0, backend: str = "auto"):
-    """A kernel stepping ``contract``: (kernel, the backend it is)."""
+def make_kernel(contract: StepContract, start_time: float = 0.0, backend: str = "auto",
+                library=None):
+    """A kernel stepping ``contract``: (kernel, the backend it is). ``library``: a loaded
+    compiled kernel library to use (the Python FMU's own), else the package's."""
     if backend not in BACKENDS:
         from .parameters import ParameterError, Problem
 
         raise ParameterError([Problem("backend", backend, "", f"one of {', '.join(BACKENDS)}")])
     if backend != "numpy":
-        try:  # the compiled kernel lives outside the core: ctypes and a C compiler
+        # the compiled kernel lives outside the core (ctypes and a C compiler): imported only
+        # when asked for, so the core itself needs numpy and scipy alone
+        try:
             from ..native.kernel import CompiledKernel, KernelUnavailable
-        except ImportError as error:  # a core without the native package
+        except ImportError as error:
             if backend == "compiled":
                 raise
             warnings.warn(f"the compiled step kernel is not available ({error}); stepping "
-                          "with the numpy reference", KernelFallbackWarning, stacklevel=3)
+                          "with the numpy reference kernel", KernelFallbackWarning, stacklevel=3)
         else:
             try:
-                return CompiledKernel(contract, start_time), "compiled"
+                return CompiledKernel(contract, start_time, library), "compiled"
             except KernelUnavailable as error:
                 if backend == "compiled":
                     raise
@@ -88,30 +98,61 @@ class ContactState:
         head, newline, payload = data.partition(b"\n")
         magic, _, digest = head.partition(b" ")
         if magic != _STATE_MAGIC:
-            raise StateError(f"not a tire_fmu contact state: it starts with {data[:24]!r}")
+            raise StateError(f"not a tire_fmu contact state of this version: it starts with "
+                             f"{data[:len(_STATE_MAGIC)]!r}")
         if not newline or hashlib.sha256(payload).hexdigest().encode() != digest:
             raise StateError("contact state damaged: its checksum does not match")
+        if len(payload) < 16 + 8 * 15:
+            raise StateError(f"contact state of {len(payload)} bytes: shorter than its header")
         return cls(payload)
+
+    # what the header of the kernel's bytes holds (kernel.c's layout)
+    def _head(self, index: int) -> float:
+        return struct.unpack_from("<d", self.data, 16 + 8 * index)[0]
+
+    @property
+    def start_time(self) -> float:
+        return self._head(0)
+
+    @property
+    def time(self) -> float:
+        return self._head(0) + self._head(1)
+
+    @property
+    def last_step_s(self) -> float:
+        has_last = struct.unpack_from("<i", self.data, 12)[0]
+        return self._head(3) if has_last else math.nan
+
+    @property
+    def history_samples(self) -> int:
+        return struct.unpack_from("<i", self.data, 8)[0]
+
+    @property
+    def outputs(self) -> np.ndarray:
+        return np.array(struct.unpack_from("<6d", self.data, 16 + 8 * 9))
 
 
 class ContactSimulator:
     """Steps a :class:`~.contact_dynamics.ContactModel` from communication point to
     communication point (module doc)."""
 
-    def __init__(self, contact, start_time: float = 0.0, backend: str = "auto"):
+    def __init__(self, contact, start_time: float = 0.0, backend: str = "auto", library=None):
         self.contact = contact
         self.contract = build_contract(contact)
-        self.kernel, self.backend = make_kernel(self.contract, start_time, backend)
+        self.kernel, self.backend = make_kernel(self.contract, start_time, backend, library)
         self.static_active = self.contract.f_static > 0.0
+        self.n_zone = self.contract.n_points
+        self.min_step_s = self.contract.min_step_s
 
     # -- time and state -----------------------------------------------------------------------
     @property
     def time(self) -> float:
+        """The clock: the start time plus the time since it."""
         return self.kernel.time
 
-    @time.setter
-    def time(self, value: float) -> None:
-        self.kernel.time = float(value)
+    @property
+    def start_time(self) -> float:
+        return self.kernel.start_time
 
     def reset(self, start_time: float = 0.0) -> None:
         self.kernel.reset(start_time)
@@ -119,13 +160,18 @@ class ContactSimulator:
     def get_state(self) -> ContactState:
         return ContactState(self.kernel.state_bytes())
 
+    def state_problems(self, state: ContactState) -> list[str]:
+        """Everything that makes ``state`` no state of this simulator (empty when it is
+        one): its layout and what it means, checked by the kernel (kernel_state_check)."""
+        problem = self.kernel.state_problem(state.data)
+        return problem.split("; ") if problem else []
+
     def set_state(self, state: ContactState) -> None:
-        """Restore a state; StateError (nothing changed) if it is not one of this model's."""
-        problem = state_problem(self.contract, state.data)
-        if problem is None and self.backend == "compiled":
-            problem = self.kernel.state_problem(state.data)
-        if problem:
-            raise StateError(f"state of another model or damaged: {problem}")
+        """Continue from ``state`` exactly as the run it was taken from; StateError listing
+        every problem changes nothing."""
+        problems = self.state_problems(state)
+        if problems:
+            raise StateError("; ".join(problems))
         self.kernel.set_state_bytes(state.data)
 
     # -- stepping -----------------------------------------------------------------------------
@@ -137,21 +183,42 @@ class ContactSimulator:
                     road_vz: float) -> tuple[float, ...]:
         """Advance from ``time`` to ``time + h`` with the inputs given at ``time`` (ramped
         with their rates); the total outputs at the new time."""
-        if not (h > 0.0 and math.isfinite(h)) or (rim_z + rim_vz + road_z + road_vz) * 0.0 \
-                != 0.0 or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
-                or abs(rim_vz) > MAX_VELOCITY_M_S or abs(road_vz) > MAX_VELOCITY_M_S:
-            _check(h, (rim_z, rim_vz, road_z, road_vz))
-        return tuple(self.kernel.step_values(h, rim_z, rim_vz, road_z, road_vz)) \
-            if self.backend == "compiled" else tuple(
-                float(x) for x in self.kernel.step(h, (rim_z, rim_vz, road_z, road_vz)))
+        if not (h >= self.min_step_s and h > 0.0 and math.isfinite(h)) \
+                or (rim_z + rim_vz + road_z + road_vz) * 0.0 != 0.0 \
+                or abs(rim_z) > MAX_DISPLACEMENT_M or abs(road_z) > MAX_DISPLACEMENT_M \
+                or abs(rim_vz) > MAX_VELOCITY_M_S or abs(road_vz) > MAX_VELOCITY_M_S \
+                or not clock.resolves(self.kernel.time, h):
+            self._check(h, (rim_z, rim_vz, road_z, road_vz))
+        return self.kernel.step_values(h, rim_z, rim_vz, road_z, road_vz)
 
     def outputs_with(self, rim_z: float, rim_vz: float, road_z: float, road_vz: float
                      ) -> tuple[float, ...]:
         """Total outputs at ``time`` for inputs given at ``time``; the state keeps the
         re-evaluated forces, which the next step starts from."""
-        _check(1.0, (rim_z, rim_vz, road_z, road_vz))
+        self._check(None, (rim_z, rim_vz, road_z, road_vz))
         return tuple(float(x) for x in self.kernel.outputs_with((rim_z, rim_vz, road_z,
                                                                  road_vz)))
+
+    def _check(self, h: float | None, values: tuple) -> None:
+        """Raise StepError naming every bad value (h, an input outside its range, or a step
+        the clock does not resolve at the current time; None: no step, the inputs only)."""
+        problems = []
+        if h is None:
+            pass
+        elif not (h > 0.0 and math.isfinite(h)):
+            problems.append(f"step size h = {h!r} s: must be finite and > 0")
+        elif h < self.min_step_s:
+            problems.append(SHORT_STEP_TEMPLATE % (repr(h), self.min_step_s))
+        elif not clock.resolves(self.time, h):
+            problems.append(clock.resolution_problem(self.time, h))
+        for name, value in zip(INPUT_NAMES, values):
+            limit, unit = ((MAX_VELOCITY_M_S, "m/s") if name.endswith("vz")
+                           else (MAX_DISPLACEMENT_M, "m"))
+            if not (math.isfinite(value) and abs(value) <= limit):
+                problems.append(f"{name} = {value!r} {unit}: must be in [-{limit:g}, "
+                                f"{limit:g}] {unit}")
+        if problems:
+            raise StepError("; ".join(problems))
 
     # -- what it shows ------------------------------------------------------------------------
     @property
@@ -177,46 +244,3 @@ class ContactSimulator:
     @property
     def solver_fallbacks(self) -> int:
         return int(self.kernel.solver_fallbacks)
-
-
-def _check(h: float, values: tuple) -> None:
-    """Raise StepError naming every bad value (h, or an input outside its range)."""
-    problems = []
-    if not (h > 0.0 and math.isfinite(h)):
-        problems.append(f"step size h = {h!r} s: must be finite and > 0")
-    for name, value in zip(INPUT_NAMES, values):
-        limit, unit = ((MAX_VELOCITY_M_S, "m/s") if name.endswith("vz")
-                       else (MAX_DISPLACEMENT_M, "m"))
-        if not (math.isfinite(value) and abs(value) <= limit):
-            problems.append(f"{name} = {value!r} {unit}: must be in [-{limit:g}, "
-                            f"{limit:g}] {unit}")
-    if problems:
-        raise StepError("; ".join(problems))
-
-
-def state_problem(contract: StepContract, data: bytes) -> str | None:
-    """Why ``data`` is not a kernel state of ``contract`` (the layout of kernel.c), or None."""
-    import struct
-
-    if len(data) < 16:
-        return f"{len(data)} bytes, shorter than a state's header"
-    modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
-    if (modes, points) != (contract.n_modes, contract.n_points):
-        return (f"it holds {modes} modes and {points} contact points, this model "
-                f"{contract.n_modes} and {contract.n_points}")
-    if not 0 <= history <= (len(data) - 16) // 24 or has_last not in (0, 1):
-        return "its header is impossible"
-    count = 12 + 2 * modes + 5 * points + 3 * history
-    if len(data) != 16 + 8 * count + points:
-        return f"{len(data)} bytes, expected {16 + 8 * count + points}"
-    values = np.frombuffer(data, "<f8", count, 16)
-    if not np.all(np.isfinite(values)):
-        return "it holds non-finite values"
-    t = values[12 + 2 * modes + 5 * points:][:history]
-    if np.any(np.diff(t) <= 0):
-        return "its road history times do not increase"
-    if has_last and not values[1] > 0:
-        return f"its last step is {values[1]!r} s, not > 0"
-    if np.any(np.frombuffer(data, np.uint8, points, len(data) - points) > 1):
-        return "its contact flags are not 0 or 1"
-    return None

@@ -43,17 +43,7 @@ def same_fixed_value(given: float, fixed: float) -> bool:
     given, fixed = float(given), float(fixed)
     return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
 
-#: The longest communication step (s). The contact is solved in sub-steps of at most
-#: contact_dynamics.MAX_SUBSTEP_S (0.1 ms), so this is 10^4 of them (a fraction of a second of
-#: work); 1e6 s, the former limit, meant 10^10 sub-steps and hung the host (found by fuzzing).
-MAX_STEP_S = 1.0
-#: At speed the FMU keeps the road's history back to the patch's last node, one sample per
-#: step, and reads it through a delay line of that many steps: at most this many.
-MAX_DELAY_STEPS = 100_000
-#: The most road samples the FMU ever holds: a delay line of MAX_DELAY_STEPS + 2 (the older
-#: sample of the last window end and the newest), or as many recorded one a step over the
-#: same reach, and the current point's; a state holding more is none of the FMU's.
-MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
+from ..core.step_limits import MAX_DELAY_STEPS, MAX_HISTORY_SAMPLES, MAX_STEP_S  # noqa: E402, F401
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.

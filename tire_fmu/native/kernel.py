@@ -29,7 +29,7 @@ KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c")
 KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h")
 KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
 LIBRARY_NAME = "tire_kernel"
-N_INPUTS, N_OUTPUTS = 4, 5
+N_INPUTS, N_OUTPUTS = 4, 6
 _WHY_SIZE = 512
 
 
@@ -38,9 +38,10 @@ class KernelUnavailable(RuntimeError):
 
 
 def _c_folder() -> Path:
-    from .builder import c_folder
+    """The package's C (importlib.resources: the builder's c_folder, without importing it)."""
+    from importlib import resources
 
-    return Path(str(c_folder()))
+    return Path(str(resources.files("tire_fmu.native") / "c"))
 
 
 def sources_digest() -> str:
@@ -127,12 +128,9 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
     lib.kernel_outputs.restype = None
     lib.kernel_outputs.argtypes = [handle, p_double]
-    lib.kernel_time.restype = double
-    lib.kernel_time.argtypes = [handle]
-    lib.kernel_set_time.restype = None
-    lib.kernel_set_time.argtypes = [handle, double]
-    lib.kernel_horizon.restype = double
-    lib.kernel_horizon.argtypes = [handle]
+    for name in ("kernel_time", "kernel_start_time", "kernel_min_step", "kernel_horizon"):
+        getattr(lib, name).restype = double
+        getattr(lib, name).argtypes = [handle]
     for name in ("kernel_in_contact", "kernel_at_zone_edge"):
         getattr(lib, name).restype = ctypes.c_int
         getattr(lib, name).argtypes = [handle]
@@ -186,9 +184,9 @@ class CompiledKernel:
     def time(self) -> float:
         return self._lib.kernel_time(self._handle)
 
-    @time.setter
-    def time(self, value: float) -> None:
-        self._lib.kernel_set_time(self._handle, float(value))
+    @property
+    def start_time(self) -> float:
+        return self._lib.kernel_start_time(self._handle)
 
     def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
         """One communication step; the outputs at the new time as a tuple."""

@@ -8,7 +8,7 @@
 
 #include "numerics.h"
 
-#define TIRE_CONTRACT_VERSION 29742437u
+#define TIRE_CONTRACT_VERSION 48865725u
 
 typedef struct {
     unsigned int version; /* TIRE_CONTRACT_VERSION */
@@ -21,8 +21,11 @@ typedef struct {
     int n_ring_rows; /* rows of d and e: 3 + 2 Z */
     int n_ring_cols; /* columns of d and e: 1 + Z */
     int linear; /* 1: two-sided springs on the static footprint's points */
+    int centre_point; /* the contact point at the contact centre */
     double substep_s; /* longest internal step (s) */
     double speed_m_s; /* rolling speed (m/s) */
+    double static_deflection_m; /* the rim's static lowering (m) */
+    double min_step_s; /* shortest step it takes (s), 0 for any */
     const int32_t* order_start; /* [n_orders + 1] first mode of each order */
     const cx* lam; /* [n_modes] eigenvalue (1/s) */
     const cx* beta; /* [n_modes] input of a node force: beta exp(-i n theta) */
@@ -44,7 +47,7 @@ typedef struct {
     const double* pen_static; /* [n_points] static penetration (m) */
     const double* window_early_s; /* [n_points] road delay, window front (s) */
     const double* window_late_s; /* [n_points] road delay, window rear (s) */
-    const double* static_ring_out; /* [3] static rim_Fz, rim_Fx, deflection */
+    const double* static_ring_out; /* [3] static rim_Fz, rim_Fx, tread_deflection */
 } TireContract;
 
 /* X(name) for every array field, in order (to free or check them all) */

@@ -20,7 +20,8 @@ void contract_free(TireContract* c, const Memory* mem)
 
 int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zone* zone,
                   const Footprint* fp, const Windows* windows, const double* compliance,
-                  double deflection, double substep_s, int linear, double speed)
+                  double deflection, double substep_s, int linear, double speed,
+                  double min_step_s)
 {
     int K = ring->n_modes, Z = zone->n_zone, P = Z, rows = ring->rows, cols = ring->cols, j, r;
     int32_t *order_start, *zone_offset, *point_support;
@@ -39,8 +40,11 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     c->n_ring_rows = rows;
     c->n_ring_cols = cols;
     c->linear = linear;
+    c->centre_point = zone->centre;
     c->substep_s = substep_s;
     c->speed_m_s = speed;
+    c->static_deflection_m = deflection;
+    c->min_step_s = min_step_s;
     if (NEW(order_start, ring->n_orders + 1) || NEW(lam, K) || NEW(beta, K) || NEW(gamma, K) ||
         NEW(eta, K) || NEW(b_rim, K) || NEW(c_rim, 2 * K) || NEW(d, rows * cols) ||
         NEW(e, rows * cols) || NEW(zone_offset, Z) || NEW(point_support, P) ||

@@ -8,7 +8,8 @@
 /* fill c (its arrays allocated with mem); 0, or -1 out of memory (nothing allocated then) */
 int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zone* zone,
                   const Footprint* fp, const Windows* windows, const double* compliance,
-                  double deflection, double substep_s, int linear, double speed);
+                  double deflection, double substep_s, int linear, double speed,
+                  double min_step_s);
 /* free the arrays of a packed contract */
 void contract_free(TireContract* c, const Memory* mem);
 

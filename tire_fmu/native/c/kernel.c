@@ -45,7 +45,8 @@ struct TireKernel {
     Memory mem;
     /* the contract */
     int n_elements, n_orders, K, Z, P, S, half, linear, rows, cols;
-    double substep_s, speed;
+    double substep_s, speed, static_deflection, min_step;
+    int centre;
     int32_t* order_start;
     cx *lam, *beta, *gamma, *eta;
     int n_rim;         /* modes with a rim coupling */
@@ -64,8 +65,10 @@ struct TireKernel {
     double* pen_rim;   /* P: how the rim's position moves each point's penetration */
     double* rate_rim;  /* P: how the rim's rate moves its rate */
     int truncated;     /* d or e reach the zone forces: the forces couple at an instant */
-    /* the state */
-    double time;
+    /* the state; its clock is the time since start_time (core/clock.py) */
+    double start_time;
+    double elapsed;    /* the road history's time */
+    double carry;      /* the compensation of elapsed's sum */
     cx* q;
     double* df;        /* P: force deviation from static at time */
     char* active;
@@ -381,7 +384,8 @@ static Interface* step_interface(TireKernel* kn, double h)
         if (kn->kernels[i].h_comm == h) return &kn->kernels[i];
     }
     for (i = 0; i < kn->n_kernels; i++) {
-        if (fabs(h - kn->kernels[i].h_comm) <= SPEC_SAME_POINT_EPS * (fabs(kn->time) + h)) {
+        if (fabs(h - kn->kernels[i].h_comm) <=
+            SPEC_SAME_POINT_EPS * (fabs(kn->start_time + kn->elapsed) + h)) {
             return &kn->kernels[i];
         }
     }
@@ -824,8 +828,11 @@ static void update_outputs(TireKernel* kn)
     kn->outputs[0] = kn->static_ring[0] + kn->ring_out[0];
     kn->outputs[1] = kn->static_ring[1] + kn->ring_out[1];
     kn->outputs[2] = contact;
-    kn->outputs[3] = kn->static_ring[2] + kn->ring_out[2];
+    /* the rim's lowering at the contact centre: the static one, the road's rise under the
+     * centre point, less the rim's (core: ContactSimulator.deflection) */
+    kn->outputs[3] = kn->static_deflection + kn->seen_heights[kn->centre] - kn->seen_z;
     kn->outputs[4] = contact_length(kn);
+    kn->outputs[5] = kn->static_ring[2] + kn->ring_out[2];
 }
 
 void kernel_outputs(const TireKernel* kn, double outputs[KERNEL_N_OUTPUTS])
@@ -841,9 +848,11 @@ int kernel_at_zone_edge(const TireKernel* kn)
     return kn->df[0] > -kn->f_static[0] || kn->df[P - 1] > -kn->f_static[P - 1];
 }
 
-double kernel_time(const TireKernel* kn) { return kn->time; }
+double kernel_time(const TireKernel* kn) { return kn->start_time + kn->elapsed; }
 
-void kernel_set_time(TireKernel* kn, double time) { kn->time = time; }
+double kernel_start_time(const TireKernel* kn) { return kn->start_time; }
+
+double kernel_min_step(const TireKernel* kn) { return kn->min_step; }
 
 double kernel_horizon(const TireKernel* kn) { return kn->windows.horizon; }
 
@@ -861,7 +870,7 @@ int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
     Interface* k = step_interface(kn, h);
     int i;
     if (k == NULL) return KERNEL_NO_MEMORY;
-    if (road_read(&kn->road, &kn->mem, kn->time, inputs[2], inputs[3], h, kn->heights,
+    if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
                   kn->slopes) != 0) {
         return KERNEL_NO_MEMORY;
     }
@@ -871,7 +880,11 @@ int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
             return KERNEL_NO_MEMORY;
         }
     }
-    kn->time += h;
+    {   /* elapsed += h, compensated (core/clock.py: advance) */
+        double y = h - kn->carry, total = kn->elapsed + y;
+        kn->carry = (total - kn->elapsed) - y;
+        kn->elapsed = total;
+    }
     kn->last_step = h;
     kn->has_last = 1;
     update_outputs(kn);
@@ -883,7 +896,7 @@ int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
                         double outputs[KERNEL_N_OUTPUTS])
 {
     double h = kn->has_last ? kn->last_step : NAN;
-    if (road_read(&kn->road, &kn->mem, kn->time, inputs[2], inputs[3], h, kn->heights,
+    if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
                   kn->slopes) != 0) {
         return KERNEL_NO_MEMORY;
     }
@@ -909,7 +922,9 @@ static void settle(TireKernel* kn)
 void kernel_reset(TireKernel* kn, double start_time)
 {
     int P = kn->P, K = kn->K, j;
-    kn->time = start_time;
+    kn->start_time = start_time;
+    kn->elapsed = 0.0;
+    kn->carry = 0.0;
     for (j = 0; j < K; j++) kn->q[j] = cx_make(0.0, 0.0);
     for (j = 0; j < P; j++) {
         kn->df[j] = 0.0;
@@ -927,6 +942,7 @@ void kernel_reset(TireKernel* kn, double start_time)
     kn->dft_ok = 0;
     kn->pending = 0;
     road_reset(&kn->road, &kn->mem);
+    kn->road.origin = start_time;
     update_outputs(kn);
 }
 
@@ -943,7 +959,7 @@ static int layout_problem(const TireContract* c, char* why, size_t why_size)
     if (c->n_elements < 1 || c->n_orders != c->n_elements / 2 + 1 || c->n_modes < 0 ||
         c->n_zone < 1 || c->n_zone % 2 != 1 || c->n_points < 1 || c->n_support < 1 ||
         c->n_ring_rows != 3 + 2 * c->n_zone || c->n_ring_cols != 1 + c->n_zone ||
-        !(c->substep_s > 0.0)) {
+        !(c->substep_s > 0.0) || c->centre_point < 0 || c->centre_point >= c->n_points) {
         snprintf(why, why_size, "the contract's sizes are inconsistent");
         return 1;
     }
@@ -1071,6 +1087,9 @@ int kernel_create(const TireContract* c, const Memory* mem, double start_time,
     kn->cols = c->n_ring_cols;
     kn->substep_s = c->substep_s;
     kn->speed = c->speed_m_s;
+    kn->static_deflection = c->static_deflection_m;
+    kn->min_step = c->min_step_s;
+    kn->centre = c->centre_point;
     for (j = 0; j < 3; j++) kn->static_ring[j] = c->static_ring_out[j];
     if (COPY(order_start, order_start, kn->n_orders + 1) || COPY(lam, lam, K) ||
         COPY(beta, beta, K) || COPY(gamma, gamma, K) || COPY(eta, eta, K) ||
@@ -1187,16 +1206,17 @@ memory:
 #undef COPY
 
 /* -- the kernel's state -------------------------------------------------------------------------
- * int32: K, P, history length, has_last; then doubles: time, last step, seen z and z', ring_out
- * (3), outputs (5), q (2K), df, penetration, rate, seen heights, seen slopes (P each),
- * history t, z, v; then the active flags (P bytes). Everything little-endian as written. */
+ * int32: K, P, history length, has_last; then doubles: start time, elapsed time, its carry,
+ * last step, seen z and z', ring_out (3), outputs (6), q (2K), df, penetration, rate, seen
+ * heights, seen slopes (P each), history t, z, v; then the active flags (P bytes). All
+ * little-endian as x86-64 and arm64 write them; the numpy kernel writes the same bytes. */
 
 #define STATE_INTS 4
-#define STATE_HEAD_DOUBLES 12
+#define STATE_HEAD 15
 
 static size_t doubles_for(int K, int P, int history)
 {
-    return (size_t)(STATE_HEAD_DOUBLES + 2 * K + 5 * P + 3 * history);
+    return (size_t)(STATE_HEAD + 2 * K + 5 * P + 3 * history);
 }
 
 size_t kernel_state_size(const TireKernel* kn)
@@ -1221,19 +1241,21 @@ static void put_doubles(unsigned char** out, const double* values, int count)
 void kernel_state_write(TireKernel* kn, unsigned char* out)
 {
     int K = kn->K, P = kn->P, history = road_history_length(&kn->road);
-    double head[STATE_HEAD_DOUBLES];
+    double head[STATE_HEAD];
     settle(kn);  /* the modal state with its pending ramp added */
     put_int(&out, K);
     put_int(&out, P);
     put_int(&out, history);
     put_int(&out, kn->has_last);
-    head[0] = kn->time;
-    head[1] = kn->has_last ? kn->last_step : 0.0;
-    head[2] = kn->seen_z;
-    head[3] = kn->seen_vz;
-    memcpy(head + 4, kn->ring_out, sizeof(double) * 3);
-    memcpy(head + 7, kn->outputs, sizeof(double) * 5);
-    put_doubles(&out, head, STATE_HEAD_DOUBLES);
+    head[0] = kn->start_time;
+    head[1] = kn->elapsed;
+    head[2] = kn->carry;
+    head[3] = kn->has_last ? kn->last_step : 0.0;
+    head[4] = kn->seen_z;
+    head[5] = kn->seen_vz;
+    memcpy(head + 6, kn->ring_out, sizeof(double) * 3);
+    memcpy(head + 9, kn->outputs, sizeof(double) * KERNEL_N_OUTPUTS);
+    put_doubles(&out, head, STATE_HEAD);
     put_doubles(&out, (const double*)kn->q, 2 * K);
     put_doubles(&out, kn->df, P);
     put_doubles(&out, kn->penetration, P);
@@ -1252,12 +1274,255 @@ static int get_int(const unsigned char* in, int index)
     return (int)v;
 }
 
+/* double number index of the state's doubles (they may be unaligned in the bytes) */
+static double get_double(const unsigned char* in, size_t index)
+{
+    double v;
+    memcpy(&v, in + STATE_INTS * 4 + 8 * index, 8);
+    return v;
+}
+
+double kernel_state_time(const unsigned char* in) { return get_double(in, 0) + get_double(in, 1); }
+
+double kernel_state_start(const unsigned char* in) { return get_double(in, 0); }
+
+void kernel_state_outputs(const unsigned char* in, double outputs[KERNEL_N_OUTPUTS])
+{
+    int i;
+    for (i = 0; i < KERNEL_N_OUTPUTS; i++) outputs[i] = get_double(in, 9 + (size_t)i);
+}
+
+/* the problems found so far, "; " between them (as the core joins them) */
+static void add_why(char* why, size_t why_size, const char* text)
+{
+    size_t used = strlen(why);
+    if (used + 2 >= why_size) return;
+    snprintf(why + used, why_size - used, "%s%s", used ? "; " : "", text);
+}
+
+static double largest_abs(const unsigned char* in, size_t first, int count)
+{
+    double big = 0.0;
+    int i;
+    for (i = 0; i < count; i++) big = fmax(big, fabs(get_double(in, first + (size_t)i)));
+    return big;
+}
+
+static int resolves(double time, double h)
+{
+    int exponent;
+    frexp(h, &exponent);
+    return fabs(time) + h < ldexp(1.0, exponent + 52);
+}
+
+/* the road history as the reader keeps it (core: kernel_numpy.history_problems) */
+static void history_problems(const TireKernel* kn, const unsigned char* in, size_t t0,
+                             int history, double now, double last, int has_last, char* why,
+                             size_t why_size)
+{
+    const Windows* w = &kn->windows;
+    double slack = SPEC_SAME_POINT_EPS * (fabs(now) + w->horizon + 1.0), newest, earliest;
+    char text[512];
+    int i, increasing = 1;
+    if (!w->delayed) {
+        if (history > 0) {
+            snprintf(text, sizeof text, "its road history holds %d samples, but at rest the "
+                     "whole zone reads the road at the instant and keeps none", history);
+            add_why(why, why_size, text);
+        }
+        return;
+    }
+    if (history > SPEC_MAX_HISTORY_SAMPLES) {
+        snprintf(text, sizeof text, "its road history holds %d samples; the FMU keeps at most "
+                 "%d (one a step, over at most %d steps)", history, SPEC_MAX_HISTORY_SAMPLES,
+                 SPEC_MAX_DELAY_STEPS);
+        add_why(why, why_size, text);
+        return;
+    }
+    for (i = 1; i < history; i++) {
+        if (!(get_double(in, t0 + (size_t)i) > get_double(in, t0 + (size_t)i - 1))) increasing = 0;
+    }
+    if (!increasing) add_why(why, why_size, "its road history times do not increase");
+    if (history > 0) {
+        newest = get_double(in, t0 + (size_t)history - 1);
+        earliest = now - (has_last ? last : 0.0);
+        if (!(earliest - slack <= newest && newest <= now + slack)) {
+            char a[40], b[40], c[40];
+            py_repr(newest, a, sizeof a);
+            py_repr(now, b, sizeof b);
+            py_repr(has_last ? last : NAN, c, sizeof c);
+            snprintf(text, sizeof text, "its newest road sample is at %s s, but the state is at "
+                     "%s s after a step of %s s: the road is sampled at each step's start", a, b,
+                     c);
+            add_why(why, why_size, text);
+        }
+        if (get_double(in, t0) < -slack) {
+            char a[40];
+            py_repr(get_double(in, t0), a, sizeof a);
+            snprintf(text, sizeof text, "its road history starts at %s s, before the start", a);
+            add_why(why, why_size, text);
+        }
+        if (history > 1 && get_double(in, t0 + 1) < newest - w->horizon - slack) {
+            snprintf(text, sizeof text, "its road history reaches back %.6g s from its newest "
+                     "sample, beyond the %.6g s the contact zone reads (older samples are "
+                     "dropped)", newest - get_double(in, t0 + 1), w->horizon);
+            add_why(why, why_size, text);
+        }
+    } else if (has_last) {
+        add_why(why, why_size, "its road history is empty, but a step was taken (each step "
+                "samples the road at its start)");
+    }
+    if (!(largest_abs(in, t0 + (size_t)history, history) <= SPEC_MAX_DISPLACEMENT_M &&
+          largest_abs(in, t0 + 2 * (size_t)history, history) <= SPEC_MAX_VELOCITY_M_S)) {
+        snprintf(text, sizeof text, "its road samples go beyond the inputs' limits (%g m, %g "
+                 "m/s)", SPEC_MAX_DISPLACEMENT_M, SPEC_MAX_VELOCITY_M_S);
+        add_why(why, why_size, text);
+    }
+}
+
+/* what the state holds against what a state of this tire means: a clock a run reaches, a road
+ * history as the reader keeps it, forces that do not pull, displacements and rates within the
+ * spec's bounds, and outputs that are the ones its own values give */
+static void meaning_problems(const TireKernel* kn, const unsigned char* in, char* why,
+                             size_t why_size)
+{
+    int K = kn->K, P = kn->P, history = get_int(in, 2), has_last = get_int(in, 3), n, q, j, i;
+    size_t o_q = STATE_HEAD, o_df = o_q + 2 * (size_t)K, o_pen = o_df + (size_t)P;
+    size_t o_rate = o_pen + (size_t)P, o_heights = o_rate + (size_t)P;
+    size_t o_slopes = o_heights + (size_t)P, o_t = o_slopes + (size_t)P;
+    double start = get_double(in, 0), elapsed = get_double(in, 1), carry = get_double(in, 2);
+    double last = get_double(in, 3), time = start + elapsed;
+    double length = SPEC_MAX_STATE_DISPLACEMENT_M, rate = SPEC_MAX_STATE_VELOCITY_M_S;
+    double reach = 0.0, speed = 0.0, total_bound = 0.0, contact = 0.0, scale = 0.0;
+    int pulls = 0, exceeds = 0;
+    char text[512], a[40], b[40];
+    if (!(elapsed >= 0.0 && fabs(carry) <= nextafter(elapsed, INFINITY) - elapsed)) {
+        py_repr(elapsed, a, sizeof a);
+        py_repr(carry, b, sizeof b);
+        snprintf(text, sizeof text, "its clock reads %s s since the start with a carry of %s s: "
+                 "a run's clock is >= 0, and its carry below one rounding of it", a, b);
+        add_why(why, why_size, text);
+    }
+    if (has_last != (elapsed != 0.0)) {
+        py_repr(elapsed, a, sizeof a);
+        py_repr(has_last ? last : NAN, b, sizeof b);
+        snprintf(text, sizeof text, "its clock reads %s s since the start and its last step is "
+                 "%s s: only steps advance the clock", a, b);
+        add_why(why, why_size, text);
+    } else if (has_last && !(last <= SPEC_MAX_STEP_S)) {
+        py_repr(last, a, sizeof a);
+        snprintf(text, sizeof text, "its last step is %s s; the FMU takes at most %g s", a,
+                 SPEC_MAX_STEP_S);
+        add_why(why, why_size, text);
+    } else if (has_last && !resolves(time - last, last)) {
+        py_repr(last, a, sizeof a);
+        py_repr(time, b, sizeof b);
+        snprintf(text, sizeof text, "its last step of %s s ends at t = %s s, where the clock "
+                 "does not resolve it", a, b);
+        add_why(why, why_size, text);
+    }
+    history_problems(kn, in, o_t, history, elapsed, last, has_last, why, why_size);
+    for (j = 0; j < P; j++) {
+        double f = kn->f_static[j] + get_double(in, o_df + (size_t)j);
+        double bound = kn->f_static[j] + kn->k[j] * (length + fabs(kn->pen_static[j]))
+                       + kn->c[j] * rate;
+        if (!kn->linear && f < 0.0) pulls = 1;
+        if (!(fabs(f) <= bound)) exceeds = 1;
+        total_bound += bound;
+        contact += kn->cos[j] * f;
+        scale += fabs(f) + fabs(kn->f_static[j]);
+    }
+    if (pulls) add_why(why, why_size, "its contact forces pull on the tread (the unilateral "
+                       "contact only pushes)");
+    if (exceeds) {
+        snprintf(text, sizeof text, "its contact forces exceed what the contact springs give "
+                 "at %g m and %g m/s", length, rate);
+        add_why(why, why_size, text);
+    }
+    for (n = 0; n < kn->n_orders; n++) {
+        for (q = kn->order_start[n]; q < kn->order_start[n + 1]; q++) {
+            double size = hypot(get_double(in, o_q + 2 * (size_t)q),
+                                get_double(in, o_q + 2 * (size_t)q + 1));
+            reach = fmax(reach, size * cx_abs(kn->gamma[q]));
+            speed = fmax(speed, size * cx_abs(kn->eta[q]));
+        }
+    }
+    {
+        const char* whats[7] = {"the tread's excursion at the zone nodes from a mode",
+                                "the tread's rate at the zone nodes from a mode",
+                                "its penetrations", "its penetration rates",
+                                "the rim and road positions it saw", "the road rates it saw",
+                                "the tread deflection it holds"};
+        const char* units[7] = {"m", "m/s", "m", "m/s", "m", "m/s", "m"};
+        double found[7], bound;
+        found[0] = reach;
+        found[1] = speed;
+        found[2] = largest_abs(in, o_pen, P);
+        found[3] = largest_abs(in, o_rate, P);
+        found[4] = fmax(fabs(get_double(in, 4)), largest_abs(in, o_heights, P));
+        found[5] = largest_abs(in, o_slopes, P);
+        found[6] = fabs(get_double(in, 8));
+        for (i = 0; i < 7; i++) {
+            bound = units[i][1] == '/' ? rate : length;
+            if (!(found[i] <= bound)) {
+                snprintf(text, sizeof text, "%s reach %.3g %s, beyond the %g %s a state may hold",
+                         whats[i], found[i], units[i], bound, units[i]);
+                add_why(why, why_size, text);
+            }
+        }
+    }
+    if (!(fabs(get_double(in, 5)) <= SPEC_MAX_VELOCITY_M_S)) {
+        py_repr(get_double(in, 5), a, sizeof a);
+        snprintf(text, sizeof text, "the rim velocity it saw, %s m/s, is beyond the input limit "
+                 "%g m/s", a, SPEC_MAX_VELOCITY_M_S);
+        add_why(why, why_size, text);
+    }
+    if (!(fabs(get_double(in, 6)) <= total_bound && fabs(get_double(in, 7)) <= total_bound)) {
+        snprintf(text, sizeof text, "its rim forces exceed what the contact springs give at %g "
+                 "m and %g m/s", length, rate);
+        add_why(why, why_size, text);
+    }
+    if (why[0] != '\0') return;
+    {   /* its outputs, the ones its own values give (contact force and footprint to
+         * rounding: they are sums the state does not fix the order of) */
+        double expected[KERNEL_N_OUTPUTS], tolerance[KERNEL_N_OUTPUTS] = {0.0};
+        int first = -1, end = -1;
+        for (j = 0; j < P; j++) {
+            if (kn->f_static[j] + get_double(in, o_df + (size_t)j) > 0.0) {
+                if (first < 0) first = j;
+                end = j;
+            }
+        }
+        expected[0] = kn->static_ring[0] + get_double(in, 6);
+        expected[1] = kn->static_ring[1] + get_double(in, 7);
+        expected[2] = contact;
+        tolerance[2] = 1e-9 * scale;
+        expected[3] = kn->static_deflection + get_double(in, o_heights + (size_t)kn->centre)
+                      - get_double(in, 4);
+        expected[4] = 0.0;
+        if (first >= 0) {
+            double* pen = kn->work;
+            for (j = 0; j < P; j++) pen[j] = get_double(in, o_pen + (size_t)j);
+            expected[4] = crossing(kn->x_road, pen, first, first - 1, P)
+                          - crossing(kn->x_road, pen, end, end + 1, P);
+        }
+        tolerance[4] = 1e-9 * (kn->x_road[0] - kn->x_road[P - 1]);
+        expected[5] = kn->static_ring[2] + get_double(in, 8);
+        for (i = 0; i < KERNEL_N_OUTPUTS; i++) {
+            if (!(fabs(get_double(in, 9 + (size_t)i) - expected[i]) <= tolerance[i])) {
+                add_why(why, why_size, "its outputs are not the ones it gives");
+                break;
+            }
+        }
+    }
+}
+
 int kernel_state_check(const TireKernel* kn, const unsigned char* in, size_t size, char* why,
                        size_t why_size)
 {
     int K, P, history, i;
     size_t count, expected;
-    const unsigned char* doubles = in + STATE_INTS * 4;
+    why[0] = '\0';
     if (size < STATE_INTS * 4) {
         snprintf(why, why_size, "its model part is %lu bytes, shorter than its header",
                  (unsigned long)size);
@@ -1287,33 +1552,14 @@ int kernel_state_check(const TireKernel* kn, const unsigned char* in, size_t siz
     }
     count = doubles_for(K, P, history);
     for (i = 0; i < (int)count; i++) {
-        double v;
-        memcpy(&v, doubles + 8 * (size_t)i, 8);
-        if (!isfinite(v)) {
+        if (!isfinite(get_double(in, (size_t)i))) {
             snprintf(why, why_size, "value %d of its model part is not finite", i);
             return KERNEL_BAD_CONTRACT;
         }
     }
-    {
-        double last;
-        memcpy(&last, doubles + 8, 8);
-        if (get_int(in, 3) && !(last > 0.0)) {
-            snprintf(why, why_size, "its last step is %g s, not > 0", last);
-            return KERNEL_BAD_CONTRACT;
-        }
-    }
-    {
-        double previous = -HUGE_VAL;
-        size_t offset = STATE_INTS * 4 + (size_t)(STATE_HEAD_DOUBLES + 2 * K + 5 * P) * 8;
-        for (i = 0; i < history; i++) {
-            double ti;
-            memcpy(&ti, in + offset + 8 * (size_t)i, 8);
-            if (!(ti > previous)) {
-                snprintf(why, why_size, "its road history times do not increase");
-                return KERNEL_BAD_CONTRACT;
-            }
-            previous = ti;
-        }
+    if (get_int(in, 3) && !(get_double(in, 3) > 0.0)) {
+        snprintf(why, why_size, "its last step is %g s, not > 0", get_double(in, 3));
+        return KERNEL_BAD_CONTRACT;
     }
     for (i = 0; i < P; i++) {
         if (in[size - (size_t)P + (size_t)i] > 1) {
@@ -1321,24 +1567,27 @@ int kernel_state_check(const TireKernel* kn, const unsigned char* in, size_t siz
             return KERNEL_BAD_CONTRACT;
         }
     }
-    return KERNEL_OK;
+    meaning_problems(kn, in, why, why_size);
+    return why[0] == '\0' ? KERNEL_OK : KERNEL_BAD_CONTRACT;
 }
 
 int kernel_state_apply(TireKernel* kn, const unsigned char* in)
 {
     int K = get_int(in, 0), P = get_int(in, 1), history = get_int(in, 2), i, status = KERNEL_OK;
     const unsigned char* p = in + STATE_INTS * 4;
-    double head[STATE_HEAD_DOUBLES];
+    double head[STATE_HEAD];
     double* scratch;
     memcpy(head, p, sizeof head);
     p += sizeof head;
     kn->has_last = get_int(in, 3);
-    kn->time = head[0];
-    kn->last_step = head[1];
-    kn->seen_z = head[2];
-    kn->seen_vz = head[3];
-    memcpy(kn->ring_out, head + 4, sizeof(double) * 3);
-    memcpy(kn->outputs, head + 7, sizeof(double) * 5);
+    kn->start_time = head[0];
+    kn->elapsed = head[1];
+    kn->carry = head[2];
+    kn->last_step = head[3];
+    kn->seen_z = head[4];
+    kn->seen_vz = head[5];
+    memcpy(kn->ring_out, head + 6, sizeof(double) * 3);
+    memcpy(kn->outputs, head + 9, sizeof(double) * KERNEL_N_OUTPUTS);
     memcpy(kn->q, p, sizeof(double) * (size_t)(2 * K));
     p += sizeof(double) * (size_t)(2 * K);
 #define TAKE(field)                                        \
@@ -1354,6 +1603,7 @@ int kernel_state_apply(TireKernel* kn, const unsigned char* in)
     scratch = (double*)mem_alloc(&kn->mem, (size_t)(3 * history), sizeof(double));
     if (scratch == NULL) return KERNEL_NO_MEMORY;
     memcpy(scratch, p, sizeof(double) * (size_t)(3 * history));
+    kn->road.origin = kn->start_time;
     if (road_set_history(&kn->road, &kn->mem, scratch, scratch + history,
                          scratch + 2 * history, history) != 0) {
         status = KERNEL_NO_MEMORY;

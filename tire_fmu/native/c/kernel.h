@@ -8,7 +8,8 @@
  * substep, the contact forces solved at the end of each substep from the substep's own
  * interface flexibility (active set, then projected Gauss-Seidel), the road read at each
  * communication point. Inputs: rim_z, rim_vz, road_z, road_vz; outputs: rim_Fz, rim_Fx,
- * contact_Fz, deflection, contact_length. */
+ * contact_Fz, deflection, contact_length, tread_deflection. The clock is the time since the
+ * start, its steps summed with compensation (core/clock.py). */
 #ifndef TIRE_KERNEL_H
 #define TIRE_KERNEL_H
 
@@ -18,7 +19,7 @@
 #include "tire.h"
 
 #define KERNEL_N_INPUTS 4
-#define KERNEL_N_OUTPUTS 5
+#define KERNEL_N_OUTPUTS 6
 
 typedef struct TireKernel TireKernel;
 
@@ -42,8 +43,9 @@ int kernel_step(TireKernel* kernel, double h, const double inputs[KERNEL_N_INPUT
 int kernel_outputs_with(TireKernel* kernel, const double inputs[KERNEL_N_INPUTS],
                         double outputs[KERNEL_N_OUTPUTS]);
 void kernel_outputs(const TireKernel* kernel, double outputs[KERNEL_N_OUTPUTS]);
-double kernel_time(const TireKernel* kernel);
-void kernel_set_time(TireKernel* kernel, double time);
+double kernel_time(const TireKernel* kernel);         /* start + time since it */
+double kernel_start_time(const TireKernel* kernel);
+double kernel_min_step(const TireKernel* kernel);     /* shortest step it takes (s) */
 double kernel_horizon(const TireKernel* kernel);  /* road delay to the last point (s) */
 int kernel_in_contact(const TireKernel* kernel);
 int kernel_at_zone_edge(const TireKernel* kernel);
@@ -58,5 +60,9 @@ void kernel_state_write(TireKernel* kernel, unsigned char* out);
 int kernel_state_check(const TireKernel* kernel, const unsigned char* in, size_t size,
                        char* why, size_t why_size);
 int kernel_state_apply(TireKernel* kernel, const unsigned char* in);
+/* what state bytes (checked) hold: their time (start + since), start, outputs */
+double kernel_state_time(const unsigned char* in);
+double kernel_state_start(const unsigned char* in);
+void kernel_state_outputs(const unsigned char* in, double outputs[KERNEL_N_OUTPUTS]);
 
 #endif

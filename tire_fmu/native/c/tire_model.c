@@ -489,7 +489,8 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     }
     if (contract_pack(&model->contract, mem, &model->ring, &model->zone, &model->footprint,
                       &model->windows, model->compliance, model->footprint.deflection,
-                      model->sim.substep_s, model->linear, speed) != 0) {
+                      model->sim.substep_s, model->linear, speed,
+                      model->ring.truncated ? SPEC_MIN_CORRECTED_STEP_S : 0.0) != 0) {
         goto memory;
     }
     return MODEL_OK;
