@@ -153,6 +153,11 @@ class NumpyKernel:
         self._interfaces[h] = entry
         return entry
 
+    @property
+    def cached_steps(self) -> int:
+        """How many communication step sizes have their coefficients cached."""
+        return len(self._interfaces)
+
     def _road(self, h: float) -> tuple[np.ndarray, np.ndarray]:
         p = self.contract.n_points
         out = np.empty(2 * p)
@@ -311,19 +316,15 @@ class NumpyKernel:
 
     # -- the state as bytes: the layout of kernel.c ------------------------------------------
     def state_bytes(self) -> bytes:
-        c = self.contract
         t, z, v = self.road.history()
-        has_last = self.last is not None
-        head = [self.start_time, self.elapsed_s, self.carry_s,
-                self.last_step if has_last else 0.0, self.seen[0], self.seen[1],
-                *self.ring_out, *self.outputs]
-        return b"".join([
-            struct.pack("<4i", c.n_modes, c.n_points, t.size, int(has_last)),
-            struct.pack(f"<{len(head)}d", *head),
-            np.ascontiguousarray(self.q).view("<f8").tobytes(),
-            *(np.asarray(x, "<f8").tobytes() for x in (
-                self.df, self.penetration, self.rate, self.seen[2], self.seen[3], t, z, v)),
-            self.active.astype(np.uint8).tobytes()])
+        return state_data({
+            "start_time": self.start_time, "elapsed_s": self.elapsed_s, "carry_s": self.carry_s,
+            "last_step_s": self.last_step if self.last is not None else math.nan,
+            "seen_z": self.seen[0], "seen_vz": self.seen[1], "ring_out": self.ring_out,
+            "outputs": self.outputs, "q": self.q, "df": self.df,
+            "penetration": self.penetration, "rate": self.rate, "seen_heights": self.seen[2],
+            "seen_slopes": self.seen[3], "history_t": t, "history_z": z, "history_v": v,
+            "active": self.active})
 
     def state_problem(self, data: bytes) -> str | None:
         """Why ``data`` is no state of this kernel (kernel.c's kernel_state_check), or None."""
@@ -349,30 +350,72 @@ class NumpyKernel:
         self.last = self.interface(self.last_step)[1] if fields.has_last else None
 
 
-#: The state layout (kernel.c): four int32, then doubles, then one byte per contact point.
-_STATE_INTS, _STATE_HEAD = 4, 15
+#: The state layout (kernel.c's kernel_state_write): four int32 (modes, points, road samples,
+#: whether a step was taken), the head's doubles, the arrays of doubles, then one byte per
+#: contact point (pushing or not). Names as ContactState.fields gives them.
+_STATE_INTS = 4
+STATE_HEAD = ("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z", "seen_vz",
+              "ring_out", "ring_out", "ring_out", *("outputs",) * 6)
+_STATE_HEAD = len(STATE_HEAD)
+STATE_ARRAYS = ("q", "df", "penetration", "rate", "seen_heights", "seen_slopes", "history_t",
+                "history_z", "history_v")
+
+
+def state_fields(data: bytes) -> dict:
+    """The named fields of state bytes whose layout is sound (sizes from their header)."""
+    modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
+    values = np.frombuffer(data, "<f8", _STATE_HEAD + 2 * modes + 5 * points + 3 * history,
+                           4 * _STATE_INTS)
+    head = values[:_STATE_HEAD]
+    out = {"start_time": float(head[0]), "elapsed_s": float(head[1]),
+           "carry_s": float(head[2]),
+           "last_step_s": float(head[3]) if has_last else math.nan,
+           "seen_z": float(head[4]), "seen_vz": float(head[5]),
+           "ring_out": head[6:9].copy(), "outputs": head[9:15].copy()}
+    rest = values[_STATE_HEAD:]
+    out["q"] = rest[:2 * modes].copy().view(complex)
+    sizes = (points,) * 5 + (history,) * 3
+    offset = 2 * modes
+    for name, size in zip(STATE_ARRAYS[1:], sizes):
+        out[name] = rest[offset:offset + size].copy()
+        offset += size
+    out["active"] = np.frombuffer(data, np.uint8, points, len(data) - points).astype(bool)
+    return out
+
+
+def state_data(fields: dict) -> bytes:
+    """State bytes from named fields (the inverse of :func:`state_fields`)."""
+    q = np.ascontiguousarray(fields["q"], dtype=complex)
+    history = np.asarray(fields["history_t"]).size
+    last = fields["last_step_s"]
+    has_last = not math.isnan(last)
+    head = [fields["start_time"], fields["elapsed_s"], fields["carry_s"],
+            last if has_last else 0.0, fields["seen_z"], fields["seen_vz"],
+            *fields["ring_out"], *fields["outputs"]]
+    active = np.asarray(fields["active"])
+    return b"".join([
+        struct.pack("<4i", q.size, active.size, history, int(has_last)),
+        struct.pack(f"<{len(head)}d", *head), q.view("<f8").tobytes(),
+        *(np.asarray(fields[name], "<f8").tobytes() for name in STATE_ARRAYS[1:]),
+        active.astype(np.uint8).tobytes()])
 
 
 class _StateFields:
     """State bytes read into named fields (the layout of kernel.c's kernel_state_write)."""
 
     def __init__(self, contract: StepContract, data: bytes):
-        k, p = contract.n_modes, contract.n_points
-        self.modes, self.points, self.history, self.has_last = struct.unpack_from(
-            "<4i", data, 0)
-        count = _STATE_HEAD + 2 * k + 5 * p + 3 * self.history
-        values = np.frombuffer(data, "<f8", count, 4 * _STATE_INTS)
-        self.values = values
-        (self.start, self.elapsed, self.carry, self.last, self.seen_z,
-         self.seen_vz) = (float(x) for x in values[:6])
-        self.ring_out, self.outputs = values[6:9], values[9:15]
-        rest = values[_STATE_HEAD:]
-        self.q = rest[:2 * k].copy().view(complex)
-        arrays = rest[2 * k:2 * k + 5 * p].reshape(5, p)
-        self.df, self.penetration, self.rate, self.heights, self.slopes = arrays
-        history = rest[2 * k + 5 * p:].reshape(3, self.history)
-        self.t, self.z, self.v = history
-        self.active = np.frombuffer(data, np.uint8, p, len(data) - p).astype(bool)
+        f = state_fields(data)
+        self.history = f["history_t"].size
+        self.has_last = not math.isnan(f["last_step_s"])
+        self.values = np.frombuffer(data, "<f8", (len(data) - contract.n_points - 16) // 8, 16)
+        self.start, self.elapsed, self.carry = f["start_time"], f["elapsed_s"], f["carry_s"]
+        self.last = f["last_step_s"] if self.has_last else 0.0
+        self.seen_z, self.seen_vz = f["seen_z"], f["seen_vz"]
+        self.ring_out, self.outputs, self.q = f["ring_out"], f["outputs"], f["q"]
+        self.df, self.penetration, self.rate = f["df"], f["penetration"], f["rate"]
+        self.heights, self.slopes = f["seen_heights"], f["seen_slopes"]
+        self.t, self.z, self.v = f["history_t"], f["history_z"], f["history_v"]
+        self.active = f["active"]
 
 
 def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
@@ -397,7 +440,8 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
         return [f"its model part is {len(data)} bytes, shorter than its header"]
     modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
     if (modes, points) != (k, p):
-        return [f"it holds {modes} modes and {points} contact points, this model {k} and {p}"]
+        return [f"state of another model (build both with the same parameters): it holds "
+                f"{modes} modes and {points} contact points, this model {k} and {p}"]
     if not 0 <= history <= (len(data) - 4 * _STATE_INTS) // 24:
         return [f"its road history length {history} is impossible"]
     expected = 4 * _STATE_INTS + 8 * (_STATE_HEAD + 2 * k + 5 * p + 3 * history) + p
@@ -438,7 +482,7 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
         problems.append("its contact forces pull on the tread (the unilateral contact only "
                         "pushes)")
     if not np.all(np.abs(forces) <= bound):
-        problems.append(f"its contact forces exceed what the contact springs give at "
+        problems.append(f"its contact forces exceed what the zone springs give at "
                         f"{length:g} m and {rate:g} m/s")
     size = np.abs(s.q)
     for what, found, limit, unit in (
@@ -459,7 +503,7 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
         problems.append(f"the rim velocity it saw, {s.seen_vz!r} m/s, is beyond the input "
                         f"limit {MAX_VELOCITY_M_S:g} m/s")
     if not (abs(s.ring_out[0]) <= bound.sum() and abs(s.ring_out[1]) <= bound.sum()):
-        problems.append(f"its rim forces exceed what the contact springs give at {length:g} m "
+        problems.append(f"its rim forces exceed what the zone springs give at {length:g} m "
                         f"and {rate:g} m/s")
     if problems:
         return problems
@@ -473,8 +517,13 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
                     c.static_ring_out[2] + s.ring_out[2])
     tolerance = (0.0, 0.0, 1e-9 * scale, 0.0,
                  1e-9 * float(c.point_x_road[0] - c.point_x_road[-1]), 0.0)
-    if not all(abs(g - e) <= tol for g, e, tol in zip(s.outputs, expected_out, tolerance)):
-        problems.append("its outputs are not the ones it gives")
+    from .simulator import OUTPUT_NAMES
+
+    wrong = [f"{name} = {float(g)!r}, but the state gives {float(e)!r}"
+             for name, g, e, tol in zip(OUTPUT_NAMES, s.outputs, expected_out, tolerance)
+             if not abs(g - e) <= tol]
+    if wrong:
+        problems.append("its outputs are not the ones it gives: " + "; ".join(wrong))
     return problems
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from . import clock
 from .contract import StepContract, build_contract
-from .kernel_numpy import NumpyKernel
+from .kernel_numpy import NumpyKernel, state_data, state_fields
 from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S, SHORT_STEP_TEMPLATE
 
 OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
@@ -106,30 +106,37 @@ class ContactState:
             raise StateError(f"contact state of {len(payload)} bytes: shorter than its header")
         return cls(payload)
 
-    # what the header of the kernel's bytes holds (kernel.c's layout)
-    def _head(self, index: int) -> float:
-        return struct.unpack_from("<d", self.data, 16 + 8 * index)[0]
+    def fields(self) -> dict:
+        """What the state holds, by name (the layout of kernel.c; kernel_numpy.state_fields):
+        start_time, elapsed_s, carry_s, last_step_s (nan: no step yet), seen_z, seen_vz,
+        ring_out, outputs, q, df, penetration, rate, seen_heights, seen_slopes, history_t,
+        history_z, history_v, active."""
+        return state_fields(self.data)
 
-    @property
-    def start_time(self) -> float:
-        return self._head(0)
+    def replaced(self, **changes) -> ContactState:
+        """The same state with some fields changed (a tool to build states, forged ones
+        included: setting one checks what it means)."""
+        fields = self.fields()
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise TypeError(f"no state fields {sorted(unknown)}; they are {list(fields)}")
+        return ContactState(state_data({**fields, **changes}))
+
+    def __getattr__(self, name: str):
+        if name != "data" and name in _FIELD_NAMES:
+            return self.fields()[name]
+        raise AttributeError(name)
 
     @property
     def time(self) -> float:
-        return self._head(0) + self._head(1)
+        fields = self.fields()
+        return fields["start_time"] + fields["elapsed_s"]
 
-    @property
-    def last_step_s(self) -> float:
-        has_last = struct.unpack_from("<i", self.data, 12)[0]
-        return self._head(3) if has_last else math.nan
 
-    @property
-    def history_samples(self) -> int:
-        return struct.unpack_from("<i", self.data, 8)[0]
-
-    @property
-    def outputs(self) -> np.ndarray:
-        return np.array(struct.unpack_from("<6d", self.data, 16 + 8 * 9))
+_FIELD_NAMES = frozenset(("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z",
+                          "seen_vz", "ring_out", "outputs", "q", "df", "penetration", "rate",
+                          "seen_heights", "seen_slopes", "history_t", "history_z", "history_v",
+                          "active"))
 
 
 class ContactSimulator:
@@ -153,6 +160,11 @@ class ContactSimulator:
     @property
     def start_time(self) -> float:
         return self.kernel.start_time
+
+    @property
+    def elapsed_s(self) -> float:
+        """The time since the start: what the road history is indexed by."""
+        return self.kernel.elapsed_s
 
     def reset(self, start_time: float = 0.0) -> None:
         self.kernel.reset(start_time)

@@ -128,10 +128,11 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
     lib.kernel_outputs.restype = None
     lib.kernel_outputs.argtypes = [handle, p_double]
-    for name in ("kernel_time", "kernel_start_time", "kernel_min_step", "kernel_horizon"):
+    for name in ("kernel_time", "kernel_start_time", "kernel_elapsed", "kernel_min_step",
+                 "kernel_horizon"):
         getattr(lib, name).restype = double
         getattr(lib, name).argtypes = [handle]
-    for name in ("kernel_in_contact", "kernel_at_zone_edge"):
+    for name in ("kernel_in_contact", "kernel_at_zone_edge", "kernel_cached_steps"):
         getattr(lib, name).restype = ctypes.c_int
         getattr(lib, name).argtypes = [handle]
     lib.kernel_solver_fallbacks.restype = ctypes.c_long
@@ -188,6 +189,10 @@ class CompiledKernel:
     def start_time(self) -> float:
         return self._lib.kernel_start_time(self._handle)
 
+    @property
+    def elapsed_s(self) -> float:
+        return self._lib.kernel_elapsed(self._handle)
+
     def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
         """One communication step; the outputs at the new time as a tuple."""
         inputs = self._in
@@ -218,6 +223,11 @@ class CompiledKernel:
 
     def at_zone_edge(self) -> bool:
         return bool(self._lib.kernel_at_zone_edge(self._handle))
+
+    @property
+    def cached_steps(self) -> int:
+        """How many communication step sizes have their coefficients cached."""
+        return int(self._lib.kernel_cached_steps(self._handle))
 
     @property
     def solver_fallbacks(self) -> int:

@@ -852,11 +852,15 @@ double kernel_time(const TireKernel* kn) { return kn->start_time + kn->elapsed; 
 
 double kernel_start_time(const TireKernel* kn) { return kn->start_time; }
 
+double kernel_elapsed(const TireKernel* kn) { return kn->elapsed; }
+
 double kernel_min_step(const TireKernel* kn) { return kn->min_step; }
 
 double kernel_horizon(const TireKernel* kn) { return kn->windows.horizon; }
 
 long kernel_solver_fallbacks(const TireKernel* kn) { return kn->solver_fallbacks; }
+
+int kernel_cached_steps(const TireKernel* kn) { return kn->n_kernels; }
 
 void kernel_forces(const TireKernel* kn, double* forces)
 {
@@ -1214,6 +1218,9 @@ memory:
 #define STATE_INTS 4
 #define STATE_HEAD 15
 
+static const char* const OUTPUT_NAMES[KERNEL_N_OUTPUTS] = {
+    "rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"};
+
 static size_t doubles_for(int K, int P, int history)
 {
     return (size_t)(STATE_HEAD + 2 * K + 5 * P + 3 * history);
@@ -1242,7 +1249,12 @@ void kernel_state_write(TireKernel* kn, unsigned char* out)
 {
     int K = kn->K, P = kn->P, history = road_history_length(&kn->road);
     double head[STATE_HEAD];
-    settle(kn);  /* the modal state with its pending ramp added */
+    /* what the state holds is what the kernel continues from: the modal state with its
+     * pending ramp added, the forces' DFT computed again and the road's delay line rebuilt
+     * from its history, as a restore does, so a restored run is the same run, bit for bit */
+    settle(kn);
+    kn->dft_ok = 0;
+    road_rebuild(&kn->road, &kn->mem);
     put_int(&out, K);
     put_int(&out, P);
     put_int(&out, history);
@@ -1435,7 +1447,7 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
     if (pulls) add_why(why, why_size, "its contact forces pull on the tread (the unilateral "
                        "contact only pushes)");
     if (exceeds) {
-        snprintf(text, sizeof text, "its contact forces exceed what the contact springs give "
+        snprintf(text, sizeof text, "its contact forces exceed what the zone springs give "
                  "at %g m and %g m/s", length, rate);
         add_why(why, why_size, text);
     }
@@ -1478,7 +1490,7 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
         add_why(why, why_size, text);
     }
     if (!(fabs(get_double(in, 6)) <= total_bound && fabs(get_double(in, 7)) <= total_bound)) {
-        snprintf(text, sizeof text, "its rim forces exceed what the contact springs give at %g "
+        snprintf(text, sizeof text, "its rim forces exceed what the zone springs give at %g "
                  "m and %g m/s", length, rate);
         add_why(why, why_size, text);
     }
@@ -1508,12 +1520,19 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
         }
         tolerance[4] = 1e-9 * (kn->x_road[0] - kn->x_road[P - 1]);
         expected[5] = kn->static_ring[2] + get_double(in, 8);
+        text[0] = '\0';
         for (i = 0; i < KERNEL_N_OUTPUTS; i++) {
-            if (!(fabs(get_double(in, 9 + (size_t)i) - expected[i]) <= tolerance[i])) {
-                add_why(why, why_size, "its outputs are not the ones it gives");
-                break;
+            double given = get_double(in, 9 + (size_t)i);
+            if (!(fabs(given - expected[i]) <= tolerance[i])) {
+                size_t used = strlen(text);
+                py_repr(given, a, sizeof a);
+                py_repr(expected[i], b, sizeof b);
+                snprintf(text + used, sizeof text - used, "%s%s = %s, but the state gives %s",
+                         used ? "; " : "its outputs are not the ones it gives: ",
+                         OUTPUT_NAMES[i], a, b);
             }
         }
+        if (text[0] != '\0') add_why(why, why_size, text);
     }
 }
 
@@ -1532,8 +1551,8 @@ int kernel_state_check(const TireKernel* kn, const unsigned char* in, size_t siz
     P = get_int(in, 1);
     history = get_int(in, 2);
     if (K != kn->K || P != kn->P) {
-        snprintf(why, why_size, "it holds %d modes and %d contact points, this model %d and %d",
-                 K, P, kn->K, kn->P);
+        snprintf(why, why_size, "state of another model (build both with the same parameters): it holds "
+                 "%d modes and %d contact points, this model %d and %d", K, P, kn->K, kn->P);
         return KERNEL_BAD_CONTRACT;
     }
     if (history < 0 || history > (int)((size - STATE_INTS * 4) / 24)) {

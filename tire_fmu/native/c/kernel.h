@@ -45,11 +45,13 @@ int kernel_outputs_with(TireKernel* kernel, const double inputs[KERNEL_N_INPUTS]
 void kernel_outputs(const TireKernel* kernel, double outputs[KERNEL_N_OUTPUTS]);
 double kernel_time(const TireKernel* kernel);         /* start + time since it */
 double kernel_start_time(const TireKernel* kernel);
+double kernel_elapsed(const TireKernel* kernel);       /* time since the start */
 double kernel_min_step(const TireKernel* kernel);     /* shortest step it takes (s) */
 double kernel_horizon(const TireKernel* kernel);  /* road delay to the last point (s) */
 int kernel_in_contact(const TireKernel* kernel);
 int kernel_at_zone_edge(const TireKernel* kernel);
 long kernel_solver_fallbacks(const TireKernel* kernel);
+int kernel_cached_steps(const TireKernel* kernel);   /* step sizes with coefficients kept */
 /* the forces on each contact point at kernel_time (N), n_points values */
 void kernel_forces(const TireKernel* kernel, double* forces);
 

@@ -178,6 +178,8 @@ int road_read(RoadReader* road, const Memory* mem, double now, double z, double 
 /* the history as samples (t, z, v), oldest first; count samples */
 int road_history_length(const RoadReader* road);
 void road_history(const RoadReader* road, double* t, double* z, double* v);
+/* drop the delay line, keep the history (what a restore of the history leaves) */
+void road_rebuild(RoadReader* road, const Memory* mem);
 int road_set_history(RoadReader* road, const Memory* mem, const double* t, const double* z,
                      const double* v, int count);
 
