@@ -4,9 +4,10 @@
 #ifndef TIRE_CONTRACT_H
 #define TIRE_CONTRACT_H
 
-#include <stdint.h>
-
-#include "numerics.h"
+/* int32_t and cx come from numerics.h (which has stdint.h): include it first */
+#ifndef TIRE_NUMERICS_H
+#error "include numerics.h before contract.h"
+#endif
 
 #define TIRE_CONTRACT_VERSION 48865725u
 

@@ -2,8 +2,8 @@
 #ifndef TIRE_CONTRACT_PACK_H
 #define TIRE_CONTRACT_PACK_H
 
+#include "tire.h" /* numerics.h first: contract.h uses its types */
 #include "contract.h"
-#include "tire.h"
 
 /* fill c (its arrays allocated with mem); 0, or -1 out of memory (nothing allocated then) */
 int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zone* zone,

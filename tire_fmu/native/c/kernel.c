@@ -1320,12 +1320,14 @@ static double largest_abs(const unsigned char* in, size_t first, int count)
     return big;
 }
 
-static int resolves(double time, double h)
+double clock_resolved_until(double h)
 {
     int exponent;
     frexp(h, &exponent);
-    return fabs(time) + h < ldexp(1.0, exponent + 52);
+    return ldexp(1.0, exponent + 52);
 }
+
+int clock_resolves(double time, double h) { return fabs(time) + h < clock_resolved_until(h); }
 
 /* the road history as the reader keeps it (core: kernel_numpy.history_problems) */
 static void history_problems(const TireKernel* kn, const unsigned char* in, size_t t0,
@@ -1426,7 +1428,7 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
         snprintf(text, sizeof text, "its last step is %s s; the FMU takes at most %g s", a,
                  SPEC_MAX_STEP_S);
         add_why(why, why_size, text);
-    } else if (has_last && !resolves(time - last, last)) {
+    } else if (has_last && !clock_resolves(time - last, last)) {
         py_repr(last, a, sizeof a);
         py_repr(time, b, sizeof b);
         snprintf(text, sizeof text, "its last step of %s s ends at t = %s s, where the clock "

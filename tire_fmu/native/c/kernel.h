@@ -15,8 +15,8 @@
 
 #include <stddef.h>
 
+#include "tire.h" /* numerics.h first: contract.h uses its types */
 #include "contract.h"
-#include "tire.h"
 
 #define KERNEL_N_INPUTS 4
 #define KERNEL_N_OUTPUTS 6

@@ -8,8 +8,8 @@
 
 #include <stddef.h>
 
+#include "tire.h" /* numerics.h first: contract.h uses its types */
 #include "contract.h"
-#include "tire.h"
 
 /* the FMI statuses the model returns (the values of fmi2Status) */
 enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_DISCARD = 2, MODEL_ERROR = 3 };
