@@ -802,7 +802,10 @@ static double crossing(const double* x, const double* pen, int inner, int outer,
     if (outer < 0 || outer >= n) return x[inner];
     p_in = pen[inner];
     p_out = pen[outer];
-    share = p_in > p_out ? fmin(p_in / (p_in - p_out), 1.0) : 0.0;
+    /* a neighbour that penetrates without pushing puts the edge at the neighbour, a point
+     * that pushes from above the road (the linear law's two-sided spring) at itself: the
+     * footprint is never shorter than its pushing points' span (contact._edges) */
+    share = p_in > fmax(p_out, 0.0) ? fmin(p_in / (p_in - p_out), 1.0) : 0.0;
     return x[inner] + share * (x[outer] - x[inner]);
 }
 
