@@ -71,7 +71,8 @@ class StepContract:
     # the free ring's modes, grouped by order
     order_start: np.ndarray = _field("int", ("n_orders + 1",), "first mode of each order")
     lam: np.ndarray = _field("complex", ("n_modes",), "eigenvalue (1/s)")
-    beta: np.ndarray = _field("complex", ("n_modes",), "input of a node force: beta exp(-i n theta)")
+    beta: np.ndarray = _field("complex", ("n_modes",),
+                              "input of a node force: beta exp(-i n theta)")
     gamma: np.ndarray = _field("complex", ("n_modes",), "node displacement: gamma exp(i n theta)")
     eta: np.ndarray = _field("complex", ("n_modes",), "node rate: eta exp(i n theta)")
     b_rim: np.ndarray = _field("complex", ("n_modes",), "input of rim_z (order 1 only)")

@@ -109,7 +109,7 @@ class NumpyKernel:
         self.pen_rim = self.interp @ self.d_rim[self.w_rows] - self.sec
         self.rate_rim = self.interp @ self.e_rim[self.r_rows] - self.sec
         windows = RoadWindows(c.window_early_s, c.window_late_s, 0.0)
-        self.road = RoadReader(windows, delay_line=False)
+        self.road = RoadReader(windows)
         self.horizon_s = windows.horizon_s
         self._interfaces: dict[float, tuple[int, _Interface]] = {}
         self._instant = _Interface(self, 0.0, instant=True) if self.truncated else None

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import struct
 import warnings
 from dataclasses import dataclass
 

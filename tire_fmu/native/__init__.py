@@ -11,7 +11,6 @@ the linux64 and win64 binaries into one ``.fmu``. See docs/native.md; ``tire-fmu
 
 from importlib import import_module
 
-
 __all__ = [
     "DEFAULT_MODEL_IDENTIFIER",
     "NativeBuildError",

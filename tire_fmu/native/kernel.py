@@ -132,7 +132,8 @@ def _declare(lib: ctypes.CDLL) -> None:
                  "kernel_horizon"):
         getattr(lib, name).restype = double
         getattr(lib, name).argtypes = [handle]
-    for name in ("kernel_in_contact", "kernel_at_zone_edge", "kernel_cached_steps"):
+    for name in ("kernel_in_contact", "kernel_at_zone_edge", "kernel_cached_steps",
+                 "kernel_delay_line_on"):
         getattr(lib, name).restype = ctypes.c_int
         getattr(lib, name).argtypes = [handle]
     lib.kernel_solver_fallbacks.restype = ctypes.c_long
@@ -228,6 +229,11 @@ class CompiledKernel:
     def cached_steps(self) -> int:
         """How many communication step sizes have their coefficients cached."""
         return int(self._lib.kernel_cached_steps(self._handle))
+
+    @property
+    def delay_line_on(self) -> bool:
+        """Whether the road is read by road.c's delay line (a run of equal steps)."""
+        return bool(self._lib.kernel_delay_line_on(self._handle))
 
     @property
     def solver_fallbacks(self) -> int:

@@ -865,6 +865,8 @@ long kernel_solver_fallbacks(const TireKernel* kn) { return kn->solver_fallbacks
 
 int kernel_cached_steps(const TireKernel* kn) { return kn->n_kernels; }
 
+int kernel_delay_line_on(const TireKernel* kn) { return kn->road.line_on; }
+
 void kernel_forces(const TireKernel* kn, double* forces)
 {
     int j;

@@ -52,6 +52,7 @@ int kernel_in_contact(const TireKernel* kernel);
 int kernel_at_zone_edge(const TireKernel* kernel);
 long kernel_solver_fallbacks(const TireKernel* kernel);
 int kernel_cached_steps(const TireKernel* kernel);   /* step sizes with coefficients kept */
+int kernel_delay_line_on(const TireKernel* kernel);  /* the road read by its delay line */
 /* the forces on each contact point at kernel_time (N), n_points values */
 void kernel_forces(const TireKernel* kernel, double* forces);
 
