@@ -63,8 +63,10 @@ def initialised(**parameters):
 
 
 def core_simulator(load=DEFAULT_LOAD_N, speed=0.0):
+    """The core's simulator on the kernel the slave runs here: the numpy reference (in plain
+    Python the slave is in no FMU, so it has no compiled kernel of its own to load)."""
     tire, op = validate({}, {"n_elements": N, "load_n": load, "speed_m_s": speed})
-    return ContactSimulator(build_contact_model(tire, op))
+    return ContactSimulator(build_contact_model(tire, op), backend="numpy")
 
 
 def set_inputs(slave, rim_z=0.0, rim_vz=0.0, road_z=0.0, road_vz=0.0):

@@ -344,8 +344,33 @@ class TireModal(Fmi2Slave):
                 problems += error.details
             if problems:
                 raise ParameterError(problems)
-        simulator = ContactSimulator(contact, start_time=self._start_time)
+        library, why = self._kernel_library()
+        simulator = ContactSimulator(contact, start_time=self._start_time,
+                                     backend="compiled" if library else "numpy",
+                                     library=library)
+        self._kernel_note = why or "stepping with the compiled kernel"
         return simulator, contact, [fmu_message(str(w.message)) for w in caught]
+
+    def _kernel_library(self) -> tuple:
+        """The compiled step kernel this FMU carries for the platform it runs on (loaded
+        once per process), or None and why the numpy reference kernel steps instead."""
+        from tire_fmu.native.kernel import PLATFORMS, KernelUnavailable, host_platform, \
+            load_library
+
+        platform = host_platform()
+        name = PLATFORMS[platform][3] if platform in PLATFORMS else None
+        folder = os.path.dirname(os.path.abspath(self.resources)) if self.resources else ""
+        path = os.path.join(folder, "binaries", platform or "", name or "")
+        if name is None or not os.path.isfile(path):
+            return None, (f"stepping with the numpy reference kernel: this FMU carries no "
+                          f"compiled step kernel for {platform or 'this platform'} (it was "
+                          "built without a C compiler for it; the outputs are the same, each "
+                          "step slower)")
+        try:
+            return load_library(path), ""
+        except KernelUnavailable as error:
+            return None, (f"stepping with the numpy reference kernel: {error} (the outputs "
+                          "are the same, each step slower)")
 
     def _initialise(self) -> None:
         started = time.perf_counter()
@@ -381,7 +406,8 @@ class TireModal(Fmi2Slave):
             f"{summary['patch_length_m'] * 100:.3g} cm at {summary['load_n']:.6g} N, deflection "
             f"{summary['deflection_m'] * 1e3:.4g} mm, vertical stiffness "
             f"{summary['vertical_stiffness_n_per_m']:.6g} N/m, critical speed "
-            f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact; core "
+            f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact, "
+            f"{self._kernel_note}; core "
             f"tire_fmu {tire_fmu.__version__} from {tire_fmu.__file__}")
 
     def _show(self, outputs: dict, in_contact: bool) -> None:

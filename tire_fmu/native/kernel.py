@@ -29,6 +29,14 @@ KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c")
 KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h")
 KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
 LIBRARY_NAME = "tire_kernel"
+#: The compiler, flags and file name of the kernel library per FMI platform (mingw's own
+#: printf, and no DLL needed beyond the C runtime Windows ships, as the native FMU's).
+PLATFORMS = {
+    "linux64": (None, KERNEL_FLAGS, ("-lm",), LIBRARY_NAME + ".so"),
+    "win64": ("x86_64-w64-mingw32-gcc", ("-shared", "-O2", "-std=c99",
+                                         "-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"), (),
+              LIBRARY_NAME + ".dll"),
+}
 N_INPUTS, N_OUTPUTS = 4, 6
 _WHY_SIZE = 512
 
@@ -58,12 +66,26 @@ def compiler() -> str | None:
     return shutil.which(cc[0]) and cc[0]
 
 
-def compile_kernel(destination: Path, compiler_command: str | None = None) -> Path:
-    """Compile the kernel library to ``destination`` (a file path); KernelUnavailable when
-    there is no C compiler or it fails (with its output)."""
-    command = compiler_command or compiler()
+def host_platform() -> str | None:
+    """The FMI platform this process runs on, where the kernel library is built for it."""
+    import struct
+    import sys
+
+    if struct.calcsize("P") != 8:
+        return None
+    return {"linux": "linux64", "win32": "win64"}.get(sys.platform)
+
+
+def compile_kernel(destination: Path, platform: str = "linux64") -> Path:
+    """Compile the kernel library for ``platform`` (linux64 with $CC or gcc, win64 with
+    mingw-w64) to ``destination`` (a file path); KernelUnavailable when there is no such
+    compiler or it fails (with its output)."""
+    tool, flags, libraries, _ = PLATFORMS[platform]
+    command = shutil.which(tool) and tool if tool else compiler()
     if command is None:
-        raise KernelUnavailable("no C compiler found (install gcc, or set CC)")
+        raise KernelUnavailable(f"no C compiler for {platform} found ("
+                                + ("install gcc, or set CC" if tool is None else
+                                   f"install {tool}") + ")")
     folder = _c_folder()
     destination = Path(destination)
     destination.parent.mkdir(parents=True, exist_ok=True)
@@ -72,8 +94,8 @@ def compile_kernel(destination: Path, compiler_command: str | None = None) -> Pa
     os.close(handle)
     try:
         result = subprocess.run(
-            [command, *KERNEL_FLAGS, "-o", partial, *(str(folder / s) for s in KERNEL_SOURCES),
-             "-lm"], capture_output=True, text=True)
+            [command, *flags, "-o", partial, *(str(folder / s) for s in KERNEL_SOURCES),
+             *libraries], capture_output=True, text=True)
         if result.returncode != 0:
             raise KernelUnavailable(f"compiling the step kernel failed:\n{result.stderr}")
         os.replace(partial, destination)
