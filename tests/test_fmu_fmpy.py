@@ -832,7 +832,6 @@ def test_without_a_compiled_kernel_the_fmu_steps_with_numpy_and_says_so(tmp_path
     slave then steps with the numpy reference kernel, says so when it is built, and gives the
     compiled kernel's outputs (the two kernels agree to 1e-10)."""
     import tire_fmu.native.kernel as kernel
-
     from tire_fmu.fmu.builder import KernelMissingWarning
 
     def no_compiler(destination, platform="linux64"):

@@ -354,8 +354,7 @@ class TireModal(Fmi2Slave):
     def _kernel_library(self) -> tuple:
         """The compiled step kernel this FMU carries for the platform it runs on (loaded
         once per process), or None and why the numpy reference kernel steps instead."""
-        from tire_fmu.native.kernel import PLATFORMS, KernelUnavailable, host_platform, \
-            load_library
+        from tire_fmu.native.kernel import PLATFORMS, KernelUnavailable, host_platform, load_library
 
         platform = host_platform()
         name = PLATFORMS[platform][3] if platform in PLATFORMS else None
