@@ -164,10 +164,32 @@ class NumpyKernel:
         self.road.read(self.elapsed_s, self._road_z, self._road_vz, h, out)
         return out[:p].copy(), out[p:].copy()
 
-    def step(self, h: float, inputs) -> np.ndarray:
+    def step_problems(self, h: float, inputs) -> int:
+        """Why a step is refused, as the bits of kernel.h's kernel_step_problems (0: it is
+        not): h not finite and > 0 (1), shorter than the contract's shortest step (2), not
+        resolved by the clock (4); input i not finite or beyond its limit (8 << i)."""
+        from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
+
+        problems = 0
+        if not 0.0 < h < math.inf:
+            problems |= 1
+        elif h < self.contract.min_step_s:
+            problems |= 2
+        elif not clock.resolves(self.time, h):
+            problems |= 4
+        for i, value in enumerate(inputs):
+            if not abs(value) <= (MAX_VELOCITY_M_S if i % 2 else MAX_DISPLACEMENT_M):
+                problems |= 8 << i
+        return problems
+
+    def step(self, h: float, inputs) -> np.ndarray | None:
         """One communication step from ``time`` with the inputs (rim_z, rim_vz, road_z,
-        road_vz) given at ``time``; the outputs at the new time."""
-        z, vz, self._road_z, self._road_vz = (float(x) for x in inputs)
+        road_vz) given at ``time``; the outputs at the new time, or None (nothing changed)
+        for a step step_problems finds fault with."""
+        inputs = tuple(float(x) for x in inputs)
+        if self.step_problems(h, inputs):
+            return None
+        z, vz, self._road_z, self._road_vz = inputs
         n_sub, interface = self.interface(h)
         heights, slopes = self._road(h)
         self._start(z, vz, heights, slopes)
@@ -180,11 +202,32 @@ class NumpyKernel:
         return self.outputs.copy()
 
     def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
-        return tuple(float(x) for x in self.step(h, (z, vz, road_z, road_vz)))
+        out = self.step(h, (z, vz, road_z, road_vz))
+        return None if out is None else [float(x) for x in out]
 
-    def outputs_with(self, inputs) -> np.ndarray:
-        """The outputs at ``time`` for inputs given there; the forces stay re-solved."""
-        z, vz, self._road_z, self._road_vz = (float(x) for x in inputs)
+    def raw_step(self):
+        """(function, handle, inputs, report): the compiled kernel's hot-path calling
+        convention (native/kernel.py) over this kernel, for callers written against it."""
+        inputs, report = [0.0] * 4, [0.0] * 8  # plain floats, as the ctypes arrays read
+
+        def step(handle, h, inputs, report):
+            out = self.step(h, inputs)
+            if out is None:
+                return -3
+            report[:6] = [float(x) for x in out]
+            report[6] = self.time
+            report[7] = float(self.at_zone_edge())
+            return 0
+
+        return step, None, inputs, report
+
+    def outputs_with(self, inputs) -> np.ndarray | None:
+        """The outputs at ``time`` for inputs given there (the forces stay re-solved), or
+        None if an input is refused."""
+        inputs = tuple(float(x) for x in inputs)
+        if self.step_problems(1.0, inputs) & ~6:
+            return None
+        z, vz, self._road_z, self._road_vz = inputs
         heights, slopes = self._road(self.last_step)
         self._start(z, vz, heights, slopes)
         self.outputs = self._outputs()

@@ -38,6 +38,9 @@ PLATFORMS = {
               LIBRARY_NAME + ".dll"),
 }
 N_INPUTS, N_OUTPUTS = 4, 6
+#: a step's report (kernel.h): the outputs, the time, whether the footprint is at a zone end
+REPORT, REPORT_TIME, REPORT_ZONE_EDGE = N_OUTPUTS + 2, N_OUTPUTS, N_OUTPUTS + 1
+REFUSED = -3
 _WHY_SIZE = 512
 
 
@@ -148,6 +151,8 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.kernel_step.argtypes = [handle, double, p_double, p_double]
     lib.kernel_outputs_with.restype = ctypes.c_int
     lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
+    lib.kernel_step_problems.restype = ctypes.c_int
+    lib.kernel_step_problems.argtypes = [handle, double, p_double]
     lib.kernel_outputs.restype = None
     lib.kernel_outputs.argtypes = [handle, p_double]
     for name in ("kernel_time", "kernel_start_time", "kernel_elapsed", "kernel_min_step",
@@ -188,7 +193,7 @@ class CompiledKernel:
                                     f"{why.value.decode(errors='replace')}")
         self._handle = handle
         self._in = (ctypes.c_double * N_INPUTS)()
-        self._out = (ctypes.c_double * N_OUTPUTS)()
+        self._out = (ctypes.c_double * REPORT)()
         self._step = lib.kernel_step
         self.horizon_s = lib.kernel_horizon(handle)
 
@@ -217,26 +222,38 @@ class CompiledKernel:
         return self._lib.kernel_elapsed(self._handle)
 
     def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
-        """One communication step; the outputs at the new time as a tuple."""
+        """One communication step; the outputs at the new time as a list, or None (nothing
+        changed) for a step the kernel's rules refuse."""
         inputs = self._in
         inputs[0], inputs[1], inputs[2], inputs[3] = z, vz, road_z, road_vz
-        if self._step(self._handle, h, inputs, self._out):
-            self._check(1, "kernel_step")
-        return tuple(self._out)
+        status = self._step(self._handle, h, inputs, self._out)
+        if status:
+            if status == REFUSED:
+                return None
+            self._check(status, "kernel_step")
+        return self._out[0:N_OUTPUTS]
 
-    def step(self, h: float, inputs) -> np.ndarray:
-        return np.array(self.step_values(h, *inputs))
+    def raw_step(self):
+        """(function, handle, inputs, report) of the hot path: function(handle, h, inputs,
+        report) steps with the four inputs in ``inputs`` and writes the report (the outputs,
+        the time, the zone-edge flag) into ``report``; 0, or -3 refused, or -1 no memory."""
+        return self._step, self._handle, self._in, self._out
 
-    def outputs_with(self, inputs) -> np.ndarray:
+
+    def outputs_with(self, inputs):
+        """The outputs at the current time for inputs given there, or None if refused."""
         self._in[:] = [float(x) for x in inputs]
-        self._check(self._lib.kernel_outputs_with(self._handle, self._in, self._out),
-                    "kernel_outputs_with")
-        return np.array(self._out[:])
+        status = self._lib.kernel_outputs_with(self._handle, self._in, self._out)
+        if status == REFUSED:
+            return None
+        self._check(status, "kernel_outputs_with")
+        return self._out[0:N_OUTPUTS]
 
     @property
     def outputs(self) -> np.ndarray:
-        self._lib.kernel_outputs(self._handle, self._out)
-        return np.array(self._out[:])
+        out = (ctypes.c_double * N_OUTPUTS)()
+        self._lib.kernel_outputs(self._handle, out)
+        return np.array(out[:])
 
     @property
     def forces(self) -> np.ndarray:

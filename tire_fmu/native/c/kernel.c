@@ -8,6 +8,7 @@
  * mode, the modes of one order sum before the inverse DFT at the zone nodes, so a substep costs
  * O(K + N Z) and no mode x node table is ever formed. Contact points read the zone nodes
  * through their interpolation weights and give their forces back with the same weights. */
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -873,11 +874,38 @@ void kernel_forces(const TireKernel* kn, double* forces)
     for (j = 0; j < kn->P; j++) forces[j] = kn->f_static[j] + kn->df[j];
 }
 
-int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
-                double outputs[KERNEL_N_OUTPUTS])
+int kernel_step_problems(const TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS])
 {
-    Interface* k = step_interface(kn, h);
+    int problems = 0, i;
+    if (!(h > 0.0 && h <= DBL_MAX)) {
+        problems |= KERNEL_BAD_H;  /* also nan */
+    } else if (h < kn->min_step) {
+        problems |= KERNEL_SHORT_H;
+    } else if (!clock_resolves(kn->start_time + kn->elapsed, h)) {
+        problems |= KERNEL_UNRESOLVED_H;
+    }
+    for (i = 0; i < KERNEL_N_INPUTS; i++) {
+        double limit = i % 2 ? SPEC_MAX_VELOCITY_M_S : SPEC_MAX_DISPLACEMENT_M;
+        if (!(fabs(inputs[i]) <= limit)) problems |= KERNEL_BAD_INPUT << i;
+    }
+    return problems;
+}
+
+static void fill_report(const TireKernel* kn, double report[KERNEL_REPORT])
+{
+    if (report == NULL) return;
+    memcpy(report, kn->outputs, sizeof kn->outputs);
+    report[KERNEL_REPORT_TIME] = kn->start_time + kn->elapsed;
+    report[KERNEL_REPORT_ZONE_EDGE] = kernel_at_zone_edge(kn) ? 1.0 : 0.0;
+}
+
+int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
+                double report[KERNEL_REPORT])
+{
+    Interface* k;
     int i;
+    if (kernel_step_problems(kn, h, inputs) != 0) return KERNEL_REFUSED;
+    k = step_interface(kn, h);
     if (k == NULL) return KERNEL_NO_MEMORY;
     if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
                   kn->slopes) != 0) {
@@ -897,21 +925,24 @@ int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
     kn->last_step = h;
     kn->has_last = 1;
     update_outputs(kn);
-    if (outputs != NULL) kernel_outputs(kn, outputs);
+    fill_report(kn, report);
     return KERNEL_OK;
 }
 
 int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
-                        double outputs[KERNEL_N_OUTPUTS])
+                        double report[KERNEL_REPORT])
 {
     double h = kn->has_last ? kn->last_step : NAN;
+    if ((kernel_step_problems(kn, 1.0, inputs) & ~(KERNEL_SHORT_H | KERNEL_UNRESOLVED_H)) != 0) {
+        return KERNEL_REFUSED;  /* the inputs alone are checked: there is no step */
+    }
     if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
                   kn->slopes) != 0) {
         return KERNEL_NO_MEMORY;
     }
     if (start(kn, inputs[0], inputs[1], kn->heights, kn->slopes) != 0) return KERNEL_NO_MEMORY;
     update_outputs(kn);
-    if (outputs != NULL) kernel_outputs(kn, outputs);
+    fill_report(kn, report);
     return KERNEL_OK;
 }
 

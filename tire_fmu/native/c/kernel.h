@@ -20,11 +20,22 @@
 
 #define KERNEL_N_INPUTS 4
 #define KERNEL_N_OUTPUTS 6
+/* what a step reports: the outputs, then the time, then 1 where the footprint touches an end
+ * of the contact zone (a report is one array, so a host's step is one call) */
+#define KERNEL_REPORT (KERNEL_N_OUTPUTS + 2)
+#define KERNEL_REPORT_TIME KERNEL_N_OUTPUTS
+#define KERNEL_REPORT_ZONE_EDGE (KERNEL_N_OUTPUTS + 1)
 
 typedef struct TireKernel TireKernel;
 
 /* status of the kernel's calls */
-enum { KERNEL_OK = 0, KERNEL_NO_MEMORY = -1, KERNEL_BAD_CONTRACT = -2 };
+enum { KERNEL_OK = 0, KERNEL_NO_MEMORY = -1, KERNEL_BAD_CONTRACT = -2, KERNEL_REFUSED = -3 };
+
+/* why a step is refused, as bits (0: it is not): h not finite and > 0, shorter than the
+ * shortest step the contract takes, or not resolved by a clock of doubles at the kernel's
+ * time; input i not finite or beyond its limit (bit 3 + i) */
+enum { KERNEL_BAD_H = 1, KERNEL_SHORT_H = 2, KERNEL_UNRESOLVED_H = 4, KERNEL_BAD_INPUT = 8 };
+int kernel_step_problems(const TireKernel* kernel, double h, const double inputs[KERNEL_N_INPUTS]);
 
 /* a kernel for the contract, at time start_time; KERNEL_BAD_CONTRACT for another version or
  * an inconsistent layout (why says which) */
@@ -35,13 +46,14 @@ void kernel_destroy(TireKernel* kernel);
 TireKernel* kernel_new(const TireContract* contract, double start_time, char* why,
                        size_t why_size);
 void kernel_reset(TireKernel* kernel, double start_time);
-/* one communication step of h from kernel_time with the inputs at kernel_time; outputs at the
- * new time. Nothing is checked here: the FMU layers check h and the inputs first. */
+/* one communication step of h from kernel_time with the inputs at kernel_time; the report
+ * (KERNEL_REPORT values, or NULL) at the new time. KERNEL_REFUSED, nothing changed, for a step
+ * kernel_step_problems finds fault with. */
 int kernel_step(TireKernel* kernel, double h, const double inputs[KERNEL_N_INPUTS],
-                double outputs[KERNEL_N_OUTPUTS]);
+                double report[KERNEL_REPORT]);
 /* the outputs at kernel_time for inputs given there (the forces re-solved for them) */
 int kernel_outputs_with(TireKernel* kernel, const double inputs[KERNEL_N_INPUTS],
-                        double outputs[KERNEL_N_OUTPUTS]);
+                        double report[KERNEL_REPORT]);
 void kernel_outputs(const TireKernel* kernel, double outputs[KERNEL_N_OUTPUTS]);
 double kernel_time(const TireKernel* kernel);         /* start + time since it */
 double kernel_start_time(const TireKernel* kernel);
