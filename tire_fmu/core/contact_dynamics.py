@@ -146,6 +146,7 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
 from .simulator import (  # noqa: E402, F401  (the API this module has always offered)
     INPUT_NAMES,
     OUTPUT_NAMES,
+    OUTPUT_UNITS,
     ContactSimulator,
     ContactState,
     KernelFallbackWarning,

@@ -34,6 +34,8 @@ from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S, SHORT_STEP_TEMPLA
 
 OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
                 "tread_deflection")
+OUTPUT_UNITS = {"rim_Fz": "N", "rim_Fx": "N", "contact_Fz": "N", "deflection": "m",
+                "contact_length": "m", "tread_deflection": "m"}
 INPUT_NAMES = ("rim_z", "rim_vz", "road_z", "road_vz")
 BACKENDS = ("auto", "compiled", "numpy")
 _STATE_MAGIC = b"tire_fmu.kernel-state/2"

@@ -11,8 +11,8 @@ from dataclasses import dataclass, fields, replace
 from xml.etree import ElementTree
 
 from ..core.contact import DEFAULT_ZONE_LENGTH_M
-from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
-from ..core.io_model import OUTPUT_UNITS
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES, OUTPUT_UNITS
+from ..core.free_ring import RingTruncation
 from ..core.parameters import (
     DEFAULT_LOAD_N,
     MAX_ELEMENTS,
@@ -20,7 +20,6 @@ from ..core.parameters import (
     TIRE_FIELDS,
     TireParameters,
 )
-from ..core.reduction import ReductionSettings
 
 #: JSON file in an FMU's resources/ with the tire data its parameters start from (written by
 #: ``build_fmu(tire=...)``, e.g. from ``tire-fmu build-fmu --tire-file``); absent: GL073A.
@@ -136,7 +135,7 @@ def _signals() -> list[FmuVariable]:
 
 def _parameters() -> list[FmuVariable]:
     """Parameters with their defaults; f_max and n_modes use 0 for "no limit"."""
-    settings = ReductionSettings()
+    settings = RingTruncation()
     defaults = TireParameters()
     table = [
         FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
@@ -149,11 +148,11 @@ def _parameters() -> list[FmuVariable]:
                     f"finite-difference nodes around the ring; allowed [{MIN_ELEMENTS}, "
                     f"{MAX_ELEMENTS}]", "--elements"),
         FmuVariable("f_max", "Real", "parameter", settings.f_max_hz or 0.0, "Hz",
-                    "highest natural frequency of the modes the reduction keeps (0 = no cut: "
-                    "the reduction's error budget decides)", "--f-max"),
+                    "highest natural frequency of the free ring's modes the step keeps (0 = no "
+                    "cut: every mode)", "--f-max"),
         FmuVariable("n_modes", "Integer", "parameter", settings.n_modes or 0, "",
-                    "keep at most this many modes, largest contributions first (0 = no limit)",
-                    "--n-modes"),
+                    "keep at most this many of the free ring's modes, lowest natural frequency "
+                    "first (0 = no limit)", "--n-modes"),
         FmuVariable("static_correction", "Boolean", "parameter", settings.static_correction,
                     "", "add the dropped modes' static response, so static stiffness is exact",
                     "--no-static-correction"),
