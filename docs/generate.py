@@ -958,7 +958,8 @@ def _fmu_messages() -> dict[str, list[str]]:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for case, parameters in (("parameters", {"R": -1.0}), ("load", {"load": 1e7}),
-                                 ("speed", {"speed": 500.0}), ("m_s", {"m_s": 1e-6, "k_r2": 1e11, "beta": 0.1}),
+                                 ("speed", {"speed": 500.0}),
+                                 ("m_s", {"m_s": 1e-6, "k_r2": 1e11, "beta": 0.1}),
                                  ("k_r2", {"k_r2": 0.01}), ("speed-warning", {"speed": 90.0})):
             out[case] = said(initialised(**parameters))
         slave = new()

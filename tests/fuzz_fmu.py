@@ -398,6 +398,14 @@ class FmuMachine(RuleBasedStateMachine):
 #: Call sequences that failed, found by this fuzz: replayed, rule by rule with the same checks,
 #: before every run (so CI covers them whatever hypothesis draws). Each: why it failed, calls.
 REPLAYS = {
+    "outputs read after inputs that lift the tread off, then a refused input: the native FMU "
+    "refused to restore the state it had just taken (its in-contact event flag was compared "
+    "with the outputs)": [
+        ("begin", {"start": 0.0, "mesh": 16, "bad": [], "go": "run"}),
+        ("set_inputs", {"values": [0.0, 0.0, -0.01, 0.0]}),
+        ("get_outputs", {}),
+        ("set_inputs", {"values": [0.0, 0.0, 1e6, 0.0]}),
+    ],
     "no ring mode kept (f_max = 1e-3 Hz, below the lowest): after 8 steps on one active set, "
     "BLAS refused the fast step's products on the empty modal state (the Python FMU went to "
     "its error state)": [

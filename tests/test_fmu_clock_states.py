@@ -133,10 +133,11 @@ def test_a_long_run_from_an_epoch_start_keeps_time_and_gives_the_outputs_from_ze
 # -- forged states -----------------------------------------------------------------------------
 
 def _native_state(data: bytes, n_values: int):
-    """Where things are in a native FMU state (tire_model.c and fmi2_layer.c)."""
+    """Where things are in a native FMU state (fmi2_layer.c, tire_model.c's two flags, then
+    kernel.c's state)."""
     head = 8 + 4 + 4 + 48 + 8
     model = head + 8 + 8 + 4 + 4 + 8 * n_values + 8
-    k, z, history = struct.unpack_from("<3i", data, model)
+    k, z, history = struct.unpack_from("<3i", data, model + 8)
     doubles = model + 6 * 4
     at = {"time": head, "start": head + 8, "values": head + 24, "model_start": doubles,
           "q": doubles + 8 * 15, "t": doubles + 8 * (15 + 2 * k + 5 * z)}
@@ -169,8 +170,8 @@ def _native_forged(data: bytes, n_values: int, vr: dict, case: str) -> bytes:
         count = MAX_HISTORY_SAMPLES + 1
         arrays = np.concatenate([np.linspace(-1.0, 0.0, count), np.zeros(2 * count)])
         data[at["t"]:at["t"] + 24 * history] = arrays.astype("<f8").tobytes()
-        model = at["model_start"] - 6 * 4  # its ints: K, Z, history length, ...
-        data[model + 8:model + 12] = struct.pack("<i", count)
+        model = at["model_start"] - 6 * 4  # its ints: two flags, then K, P, history length
+        data[model + 16:model + 20] = struct.pack("<i", count)
         size_at = at["values"] + 8 * n_values  # the model part's size, then the total
         model_size = struct.unpack_from("<Q", data, size_at)[0]
         data[size_at:size_at + 8] = struct.pack("<Q", model_size + 24 * (count - history))
@@ -189,22 +190,21 @@ def _python_forged(data: bytes, case: str) -> bytes:
     if case == "header time 1e300":
         state = dataclasses.replace(state, start_time=1e300)
     elif case == "time 1e300 throughout":
-        state = dataclasses.replace(state, start_time=1e300, simulator=dataclasses.replace(
-            sim, start_time=1e300))
+        state = dataclasses.replace(state, start_time=1e300,
+                                    simulator=sim.replaced(start_time=1e300))
     elif case == "road sample in the future":
         t = sim.history_t.copy()
         t[-1] = 1.0
-        state = dataclasses.replace(state, simulator=dataclasses.replace(
-            sim, history_t=t, road_line=np.zeros(0), road_run=np.array([-1])))
+        state = dataclasses.replace(state, simulator=sim.replaced(history_t=t))
     elif case == "road history too long":
         count = MAX_HISTORY_SAMPLES + 1
-        state = dataclasses.replace(state, simulator=dataclasses.replace(
-            sim, history_t=np.linspace(-1.0, 0.0, count), history_z=np.zeros(count),
-            history_v=np.zeros(count), road_line=np.zeros(0), road_run=np.array([-1])))
+        state = dataclasses.replace(state, simulator=sim.replaced(
+            history_t=np.linspace(-1.0, 0.0, count), history_z=np.zeros(count),
+            history_v=np.zeros(count)))
     elif case == "modal state 1e300":
         q = sim.q.copy()
         q[0] = 1e300
-        state = dataclasses.replace(state, simulator=dataclasses.replace(sim, q=q))
+        state = dataclasses.replace(state, simulator=sim.replaced(q=q))
     elif case == "outputs 3e307":
         values = list(state.values)
         values[4] = 3e307  # rim_Fz

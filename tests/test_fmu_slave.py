@@ -63,8 +63,10 @@ def initialised(**parameters):
 
 
 def core_simulator(load=DEFAULT_LOAD_N, speed=0.0):
+    """The core's simulator on the kernel the slave runs here: the numpy reference (in plain
+    Python the slave is in no FMU, so it has no compiled kernel of its own to load)."""
     tire, op = validate({}, {"n_elements": N, "load_n": load, "speed_m_s": speed})
-    return ContactSimulator(build_contact_model(tire, op))
+    return ContactSimulator(build_contact_model(tire, op), backend="numpy")
 
 
 def set_inputs(slave, rim_z=0.0, rim_vz=0.0, road_z=0.0, road_vz=0.0):
@@ -78,8 +80,7 @@ def outputs(slave):
 def observable(slave):
     """Everything a host can see of the slave, and the simulator's state."""
     state = slave._simulator.get_state() if slave._simulator is not None else None
-    arrays = None if state is None else [
-        getattr(state, f.name) for f in dataclasses.fields(state)]
+    arrays = None if state is None else list(state.fields().values())
     return list(slave._values), slave._phase, slave._start_time, arrays
 
 
@@ -530,12 +531,10 @@ def _bad_states():
             "n_elements = 1000000000000000000000000000000: must be an integer of 32 bits"),
         "nan output": (_with(state, values=tuple(values[:4] + [math.nan] + values[5:])),
                        "rim_Fz = nan: an output must be finite"),
-        "nan modal state": (_with(state, simulator=dataclasses.replace(state.simulator,
-                                                                       q=nan_q)),
-                            "contact state has non-finite values in q"),
-        "nan time": (_with(state, simulator=dataclasses.replace(state.simulator,
-                                                                elapsed_s=math.nan)),
-                     "elapsed time = nan"),
+        "nan modal state": (_with(state, simulator=state.simulator.replaced(q=nan_q)),
+                            "of its model part is not finite"),
+        "nan time": (_with(state, simulator=state.simulator.replaced(elapsed_s=math.nan)),
+                     "of its model part is not finite"),
         "unknown phase": (_with(state, phase="flying"), "phase = 'flying'"),
         # issue 19: a state is checked for what it means, not only for its checksum
         "error phase without its reason": (

@@ -35,7 +35,8 @@ def lib(tmp_path_factory):
     folder = c_folder()
     target = tmp_path_factory.mktemp("eig") / "libring.so"
     subprocess.run(["gcc", "-std=c99", "-O2", "-shared", "-fPIC", "-I", str(folder), "-o",
-                    str(target), str(folder / "numerics.c"), str(folder / "ring.c"), "-lm"],
+                    str(target), str(folder / "numerics.c"), str(folder / "ring.c"),
+                    str(folder / "memory.c"), "-lm"],
                    check=True, capture_output=True)
     library = ctypes.CDLL(str(target))
     pointer = ctypes.c_void_p

@@ -190,13 +190,16 @@ def _orders(tire: TireParameters, grid: Grid, spin_rad_s: float,
     weight = _order_weights(n_el, orders)
     mass, damping, stiffness = order_matrices(tire, grid, spin_rad_s, orders)
 
-    # Patterns: T = -cos θ (rim translation), S = -sin θ (forward component), on both blocks.
+    # Patterns: T = -cos θ (rim translation) and S = -sin θ (its forward component), on both
+    # blocks, are exactly order ±1: Σ_m T_m e^{inθ_m} = -N/2 and Σ_m S_m e^{inθ_m} = -iN/2 for
+    # n = 1, and (1/N) Σ_m T_m e^{-inθ_m} = -1/2; the sums' rounding dust on other orders is
+    # no coupling (the C builder takes the same exact values).
     theta = grid.theta
-    trans, fwd = -np.cos(theta), -np.sin(theta)
-    # Σ_m p_m e^{inθ_m} (output side) and (1/N) Σ_m p_m e^{-inθ_m} (input side)
-    tau = (n_el * np.fft.ifft(trans))[orders]
-    sig = (n_el * np.fft.ifft(fwd))[orders]
-    t_in = (np.fft.fft(trans) / n_el)[orders]
+    trans = -np.cos(theta)
+    rim = orders == 1
+    tau = np.where(rim, -0.5 * n_el, 0.0).astype(complex)
+    sig = np.where(rim, -0.5j * n_el, 0.0)
+    t_in = np.where(rim, -0.5, 0.0)
     ones = np.ones(2)
     phase = np.exp(1j * np.outer(orders, theta[zone_nodes]))  # e^{inθ_j}, (orders, Z)
 
@@ -219,7 +222,7 @@ def _orders(tire: TireParameters, grid: Grid, spin_rad_s: float,
     # Direct terms not carried by the orders: the rim-relative parts -T z and -T ż.
     d_direct = np.zeros((n_out, n_in))
     e_direct = np.zeros((n_out, n_in))
-    # rim forces on the rim's own motion: -pᵀ K_s T z - pᵀ D_s T ż, through the orders
+    # rim forces on the rim's own motion: -pᵀ K_s T z - pᵀ D_s T ż, through order 1
     k_11 = np.einsum("i,nij,j->n", ones, stiffness, ones)
     d_11 = np.einsum("i,nij,j->n", ones, damping, ones)
     for row, pattern in ((0, tau), (1, sig)):
@@ -274,64 +277,134 @@ def order_modes(a_n: np.ndarray, real_orders: np.ndarray) -> tuple[np.ndarray, n
     return canonical_modes(values, vectors)
 
 
-def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
-                    zone_nodes: np.ndarray,
-                    truncation: RingTruncation | None = None) -> FreeRingModel:
-    """Modal form of the free rolling ring with rim and zone-force inputs (module doc)."""
+@dataclass(frozen=True, eq=False)
+class RingModes:
+    """The free ring's kept modes grouped by circumferential order, as a step reads them.
+
+    Mode k belongs to order ``orders[k]`` (ascending; an order 0 < n < N/2 stands for n and
+    -n, its conjugate). On a tread node at θ_j the mode's complex state q_k takes the road's
+    push f_j (newtons, inwards) as q̇_k += beta_k e^{-inθ_j} f_j, and reads back the
+    rim-relative radial displacement and its rate as w_j = Σ_k Re(gamma_k e^{inθ_j} q_k) and
+    ẇ_j = Σ_k Re(eta_k e^{inθ_j} q_k) (the pair factor 2 is in gamma and eta). The rim's
+    translation is order ±1 exactly: q̇_k += b_rim_k z_rim, and the rim forces (rim_Fz,
+    rim_Fx) are Re(c_rim[:, k] q_k); both are zero on every other order. ``d``, ``e`` and
+    ``static_gain`` are those of :class:`FreeRingModel` (rows rim_Fz, rim_Fx, deflection, w,
+    ẇ at the zone nodes; columns rim_z, zone forces).
+    """
+
+    orders: np.ndarray  # (K,) int
+    eigenvalues: np.ndarray  # (K,) complex
+    beta: np.ndarray
+    gamma: np.ndarray
+    eta: np.ndarray
+    b_rim: np.ndarray
+    c_rim: np.ndarray  # (2, K)
+    d: np.ndarray
+    e: np.ndarray
+    static_gain: np.ndarray
+    zone_nodes: np.ndarray
+    n_elements: int
+    total_modes: int
+    truncation: RingTruncation
+
+    @property
+    def n_modes(self) -> int:
+        return self.eigenvalues.size
+
+    def order_start(self) -> np.ndarray:
+        """Index of each order's first mode (n = 0 .. N/2), and the count at the end."""
+        n_orders = self.n_elements // 2 + 1
+        return np.searchsorted(self.orders, np.arange(n_orders + 1)).astype(np.int64)
+
+    def modal_form(self, grid: Grid) -> FreeRingModel:
+        """The same modes as a dense modal form, sorted by natural frequency."""
+        b, c = self.dense(grid.theta[self.zone_nodes])
+        order = np.argsort(np.abs(self.eigenvalues), kind="stable")
+        return FreeRingModel(
+            eigenvalues=self.eigenvalues[order], b=b[order], c=c[:, order], d=self.d,
+            e=self.e, static_gain=self.static_gain, zone_nodes=self.zone_nodes,
+            n_elements=self.n_elements, total_modes=self.total_modes,
+            truncation=self.truncation)
+
+    def dense(self, theta_zone: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(b, c) of the modal form on [rim_z, zone forces] and [rim_Fz, rim_Fx, deflection,
+        w, ẇ]: the order structure written out."""
+        phase = np.exp(1j * np.outer(self.orders, theta_zone))  # (K, Z)
+        b = np.hstack([self.b_rim[:, None], self.beta[:, None] * np.conj(phase)])
+        c = np.vstack([self.c_rim, -self.gamma[None, :], (self.gamma[:, None] * phase).T,
+                       (self.eta[:, None] * phase).T])
+        return b, c
+
+
+def ring_modes(tire: TireParameters, grid: Grid, spin_rad_s: float, zone_nodes: np.ndarray,
+               truncation: RingTruncation | None = None) -> RingModes:
+    """The free rolling ring's modes order by order, truncated (see the module doc)."""
     truncation = truncation or RingTruncation()
     n_el = grid.n_elements
     zone_nodes = np.asarray(zone_nodes, dtype=int)
     o = _orders(tire, grid, spin_rad_s, zone_nodes)
-    orders, weight, mass, damping, stiffness = o.orders, o.weight, o.mass, o.damping, o.stiffness
-    b_z, b_v, l_u, l_v, d_direct, e_direct = o.b_z, o.b_v, o.l_u, o.l_v, o.d_direct, o.e_direct
-    static_gain = o.static_gain
+    mass, damping, stiffness = o.mass, o.damping, o.stiffness
     m_inv = 1.0 / mass
 
-    # Momentum form per order and its eigen-decomposition.
+    # Momentum form per order and its eigen-decomposition (canonical modes).
     a_n = momentum_matrices(mass, damping, stiffness)
-    mb_v = b_v * m_inv[None, :, None]
-    b_n = np.concatenate([mb_v, b_z - np.einsum("nij,njk->nik", damping, mb_v)], axis=1)
-    c_n = np.concatenate([l_u, l_v * m_inv[None, None, :]], axis=2)
-    feedthrough = np.einsum("n,nok->ok", weight,
-                            np.einsum("noi,nik->nok", l_v * m_inv[None, None, :], b_v).real)
-    real_orders = weight == 1.0
+    mb_v = o.b_v * m_inv[None, :, None]
+    b_n = np.concatenate([mb_v, o.b_z - np.einsum("nij,njk->nik", damping, mb_v)], axis=1)
+    c_n = np.concatenate([o.l_u, o.l_v * m_inv[None, None, :]], axis=2)
+    feedthrough = np.einsum("n,nok->ok", o.weight,
+                            np.einsum("noi,nik->nok", o.l_v * m_inv[None, None, :], o.b_v).real)
+    real_orders = o.weight == 1.0
     lam_n, vectors_n = order_modes(a_n, real_orders)
-    values, modal_b, modal_c = [], [], []
-    for index in range(orders.size):
-        lam, vectors = lam_n[index], vectors_n[index]
-        if real_orders[index]:  # n = 0 or N/2: a real system, conjugate pairs inside it
-            keep = lam.imag >= 0.0  # one of each pair (its partner's state is its conjugate)
-            real = lam.imag == 0.0
-            b_modal = np.linalg.solve(vectors, b_n[index].real)[keep]
-            c_modal = c_n[index].real @ vectors[:, keep] * np.where(real[keep], 1.0, 2.0)
-            b_modal[real[keep]] = b_modal[real[keep]].real  # real mode: drop rounding dust
-            c_modal[:, real[keep]] = c_modal[:, real[keep]].real
-            values.append(lam[keep])
-            modal_b.append(b_modal)
-            modal_c.append(c_modal)
-            continue
-        values.append(lam)
-        modal_b.append(np.linalg.solve(vectors, b_n[index]))
-        modal_c.append(2.0 * c_n[index] @ vectors)  # order -n is the conjugate
-    lam = np.concatenate(values)
-    b_all = np.vstack(modal_b)
-    c_all = np.hstack(modal_c)
-    order = np.argsort(np.abs(lam), kind="stable")
-    lam, b_all, c_all = lam[order], b_all[order], c_all[:, order]
+    orders, lam, beta, gamma, eta, b_rim, c_rim = [], [], [], [], [], [], []
+    for index, n in enumerate(o.orders):
+        values, vectors = lam_n[index], vectors_n[index]
+        inverse = np.linalg.inv(vectors)
+        factor = np.full(values.size, 2.0)  # a complex mode's partner is its conjugate
+        if real_orders[index]:  # n = 0 or N/2: one of each conjugate pair, real modes once
+            keep = values.imag >= 0.0
+            values, vectors, inverse = values[keep], vectors[:, keep], inverse[keep]
+            factor = np.where(values.imag == 0.0, 1.0, 2.0)
+        orders.append(np.full(values.size, n))
+        lam.append(values)
+        beta.append(-inverse[:, 2] / n_el)
+        gamma.append(factor * vectors[0])
+        eta.append(factor * vectors[2] * m_inv[0])
+        b_rim.append(inverse @ b_n[index][:, 0])
+        c_rim.append(factor[None, :] * (c_n[index][:2] @ vectors))
+    orders = np.concatenate(orders)
+    lam, beta, gamma, eta = (np.concatenate(x) for x in (lam, beta, gamma, eta))
+    b_rim, c_rim = np.concatenate(b_rim), np.hstack(c_rim)
+    real_mode = lam.imag == 0.0
+    for x in (beta, gamma, eta, b_rim):  # a real eigenvalue has a real eigenvector
+        x[real_mode] = x[real_mode].real
+    c_rim[:, real_mode] = c_rim[:, real_mode].real
+    modes = RingModes(orders, lam, beta, gamma, eta, b_rim, c_rim, np.zeros(0), np.zeros(0),
+                      o.static_gain, zone_nodes, n_el, lam.size, truncation)
 
-    keep = np.ones(lam.size, dtype=bool)
+    # Truncation on the modes sorted by natural frequency (stable: order by order).
+    by_size = np.argsort(np.abs(lam), kind="stable")
+    keep_sorted = np.ones(lam.size, dtype=bool)
     if truncation.f_max_hz is not None:
-        keep &= np.abs(lam) <= 2 * np.pi * truncation.f_max_hz
+        keep_sorted &= np.abs(lam[by_size]) <= 2 * np.pi * truncation.f_max_hz
     if truncation.n_modes is not None:
-        keep &= np.cumsum(keep) <= truncation.n_modes
-    d = d_direct + feedthrough
-    e = e_direct.copy()
+        keep_sorted &= np.cumsum(keep_sorted) <= truncation.n_modes
+    keep = np.zeros(lam.size, dtype=bool)
+    keep[by_size[keep_sorted]] = True
+    d = o.d_direct + feedthrough
+    e = o.e_direct.copy()
     if truncation.static_correction and not keep.all():
-        dropped = ~keep
+        b_all, c_all = modes.dense(grid.theta[zone_nodes])
         kept_dc = np.real(-(c_all[:, keep] / lam[keep]) @ b_all[keep])
-        d = static_gain - kept_dc  # the exact DC gain, whatever is dropped
+        d = o.static_gain - kept_dc  # the exact DC gain, whatever is dropped
+        dropped = ~keep
         e = e + np.real(-(c_all[:, dropped] / lam[dropped] ** 2) @ b_all[dropped])
-    return FreeRingModel(
-        eigenvalues=lam[keep], b=b_all[keep], c=c_all[:, keep], d=d, e=e,
-        static_gain=static_gain, zone_nodes=zone_nodes, n_elements=n_el,
-        total_modes=lam.size, truncation=truncation)
+    return RingModes(orders[keep], lam[keep], beta[keep], gamma[keep], eta[keep], b_rim[keep],
+                     c_rim[:, keep], d, e, o.static_gain, zone_nodes, n_el, lam.size, truncation)
+
+
+def free_ring_model(tire: TireParameters, grid: Grid, spin_rad_s: float,
+                    zone_nodes: np.ndarray,
+                    truncation: RingTruncation | None = None) -> FreeRingModel:
+    """Modal form of the free rolling ring with rim and zone-force inputs (module doc), its
+    modes sorted by natural frequency."""
+    return ring_modes(tire, grid, spin_rad_s, zone_nodes, truncation).modal_form(grid)

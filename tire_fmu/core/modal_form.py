@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +81,8 @@ def diagonalise(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> ModalForm:
     and x = Σ 2 Re(v q) = Σ (2 Re v) Re q - (2 Im v) Im q over the kept members, so the real
     matrix [2 Re v, -2 Im v] maps (Re q, Im q) to x (a quarter of the complex solve's work).
     """
+    import scipy.linalg as sla  # loaded when a modal form is built, not at start-up
+
     values, vectors = sla.eig(a, overwrite_a=False, check_finite=False)
     real = values.imag == 0
     keep = (values.imag > 0) | real
@@ -121,6 +122,7 @@ def diagonalise_proportional(stiffness, mass_diag, alpha, beta, b_disp, b_vel, o
     whose 2×2 eigenproblem is solved in closed form. ``eigenpairs`` (ω², mass-normalised
     shapes) of (K, M), when the caller has them, spare the symmetric eigenproblem.
     """
+    import scipy.linalg as sla  # loaded when a modal form is built, not at start-up
     import scipy.sparse as sp
 
     if eigenpairs is None:
@@ -157,6 +159,8 @@ def diagonalise_proportional(stiffness, mass_diag, alpha, beta, b_disp, b_vel, o
 
 def real_block_form(eigenvalues, b, c, d, e):
     """Real (A, B, C, D, E) of a diagonal model whose outputs are Re(C q)."""
+    import scipy.linalg as sla  # loaded when a modal form is built, not at start-up
+
     blocks, rows_b, cols_c = [], [], []
     for lam, b_row, c_col in zip(eigenvalues, b, c.T):
         if lam.imag == 0.0:

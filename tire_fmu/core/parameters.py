@@ -155,11 +155,11 @@ class FieldSpec:
 #: from underflow (a mass of 1e-300 kg/m made every frequency overflow, and the critical speed
 #: read 0 m/s). The lightest tires, 23 mm road-bicycle tires, carry about 0.05 kg/m of tread
 #: and less of sidewall; masses from 1e-6 kg/m leave room for the limit studies of a massless
-#: sidewall (1e-5 kg/m must run, issue 20) while 1e-300 is refused. Tread rubber (E >= 1 MPa, at least 2 cm wide,
-#: at most 3 cm thick) is at least 7e5 N/m^2 stiff per metre: k_cw from 1e4 N/m^2. Tires run
-#: at 0.3 bar and more: the sidewall pressure law holds from 1e4 Pa (0.1 bar) up, for the
-#: pressure it is referred to and the one it scales to (below, it leaves the sidewall almost
-#: without stiffness: at 1e-300 Pa the critical speed read 0 m/s).
+#: sidewall (1e-5 kg/m must run, issue 20) while 1e-300 is refused. Tread rubber (E >= 1 MPa,
+#: at least 2 cm wide, at most 3 cm thick) is at least 7e5 N/m^2 stiff per metre: k_cw from
+#: 1e4 N/m^2. Tires run at 0.3 bar and more: the sidewall pressure law holds from 1e4 Pa
+#: (0.1 bar) up, for the pressure it is referred to and the one it scales to (below, it leaves
+#: the sidewall almost without stiffness: at 1e-300 Pa the critical speed read 0 m/s).
 MIN_MASS_KG_M = 1e-6
 MIN_CONTACT_STIFFNESS_N_M2 = 1e4
 MIN_LAW_PRESSURE_PA = 1e4

@@ -12,20 +12,13 @@ and for models that are not diagonal. The coefficients are cached per h, so a ho
 varies its step pays for each distinct h once; a step then costs one element-wise product and
 one (states × 2·inputs) matrix-vector product.
 
-:class:`FusedStep` folds the output readout, a map from the caller's own input coordinates and
-the static offset into the coefficients of one h, so that a simulator keeping its state in one
-real buffer [q, p, 1] advances with three BLAS-level calls and no allocation (the FMU's hot
-path, where the cost of a numpy call is its overhead, not its arithmetic).
+(The tire with its contact is stepped by the kernels of :mod:`.kernel_numpy` and
+``native/c/kernel.c``, which use :func:`phi_functions` the same way.)
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-
 import numpy as np
-import scipy.linalg as sla
-from scipy.linalg.blas import dgemv as _dgemv
 
 #: Below this |z| the φ-functions use their Taylor series (cancellation in e^z - 1 - z).
 SERIES_LIMIT = 1e-3
@@ -80,78 +73,6 @@ class DiagonalStepper:
         """y = Re(C q) + D r + E v for ``inputs`` = [r, v]."""
         return (self.c @ q).real + self.de @ inputs
 
-    def fused(self, h: float, input_map: np.ndarray, offset: np.ndarray) -> FusedStep:
-        """The step over h with the readout at its end folded in (see :class:`FusedStep`).
-
-        ``input_map`` (2·inputs × p) turns the caller's p input values into [r, v];
-        ``offset`` is added to every output (the static values).
-        """
-        decay, gain = self.coefficients(h)
-        m, k = self.n_inputs, decay.size
-        # outputs are read at the ramp's end: [r + v h, v] = ramp_end @ [r, v]
-        ramp_end = np.eye(2 * m)
-        ramp_end[:m, m:] = h * np.eye(m)
-        input_map = np.asarray(input_map, dtype=float)
-        on_q = self.c * decay[None, :]
-        on_p = (self.c @ gain + self.de @ ramp_end) @ input_map
-        # Re(c q) = Re c·Re q - Im c·Im q, and p is real: one real product on the buffer
-        readout = np.empty((on_q.shape[0], 2 * k + on_p.shape[1] + 1), order="F")
-        readout[:, 0:2 * k:2] = on_q.real
-        readout[:, 1:2 * k:2] = -on_q.imag
-        readout[:, 2 * k:-1] = on_p.real
-        readout[:, -1] = offset
-        gain_p = gain @ input_map
-        gain_real = np.empty((2 * k, gain_p.shape[1]), order="F")
-        gain_real[0::2], gain_real[1::2] = gain_p.real, gain_p.imag
-        return FusedStep(h=h, decay=decay, gain=gain_real, readout=readout)
-
-
-@dataclass(frozen=True, eq=False)
-class FusedStep:
-    """One step over ``h`` for a state kept in one real buffer b = [q, p, 1]: the modal state
-    q as (real, imaginary) pairs, then p, the inputs at the step's start in the caller's
-    coordinates:
-
-        y(t + h) = readout @ b,    q(t + h) = decay * q + gain @ p.
-
-    The readout is taken before q moves: it carries C·e^{λh} on q and C·Γ plus the
-    feedthrough at the ramp's end on p, so both come from the state at t. ``gain`` gives
-    the real and imaginary parts of Γ·p interleaved, as q is stored.
-    """
-
-    h: float
-    decay: np.ndarray  # (k,) complex
-    gain: np.ndarray  # (2k, p) real, Fortran order
-    readout: np.ndarray  # (outputs, 2k + p + 1) real, Fortran order
-
-    def bind(self, buffer: np.ndarray, y: np.ndarray) -> Callable[[], None]:
-        """``advance()``: write the outputs at t + h into ``y`` and move q to t + h, both in
-        place, for a contiguous float64 ``buffer`` laid out as above.
-
-        BLAS through scipy's wrappers with positional arguments and arrays already
-        contiguous in Fortran order: the wrappers then neither copy nor parse keywords
-        (overwrite_y=1 writes into the given view), and a step costs about a third less than
-        with numpy's ``dot`` and ``+=``.
-        """
-        readout, decay, gain = self.readout, self.decay, self.gain
-        k2 = 2 * decay.size
-        q_real, p = buffer[:k2], buffer[k2:k2 + gain.shape[1]]
-        q = q_real.view(complex)
-        if not decay.size:  # no modes kept: nothing for BLAS to do that numpy cannot
-            def advance_numpy() -> None:
-                np.dot(readout, buffer, out=y)
-                q[:] = decay * q
-                q_real[:] += gain @ p
-            return advance_numpy
-
-        dgemv, multiply = _dgemv, np.multiply  # closure cells: the cheapest lookups
-
-        def advance() -> None:
-            dgemv(1.0, readout, buffer, 0.0, y, 0, 1, 0, 1, 0, 1)
-            multiply(q, decay, q)  # out given positionally: no keyword parsing
-            dgemv(1.0, gain, p, 1.0, q_real, 0, 1, 0, 1, 0, 1)  # q += gain @ p
-        return advance
-
 
 class DenseStepper:
     """The same exact step on a real (A, B, C, D, E) via the augmented matrix exponential."""
@@ -175,6 +96,8 @@ class DenseStepper:
             aug[:n, :n] = self.a
             aug[:n, n : n + m] = self.b
             aug[n : n + m, n + m :] = np.eye(m)  # r' = v, v' = 0: the ramp
+            import scipy.linalg as sla  # a cross-check and for dense models only
+
             expo = sla.expm(aug * h)
             cached = (expo[:n, :n], expo[:n, n:])
             if len(self._cache) >= _CACHE_SIZE:

@@ -67,6 +67,11 @@ class GuardMissingWarning(UserWarning):
     """The FMU was built without pythonfmu_guard.c (no C compiler, or not on Linux)."""
 
 
+class KernelMissingWarning(UserWarning):
+    """The FMU was built without the compiled step kernel for a platform (no C compiler for
+    it): there the slave steps with the numpy reference kernel, slower, and says so."""
+
+
 class FmuBuildError(RuntimeError):
     """The FMU could not be built, or what was built does not validate."""
 
@@ -91,7 +96,7 @@ def build_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
             _SLAVE_SOURCE, fmu_destination(out, MODEL_IDENTIFIER), SLAVE_MODULE,
             project_files=project, capabilities=CAPABILITIES,
             units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate,
-            real_starts=None if tire is None else tire.as_dict())
+            real_starts=None if tire is None else tire.as_dict(), kernel=True)
 
 
 def fmu_destination(out: str | Path, model_identifier: str) -> Path:
@@ -104,15 +109,16 @@ def fmu_destination(out: str | Path, model_identifier: str) -> Path:
 
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                     project_files=(), capabilities: dict, units: dict[str, str],
-                    validate: bool = True, real_starts: dict[str, float] | None = None
-                    ) -> Path:
+                    validate: bool = True, real_starts: dict[str, float] | None = None,
+                    kernel: bool = False) -> Path:
     """Build a pythonfmu FMU from ``slave_source`` and complete its model description.
 
     The slave is built under ``module_name``: every pythonfmu FMU in a process shares
     ``sys.modules``, and two slave modules with one name would run the first one's code.
     ``units`` maps variable names to the units written into the model description (pythonfmu
     0.7 writes none); ``capabilities`` are the flags the slave really supports;
-    ``real_starts`` are Real start values to write exactly (pythonfmu rounds to 16 digits).
+    ``real_starts`` are Real start values to write exactly (pythonfmu rounds to 16 digits);
+    ``kernel`` ships the compiled step kernel for every platform a compiler is found for.
     """
     try:
         from pythonfmu.builder import FmuBuilder
@@ -142,8 +148,10 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                           f"the guard (fmi2Error statuses, the exit fix), see docs/fmu.md",
                           GuardMissingWarning, stacklevel=2)
             guard = None
+        kernels = compile_kernels(staging / "kernel") if kernel else {}
         with published_file(dest) as partial:
-            complete_fmu(built, capabilities, units, real_starts, guard, target=partial)
+            complete_fmu(built, capabilities, units, real_starts, guard, target=partial,
+                         kernels=kernels)
             if validate:
                 problems = validation_problems(partial)
                 if problems:
@@ -156,11 +164,14 @@ def _stage_project(folder: Path) -> list[Path]:
     package = folder / "tire_fmu"
     (package / "core").mkdir(parents=True)
     (package / "fmu").mkdir()
+    (package / "native").mkdir()
     shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
     for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
         shutil.copyfile(source, package / "core" / source.name)
     for name in ("__init__.py", "interface.py", "spec.py"):  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
+    for name in ("__init__.py", "kernel.py", "contract.py"):  # the compiled kernel's ctypes
+        shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"
                             + "\n".join(runtime_requirements()) + "\n")
@@ -213,17 +224,37 @@ def compile_guard(folder: Path) -> Path:
     return library
 
 
+def compile_kernels(folder: Path) -> dict[str, Path]:
+    """The step kernel (native/c/kernel.c and what it needs) compiled for every platform
+    this machine has a compiler for: {platform: library}. A platform without one is named in
+    a KernelMissingWarning (the FMU runs there with the numpy reference kernel)."""
+    from ..native.kernel import PLATFORMS, KernelUnavailable, compile_kernel
+
+    built = {}
+    for platform, (_, _, _, name) in PLATFORMS.items():
+        try:
+            built[platform] = compile_kernel(folder / platform / name, platform)
+        except KernelUnavailable as error:
+            warnings.warn(f"{error}: on {platform} TireModal.fmu steps with the numpy "
+                          "reference kernel (the same outputs, slower)", KernelMissingWarning,
+                          stacklevel=3)
+    return built
+
+
 def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                  real_starts: dict[str, float] | None = None, guard: Path | None = None,
-                 target: str | Path | None = None) -> None:
+                 target: str | Path | None = None,
+                 kernels: dict[str, Path] | None = None) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`;
     with ``guard``, that library becomes the linux64 binary and pythonfmu's wrapper moves to
-    ``binaries/linux64/pythonfmu-export.so``. The last entry written is the build record
+    ``binaries/linux64/pythonfmu-export.so``; ``kernels`` ({platform: library}) go into
+    ``binaries/<platform>/`` under their names. The last entry written is the build record
     (:func:`build_record`). Written to ``target``, or in place of ``fmu`` without one."""
     fmu = Path(fmu)
+    kernels = kernels or {}
     if target is None:
         with published_file(fmu) as partial:
-            complete_fmu(fmu, capabilities, units, real_starts, guard, partial)
+            complete_fmu(fmu, capabilities, units, real_starts, guard, partial, kernels)
         return
     with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w",
                                                           zipfile.ZIP_DEFLATED) as archive:
@@ -240,7 +271,10 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                 archive.writestr(wrapper, data, compress_type=zipfile.ZIP_DEFLATED)
                 data = guard.read_bytes()
             archive.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
-        record = {"built_by": f"tire_fmu {tire_fmu.__version__}", "guard": guard is not None}
+        for platform, library in sorted(kernels.items()):
+            archive.write(library, f"binaries/{platform}/{library.name}")
+        record = {"built_by": f"tire_fmu {tire_fmu.__version__}", "guard": guard is not None,
+                  "kernel": sorted(kernels)}
         archive.writestr(BUILD_RECORD, json.dumps(record) + "\n")
 
 

@@ -11,8 +11,8 @@ from dataclasses import dataclass, fields, replace
 from xml.etree import ElementTree
 
 from ..core.contact import DEFAULT_ZONE_LENGTH_M
-from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES
-from ..core.io_model import OUTPUT_UNITS
+from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES, OUTPUT_UNITS
+from ..core.free_ring import RingTruncation
 from ..core.parameters import (
     DEFAULT_LOAD_N,
     MAX_ELEMENTS,
@@ -20,7 +20,6 @@ from ..core.parameters import (
     TIRE_FIELDS,
     TireParameters,
 )
-from ..core.reduction import ReductionSettings
 
 #: JSON file in an FMU's resources/ with the tire data its parameters start from (written by
 #: ``build_fmu(tire=...)``, e.g. from ``tire-fmu build-fmu --tire-file``); absent: GL073A.
@@ -43,17 +42,7 @@ def same_fixed_value(given: float, fixed: float) -> bool:
     given, fixed = float(given), float(fixed)
     return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
 
-#: The longest communication step (s). The contact is solved in sub-steps of at most
-#: contact_dynamics.MAX_SUBSTEP_S (0.1 ms), so this is 10^4 of them (a fraction of a second of
-#: work); 1e6 s, the former limit, meant 10^10 sub-steps and hung the host (found by fuzzing).
-MAX_STEP_S = 1.0
-#: At speed the FMU keeps the road's history back to the patch's last node, one sample per
-#: step, and reads it through a delay line of that many steps: at most this many.
-MAX_DELAY_STEPS = 100_000
-#: The most road samples the FMU ever holds: a delay line of MAX_DELAY_STEPS + 2 (the older
-#: sample of the last window end and the newest), or as many recorded one a step over the
-#: same reach, and the current point's; a state holding more is none of the FMU's.
-MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
+from ..core.step_limits import MAX_DELAY_STEPS, MAX_HISTORY_SAMPLES, MAX_STEP_S  # noqa: E402, F401
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.
@@ -146,7 +135,7 @@ def _signals() -> list[FmuVariable]:
 
 def _parameters() -> list[FmuVariable]:
     """Parameters with their defaults; f_max and n_modes use 0 for "no limit"."""
-    settings = ReductionSettings()
+    settings = RingTruncation()
     defaults = TireParameters()
     table = [
         FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
@@ -159,11 +148,11 @@ def _parameters() -> list[FmuVariable]:
                     f"finite-difference nodes around the ring; allowed [{MIN_ELEMENTS}, "
                     f"{MAX_ELEMENTS}]", "--elements"),
         FmuVariable("f_max", "Real", "parameter", settings.f_max_hz or 0.0, "Hz",
-                    "highest natural frequency of the modes the reduction keeps (0 = no cut: "
-                    "the reduction's error budget decides)", "--f-max"),
+                    "highest natural frequency of the free ring's modes the step keeps (0 = no "
+                    "cut: every mode)", "--f-max"),
         FmuVariable("n_modes", "Integer", "parameter", settings.n_modes or 0, "",
-                    "keep at most this many modes, largest contributions first (0 = no limit)",
-                    "--n-modes"),
+                    "keep at most this many of the free ring's modes, lowest natural frequency "
+                    "first (0 = no limit)", "--n-modes"),
         FmuVariable("static_correction", "Boolean", "parameter", settings.static_correction,
                     "", "add the dropped modes' static response, so static stiffness is exact",
                     "--no-static-correction"),

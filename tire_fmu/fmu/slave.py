@@ -164,6 +164,8 @@ class TireModal(Fmi2Slave):
         self._start_time = 0.0
         self._simulator: ContactSimulator | None = None
         self._built_for: tuple | None = None  # parameter values the simulator was built with
+        self._raw_step = None  # the kernel's hot path: (function, handle, inputs, report)
+        self._now = math.nan  # the simulator's time, as its last step reported it
         self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
         # Inputs set since the outputs were last computed: the next read recomputes the
@@ -255,8 +257,7 @@ class TireModal(Fmi2Slave):
     def do_step(self, current_time: float, step_size: float) -> bool:
         if self._phase != Phase.RUNNING:
             return self._allowed("fmi2DoStep")
-        simulator = self._simulator
-        now = simulator.time
+        now = self._now
         values = self._values
         if current_time != now:
             # also refuses a non-finite t: every comparison with nan is false
@@ -271,31 +272,47 @@ class TireModal(Fmi2Slave):
             if problem:
                 return self._refuse_step(current_time, step_size, problem)
             self._checked_h = step_size
-        # the simulator's own clock goes on: the host's t, within rounding of it, would bring
-        # its clock's rounding into the road history (core.clock)
-        try:  # the inputs are value references 0-3 (INPUTS); the core checks their range
-            outputs = simulator.step_values(step_size, values[0], values[1], values[2],
-                                            values[3])
-        except StepError as error:
-            return self._refuse_step(current_time, step_size, str(error))
-        except Exception as error:  # an escaping exception would be fmi2Fatal
+        # one call of the step kernel (the inputs are value references 0-3, INPUTS); it
+        # checks them and the clock itself, and its own clock goes on: the host's t, within
+        # rounding of it, would bring its clock's rounding into the road history (core.clock)
+        step, handle, kernel_inputs, report = self._raw_step
+        kernel_inputs[0], kernel_inputs[1], kernel_inputs[2], kernel_inputs[3] = values[:4]
+        try:
+            status = step(handle, step_size, kernel_inputs, report)
+        except Exception as error:  # an escaping exception would be fmi2Fatal (numpy kernel)
             self._fail(f"the step from t = {current_time!r} s", error)
             return False
+        if status:
+            return self._step_refused(status, current_time, step_size)
+        outputs = report[0:6]
         if not math.isfinite(outputs[0] + outputs[1] + outputs[2] + outputs[3] + outputs[5]):
             self._fail(f"the step from t = {current_time!r} s",
                        ArithmeticError(f"non-finite outputs {outputs}"))
             return False
         values[OUTPUTS] = outputs
+        self._now = report[6]
         self._stale = False
         values[IN_CONTACT] = outputs[2] > 0.0
         # contact loss is physics (logged by nobody, in_contact says it); a footprint at the
         # end of the zone is the model's limit, and warns
-        if simulator.at_zone_edge():
+        if report[7]:
             if self._contact_warning_armed:
-                self._warn_zone_edge(simulator.time)
+                self._warn_zone_edge(self._now)
         elif not self._contact_warning_armed:
             self._contact_warning_armed = True
         return True
+
+    def _step_refused(self, status: int, t: float, h: float) -> bool:
+        """A step the kernel did not take: refused for a reason the core names (nothing
+        changed), or its memory ran out (the FMU's error state)."""
+        if status == -3:
+            try:
+                self._simulator._check(h, tuple(self._values[:4]))
+            except StepError as error:
+                return self._refuse_step(t, h, str(error))
+            status = "refused with no reason the core finds"
+        self._fail(f"the step from t = {t!r} s", MemoryError(f"step kernel status {status}"))
+        return False
 
     def _step_size_problem(self, h: float) -> str | None:
         if not 0.0 < h <= MAX_STEP_S:  # false for nan too
@@ -310,6 +327,12 @@ class TireModal(Fmi2Slave):
 
     def _refuse_step(self, t: float, h: float, why: str) -> bool:
         return self._refuse(f"fmi2DoStep(t = {t!r} s, h = {h!r} s)", why)
+
+    def _set_simulator(self, simulator, built_for) -> None:
+        self._simulator, self._built_for = simulator, built_for
+        if simulator is not None:
+            self._raw_step = simulator.kernel.raw_step()
+            self._now = simulator.time
 
     # -- building the model ------------------------------------------------------------------
     def _parameter_values(self) -> tuple:
@@ -344,8 +367,32 @@ class TireModal(Fmi2Slave):
                 problems += error.details
             if problems:
                 raise ParameterError(problems)
-        simulator = ContactSimulator(contact, start_time=self._start_time)
+        library, why = self._kernel_library()
+        simulator = ContactSimulator(contact, start_time=self._start_time,
+                                     backend="compiled" if library else "numpy",
+                                     library=library)
+        self._kernel_note = why or "stepping with the compiled kernel"
         return simulator, contact, [fmu_message(str(w.message)) for w in caught]
+
+    def _kernel_library(self) -> tuple:
+        """The compiled step kernel this FMU carries for the platform it runs on (loaded
+        once per process), or None and why the numpy reference kernel steps instead."""
+        from tire_fmu.native.kernel import PLATFORMS, KernelUnavailable, host_platform, load_library
+
+        platform = host_platform()
+        name = PLATFORMS[platform][3] if platform in PLATFORMS else None
+        folder = os.path.dirname(os.path.abspath(self.resources)) if self.resources else ""
+        path = os.path.join(folder, "binaries", platform or "", name or "")
+        if name is None or not os.path.isfile(path):
+            return None, (f"stepping with the numpy reference kernel: this FMU carries no "
+                          f"compiled step kernel for {platform or 'this platform'} (it was "
+                          "built without a C compiler for it; the outputs are the same, each "
+                          "step slower)")
+        try:
+            return load_library(path), ""
+        except KernelUnavailable as error:
+            return None, (f"stepping with the numpy reference kernel: {error} (the outputs "
+                          "are the same, each step slower)")
 
     def _initialise(self) -> None:
         started = time.perf_counter()
@@ -366,7 +413,7 @@ class TireModal(Fmi2Slave):
             return
         for text in said:
             self.log(text, Fmi2Status.warning)
-        self._simulator, self._built_for = simulator, parameters
+        self._set_simulator(simulator, parameters)
         self._checked_h = math.nan
         self._phase, self._why_not_running = Phase.RUNNING, ""
         self._contact_warning_armed = True
@@ -381,7 +428,8 @@ class TireModal(Fmi2Slave):
             f"{summary['patch_length_m'] * 100:.3g} cm at {summary['load_n']:.6g} N, deflection "
             f"{summary['deflection_m'] * 1e3:.4g} mm, vertical stiffness "
             f"{summary['vertical_stiffness_n_per_m']:.6g} N/m, critical speed "
-            f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact; core "
+            f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact, "
+            f"{self._kernel_note}; core "
             f"tire_fmu {tire_fmu.__version__} from {tire_fmu.__file__}")
 
     def _show(self, outputs: dict, in_contact: bool) -> None:
@@ -545,7 +593,7 @@ class TireModal(Fmi2Slave):
             except StateError as error:
                 self._refuse(call, str(error))
                 return
-        self._simulator, self._built_for = simulator, built_for
+        self._set_simulator(simulator, built_for)
         self._checked_h = math.nan
         self._values[:] = state.values
         self._phase, self._why_not_running = state.phase, state.why_not_running

@@ -9,13 +9,7 @@ the linux64 and win64 binaries into one ``.fmu``. See docs/native.md; ``tire-fmu
 --format fmu OUT.fmu`` is the command-line way in.
 """
 
-from .builder import (
-    DEFAULT_MODEL_IDENTIFIER,
-    NativeBuildError,
-    build_native_fmu,
-    default_platforms,
-    parameter_start_values,
-)
+from importlib import import_module
 
 __all__ = [
     "DEFAULT_MODEL_IDENTIFIER",
@@ -24,3 +18,11 @@ __all__ = [
     "default_platforms",
     "parameter_start_values",
 ]
+
+
+def __getattr__(name: str):
+    # the builder (and the FMU spec it writes) loads only when asked for: the compiled step
+    # kernel (.kernel) is imported at an FMU's start-up, and needs none of it
+    if name in __all__:
+        return getattr(import_module(".builder", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -8,7 +8,8 @@
 
 #include <stddef.h>
 
-#include "tire.h"
+#include "tire.h" /* numerics.h first: contract.h uses its types */
+#include "contract.h"
 
 /* the FMI statuses the model returns (the values of fmi2Status) */
 enum { MODEL_OK = 0, MODEL_WARNING = 1, MODEL_DISCARD = 2, MODEL_ERROR = 3 };
@@ -35,6 +36,8 @@ int model_step(Model* model, double h, double* values);
 int model_refresh(Model* model, double* values);
 /* the model's clock: start + the compensated sum of its steps (it never takes the host's t) */
 double model_time(const Model* model);
+/* the step contract the model was built into (NULL before it is built) */
+const TireContract* model_contract(const Model* model);
 /* how long the road takes from the zone front to its last node (s; 0 at rest) */
 double model_road_horizon(const Model* model);
 /* the shortest step it takes (s): SPEC_MIN_CORRECTED_STEP_S for a ring truncated with static

@@ -322,17 +322,6 @@ static void toeplitz(const cx* s, int n_orders, int half, const double* cos_tabl
     }
 }
 
-void* mem_alloc(const Memory* mem, size_t count, size_t size)
-{
-    if (count == 0) count = 1;
-    return mem->allocate(count, size);
-}
-
-void mem_free(const Memory* mem, void* pointer)
-{
-    if (pointer != NULL) mem->release(pointer);
-}
-
 void ring_free(Ring* ring, const Memory* mem)
 {
     mem_free(mem, ring->order_start);

@@ -450,3 +450,21 @@ int road_set_history(RoadReader* road, const Memory* mem, const double* t, const
     road->length = count;
     return 0;
 }
+
+/* the history kept, the delay line dropped: the reader as a restore of its history leaves it
+ * (the line is built again by the next read, from the same samples) */
+void road_rebuild(RoadReader* road, const Memory* mem)
+{
+    if (!road->line_on) {
+        road->uniform_run = -1;
+        return;
+    }
+    {
+        int count = road_history_length(road);
+        double* scratch = (double*)mem_alloc(mem, (size_t)(3 * count), sizeof(double));
+        if (scratch == NULL) return;  /* the line stays: the same values to rounding */
+        road_history(road, scratch, scratch + count, scratch + 2 * count);
+        road_set_history(road, mem, scratch, scratch + count, scratch + 2 * count, count);
+        mem_free(mem, scratch);
+    }
+}

@@ -2,7 +2,7 @@
  *   ring.c       free_ring.py, dispersion.py, standing_waves.py (the free ring, order by order)
  *   contact.c    contact.py (zone, static footprint by active-set continuation, road windows)
  *   road.c       road.py (the road under each node: history and delay line)
- *   simulator.c  contact_dynamics.py (kernels, the contact solve, stepping)
+ *   kernel.c     kernel_numpy.py (the step, for either builder's contract: kernel.h)
  * Everything an instance needs is in its structs: no global mutable state. */
 #ifndef TIRE_H
 #define TIRE_H
@@ -19,6 +19,7 @@ typedef struct {
 
 void* mem_alloc(const Memory* mem, size_t count, size_t size);
 void mem_free(const Memory* mem, void* pointer);
+const Memory* mem_default(void); /* calloc and free */
 
 /* -- tire data and operating point ---------------------------------------------------------- */
 typedef struct {
@@ -177,96 +178,14 @@ int road_read(RoadReader* road, const Memory* mem, double now, double z, double 
 /* the history as samples (t, z, v), oldest first; count samples */
 int road_history_length(const RoadReader* road);
 void road_history(const RoadReader* road, double* t, double* z, double* v);
+/* drop the delay line, keep the history (what a restore of the history leaves) */
+void road_rebuild(RoadReader* road, const Memory* mem);
 int road_set_history(RoadReader* road, const Memory* mem, const double* t, const double* z,
                      const double* v, int count);
 
-/* -- stepping with the unilateral contact (simulator.c) --------------------------------------- */
-typedef struct SolveEntry SolveEntry;
-
-typedef struct {
-    double h;         /* the substep */
-    double h_comm;    /* the communication step it belongs to */
-    int n_sub;
-    cx* decay;        /* K */
-    cx* beta_c;       /* K: h (phi1 - phi2) beta, on the DFT of the forces at t */
-    cx* beta_d;       /* K: h phi2 beta, on the DFT of the forces at t + h */
-    cx* fused;        /* K: decay beta_d + beta_c: a pending end-force ramp into the next */
-    cx rim_z[4], rim_vz[4];
-    double* m;        /* (3Z x Z): [S; W_p; W_r] */
-    double* out_f;    /* 3 x Z */
-    double* pen_const;  /* Z: pen_static - W_p f_static */
-    double* rate_const; /* Z: -W_r f_static */
-    SolveEntry* solves;
-    int n_solves, next_solve;
-} Kernel;
-
-typedef struct {
-    const Ring* ring;
-    const Zone* zone;
-    const Memory* mem;
-    int n_zone, linear;
-    double substep_s;
-    double* f_static;
-    double* pen_static;
-    char* static_active;
-    double* x_road;
-    double static_ring[3];
-    double static_deflection; /* the rim's lowering at the static footprint */
-    /* the state; its clock is the time since start_time (core/clock.py) */
-    double start_time;
-    double elapsed;   /* the road history's time */
-    double carry;     /* the compensation of elapsed's sum */
-    cx* q;            /* K, grouped by order as the ring's modes */
-    double* df;       /* force deviation from static at time */
-    char* active;
-    double* penetration;
-    double* rate;
-    double seen_z, seen_vz;
-    double* seen_heights;
-    double* seen_slopes;
-    double ring_out[3];
-    double last_step;  /* the communication step whose end _start re-solves */
-    int has_last;
-    Kernel* last;
-    double outputs[6];
-    RoadReader road;
-    long solver_fallbacks;
-    /* derived, rebuilt on demand */
-    Kernel* kernels;
-    int n_kernels, next_kernel;
-    Kernel instant;   /* a truncated ring couples the forces at an instant */
-    int has_instant;
-    cx* dft;          /* n_orders: DFT of df (valid when dft_ok) */
-    int dft_ok;
-    /* the last substep's end-force ramp, not yet added to q: the modal state is
-     * q + last->beta_d * dft (added in the next substep's pass over the modes) */
-    int pending;
-    /* scratch */
-    double* work;
-    int* iwork;
-    char* cwork;
-    cx* orders_a;
-    cx* orders_b;
-    double* heights;
-    double* slopes;
-} Simulator;
-
-int sim_init(Simulator* sim, const Memory* mem, const Ring* ring, const Zone* zone,
-             const Footprint* fp, const Windows* windows, const double* compliance,
-             double deflection, double k_cw, double rhoA, int linear);
-void sim_free(Simulator* sim);
-void sim_reset(Simulator* sim, double start_time);
-/* 0, or -1 out of memory (nothing changed) */
-int sim_step(Simulator* sim, double h, const double inputs[4]);
-int sim_outputs_with(Simulator* sim, const double inputs[4]);
-int sim_restore_last(Simulator* sim);
-void sim_settle(Simulator* sim);
-int sim_in_contact(const Simulator* sim);
-double sim_time(const Simulator* sim); /* start_time + elapsed */
-/* whether a clock of doubles resolves the step h from time (core/clock.py: resolves) */
+/* -- the clock (core/clock.py) --------------------------------------------------------------- */
+/* whether a clock of doubles resolves the step h from time, and up to which time it does */
 int clock_resolves(double time, double h);
 double clock_resolved_until(double h);
-int sim_at_zone_edge(const Simulator* sim);
-double sim_contact_length(const Simulator* sim);
 
 #endif

@@ -10,6 +10,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "contract_pack.h"
+#include "kernel.h"
 #include "model.h"
 #include "spec.h"
 
@@ -30,7 +32,8 @@ struct Model {
     Footprint footprint;
     Windows windows;
     double* compliance;
-    Simulator sim;
+    TireContract contract;  /* what the step kernel reads */
+    TireKernel* kernel;     /* the step: kernel.c, the Python FMU's too */
     int zone_warning_armed;
     int in_contact;
 };
@@ -52,7 +55,9 @@ Model* model_create(const ModelHost* host)
 static void model_clear(Model* model)
 {
     const Memory* mem = &model->host.mem;
-    if (model->sim.mem != NULL) sim_free(&model->sim);
+    kernel_destroy(model->kernel);
+    model->kernel = NULL;
+    contract_free(&model->contract, mem);
     footprint_path_free(&model->path, mem);
     footprint_free(&model->footprint, mem);
     windows_free(&model->windows, mem);
@@ -479,10 +484,21 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
                       model->footprint.deflection, speed) != 0) {
         goto memory;
     }
-    if (sim_init(&model->sim, mem, &model->ring, &model->zone, &model->footprint,
-                 &model->windows, model->compliance, model->footprint.deflection, tire->k_cw,
-                 tire->rhoA, model->linear) != 0) {
+    /* the step kernel's contract: the contact is sub-stepped at 1/sqrt(k_cw/rhoA) at most
+     * (contact_dynamics.build_contact_model) */
+    if (contract_pack(&model->contract, mem, &model->ring, &model->zone, &model->footprint,
+                      &model->windows, model->compliance, model->footprint.deflection,
+                      fmin(SPEC_MAX_SUBSTEP_S, 1.0 / sqrt(tire->k_cw / tire->rhoA)),
+                      model->linear, speed,
+                      model->ring.truncated ? SPEC_MIN_CORRECTED_STEP_S : 0.0) != 0) {
         goto memory;
+    }
+    {
+        char why[256];
+        if (kernel_create(&model->contract, mem, 0.0, &model->kernel, why, sizeof why) != 0) {
+            PROBLEM(p, "the step kernel refused the model: %s", why);
+            return MODEL_ERROR;
+        }
     }
     return MODEL_OK;
 memory:
@@ -493,10 +509,10 @@ memory:
 static void show_outputs(Model* model, double* values)
 {
     int i;
-    for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
-        values[SPEC_BLOCK_OUTPUTS_FIRST + i] = model->sim.outputs[i];
-    }
-    values[SPEC_BLOCK_IN_CONTACT] = sim_in_contact(&model->sim) ? 1.0 : 0.0;
+    double outputs[KERNEL_N_OUTPUTS];
+    kernel_outputs(model->kernel, outputs);
+    for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) values[SPEC_BLOCK_OUTPUTS_FIRST + i] = outputs[i];
+    values[SPEC_BLOCK_IN_CONTACT] = kernel_in_contact(model->kernel) ? 1.0 : 0.0;
 }
 
 int model_initialise(Model* model, const double* values, double start_time, double* out_values)
@@ -522,10 +538,10 @@ int model_initialise(Model* model, const double* values, double start_time, doub
     if (warning[0] != '\0') say(model, MODEL_WARNING, "logStatusWarning", warning);
     model->built = 1;
     memcpy(model->built_for, values, sizeof model->built_for);
-    sim_reset(&model->sim, start_time);
+    kernel_reset(model->kernel, start_time);
     model->zone_warning_armed = 1;
     show_outputs(model, out_values);
-    model->in_contact = sim_in_contact(&model->sim);
+    model->in_contact = kernel_in_contact(model->kernel);
     snprintf(line, sizeof line,
              "ready in %.3f s (CPU): N = %d, %d of %d ring modes, %d contact-zone nodes, "
              "footprint %.3g cm at %.6g N, deflection %.4g mm, vertical stiffness %.6g N/m, "
@@ -557,23 +573,23 @@ static int after_step(Model* model, double* values)
     char line[MESSAGE_SIZE];
     int status = MODEL_OK, in_contact;
     show_outputs(model, values);
-    in_contact = sim_in_contact(&model->sim);
+    in_contact = kernel_in_contact(model->kernel);
     if (in_contact != model->in_contact) {
         /* losing contact is physics (a unilateral contact): information, not a warning */
         snprintf(line, sizeof line,
                  in_contact ? "t = %.9g s: the tread is back on the road (in_contact = true)"
                             : "t = %.9g s: the tread left the road (in_contact = false)",
-                 sim_time(&model->sim));
+                 kernel_time(model->kernel));
         say(model, MODEL_OK, "logEvents", line);
         model->in_contact = in_contact;
     }
-    if (sim_at_zone_edge(&model->sim)) {
+    if (kernel_at_zone_edge(model->kernel)) {
         if (model->zone_warning_armed) {
             model->zone_warning_armed = 0;
             /* logged as a warning, but the step is OK, as in the Python FMU (whose wrapper
              * cannot return fmi2Warning from a step): a strict host must not end a ride run
              * because the footprint touched the zone's end for a moment */
-            snprintf(line, sizeof line, SPEC_MSG_ZONE_EDGE, sim_time(&model->sim));
+            snprintf(line, sizeof line, SPEC_MSG_ZONE_EDGE, kernel_time(model->kernel));
             say(model, MODEL_WARNING, "logStatusWarning", line);
         }
     } else {
@@ -585,8 +601,12 @@ static int after_step(Model* model, double* values)
 int model_step(Model* model, double h, double* values)
 {
     const double* inputs = values + SPEC_BLOCK_INPUTS_FIRST;
-    if (sim_step(&model->sim, h, inputs) != 0) {
-        say(model, MODEL_ERROR, "logStatusError", "fmi2DoStep: out of memory");
+    int status = kernel_step(model->kernel, h, inputs, NULL);
+    if (status != KERNEL_OK) {
+        /* the layer checked h and the inputs with the kernel's rules: a refusal is a bug */
+        say(model, MODEL_ERROR, "logStatusError", status == KERNEL_REFUSED
+            ? "fmi2DoStep: the step kernel refused a step the FMU's checks passed"
+            : "fmi2DoStep: out of memory");
         return MODEL_ERROR;
     }
     return after_step(model, values);
@@ -594,7 +614,7 @@ int model_step(Model* model, double h, double* values)
 
 int model_refresh(Model* model, double* values)
 {
-    if (sim_outputs_with(&model->sim, values + SPEC_BLOCK_INPUTS_FIRST) != 0) {
+    if (kernel_outputs_with(model->kernel, values + SPEC_BLOCK_INPUTS_FIRST, NULL) != KERNEL_OK) {
         say(model, MODEL_ERROR, "logStatusError", "out of memory recomputing the outputs");
         return MODEL_ERROR;
     }
@@ -602,80 +622,30 @@ int model_refresh(Model* model, double* values)
     return MODEL_OK;
 }
 
-double model_time(const Model* model) { return sim_time(&model->sim); }
+double model_time(const Model* model) { return kernel_time(model->kernel); }
 
-double model_road_horizon(const Model* model) { return model->windows.horizon; }
-
-double model_min_step(const Model* model)
+const TireContract* model_contract(const Model* model)
 {
-    return model->ring.truncated ? SPEC_MIN_CORRECTED_STEP_S : 0.0;
+    return model->built ? &model->contract : NULL;
 }
+
+double model_road_horizon(const Model* model) { return kernel_horizon(model->kernel); }
+
+double model_min_step(const Model* model) { return kernel_min_step(model->kernel); }
 
 /* -- the model's part of an FMU state --------------------------------------------------------
- * int32: K, Z, history length, has_last, zone warning armed, in contact; then doubles: start
- * time, elapsed time, its carry, last step, seen z and z', ring_out (3), outputs (6), q (2K),
- * df, penetration, rate, seen heights, seen slopes (Z each), history t, z, v; then the active
- * flags (Z bytes). */
+ * int32: zone warning armed, in contact; then the step kernel's state (kernel.c: its layout,
+ * and what it must mean to be set). */
 
-#define STATE_INTS 6
-#define STATE_HEAD 15
+#define FLAGS 2
 
-static size_t doubles_for(int K, int Z, int history)
-{
-    return (size_t)(STATE_HEAD + 2 * K + 5 * Z + 3 * history);
-}
-
-size_t model_state_size(const Model* model)
-{
-    const Simulator* sim = &model->sim;
-    int history = road_history_length(&sim->road);
-    return STATE_INTS * 4 + doubles_for(sim->ring->n_modes, sim->n_zone, history) * 8
-           + (size_t)sim->n_zone;
-}
+size_t model_state_size(const Model* model) { return FLAGS * 4 + kernel_state_size(model->kernel); }
 
 static void put_int(unsigned char** out, int value)
 {
     int32_t v = (int32_t)value;
     memcpy(*out, &v, 4);
     *out += 4;
-}
-
-static void put_doubles(unsigned char** out, const double* values, int count)
-{
-    memcpy(*out, values, sizeof(double) * (size_t)count);
-    *out += sizeof(double) * (size_t)count;
-}
-
-void model_state_write(const Model* model, unsigned char* out)
-{
-    const Simulator* sim = &model->sim;
-    sim_settle((Simulator*)&model->sim);  /* the modal state with its pending ramp added */
-    int K = sim->ring->n_modes, Z = sim->n_zone, history = road_history_length(&sim->road);
-    double head[STATE_HEAD];
-    put_int(&out, K);
-    put_int(&out, Z);
-    put_int(&out, history);
-    put_int(&out, sim->has_last);
-    put_int(&out, model->zone_warning_armed);
-    put_int(&out, model->in_contact);
-    head[0] = sim->start_time;
-    head[1] = sim->elapsed;
-    head[2] = sim->carry;
-    head[3] = sim->has_last ? sim->last_step : 0.0;
-    head[4] = sim->seen_z;
-    head[5] = sim->seen_vz;
-    memcpy(head + 6, sim->ring_out, sizeof(double) * 3);
-    memcpy(head + 9, sim->outputs, sizeof(double) * 6);
-    put_doubles(&out, head, STATE_HEAD);
-    put_doubles(&out, (const double*)sim->q, 2 * K);
-    put_doubles(&out, sim->df, Z);
-    put_doubles(&out, sim->penetration, Z);
-    put_doubles(&out, sim->rate, Z);
-    put_doubles(&out, sim->seen_heights, Z);
-    put_doubles(&out, sim->seen_slopes, Z);
-    road_history(&sim->road, (double*)out, (double*)out + history, (double*)out + 2 * history);
-    out += sizeof(double) * (size_t)(3 * history);
-    memcpy(out, sim->active, (size_t)Z);
 }
 
 static int get_int(const unsigned char* in, int index)
@@ -685,12 +655,11 @@ static int get_int(const unsigned char* in, int index)
     return (int)v;
 }
 
-/* double number index of the model part's doubles (they may be unaligned in the bytes) */
-static double get_double(const unsigned char* in, size_t index)
+void model_state_write(const Model* model, unsigned char* out)
 {
-    double v;
-    memcpy(&v, in + STATE_INTS * 4 + 8 * index, 8);
-    return v;
+    put_int(&out, model->zone_warning_armed);
+    put_int(&out, model->in_contact);
+    kernel_state_write(model->kernel, out);
 }
 
 /* the problems found so far, "; " between them (as the core joins them) */
@@ -701,336 +670,61 @@ static void add_why(char* why, size_t why_size, const char* text)
     snprintf(why + used, why_size - used, "%s%s", used ? "; " : "", text);
 }
 
-static double largest_abs(const unsigned char* in, size_t first, int count)
-{
-    double big = 0.0;
-    int i;
-    for (i = 0; i < count; i++) big = fmax(big, fabs(get_double(in, first + (size_t)i)));
-    return big;
-}
-
-/* the rules of the core's RoadReader.state_problems on the recorded history (the native FMU
- * keeps no delay line in its state: it rebuilds it from the history) */
-static void history_problems(const Simulator* sim, const unsigned char* in, size_t t0,
-                             int history, double now, double last, int has_last, char* why,
-                             size_t why_size)
-{
-    const Windows* w = sim->road.windows;
-    double slack = SPEC_SAME_POINT_EPS * (fabs(now) + w->horizon + 1.0), newest, earliest;
-    char text[512];
-    int i, increasing = 1;
-    if (!w->delayed) {
-        if (history > 0) {
-            snprintf(text, sizeof text, "its road history holds %d samples, but at rest the "
-                     "whole zone reads the road at the instant and keeps none", history);
-            add_why(why, why_size, text);
-        }
-        return;
-    }
-    if (history > SPEC_MAX_HISTORY_SAMPLES) {
-        snprintf(text, sizeof text, "its road history holds %d samples; the FMU keeps at most "
-                 "%d (one a step, over at most %d steps)", history, SPEC_MAX_HISTORY_SAMPLES,
-                 SPEC_MAX_DELAY_STEPS);
-        add_why(why, why_size, text);
-        return;
-    }
-    for (i = 1; i < history; i++) {
-        if (!(get_double(in, t0 + (size_t)i) > get_double(in, t0 + (size_t)i - 1))) increasing = 0;
-    }
-    if (!increasing) add_why(why, why_size, "its road history times do not increase");
-    if (history > 0) {
-        newest = get_double(in, t0 + (size_t)history - 1);
-        earliest = now - (has_last ? last : 0.0);
-        if (!(earliest - slack <= newest && newest <= now + slack)) {
-            char a[40], b[40], c[40];
-            py_repr(newest, a, sizeof a);
-            py_repr(now, b, sizeof b);
-            py_repr(has_last ? last : NAN, c, sizeof c);
-            snprintf(text, sizeof text, "its newest road sample is at %s s, but the state is at "
-                     "%s s after a step of %s s: the road is sampled at each step's start", a, b,
-                     c);
-            add_why(why, why_size, text);
-        }
-        if (get_double(in, t0) < -slack) {
-            char a[40];
-            py_repr(get_double(in, t0), a, sizeof a);
-            snprintf(text, sizeof text, "its road history starts at %s s, before the start", a);
-            add_why(why, why_size, text);
-        }
-        if (history > 1 && get_double(in, t0 + 1) < newest - w->horizon - slack) {
-            snprintf(text, sizeof text, "its road history reaches back %.6g s from its newest "
-                     "sample, beyond the %.6g s the contact zone reads (older samples are "
-                     "dropped)", newest - get_double(in, t0 + 1), w->horizon);
-            add_why(why, why_size, text);
-        }
-    } else if (has_last) {
-        add_why(why, why_size, "its road history is empty, but a step was taken (each step "
-                "samples the road at its start)");
-    }
-    if (!(largest_abs(in, t0 + (size_t)history, history) <= SPEC_MAX_DISPLACEMENT_M &&
-          largest_abs(in, t0 + 2 * (size_t)history, history) <= SPEC_MAX_VELOCITY_M_S)) {
-        snprintf(text, sizeof text, "its road samples go beyond the inputs' limits (%g m, %g "
-                 "m/s)", SPEC_MAX_DISPLACEMENT_M, SPEC_MAX_VELOCITY_M_S);
-        add_why(why, why_size, text);
-    }
-}
-
-/* what the model part holds against what a state of this tire means (the core's
- * ContactSimulator.state_problems, and the FMU's own limits) */
-static void meaning_problems(const Model* model, const unsigned char* in, const double* values,
-                             double layer_time, double layer_start, char* why, size_t why_size)
-{
-    const Simulator* sim = &model->sim;
-    const Ring* ring = sim->ring;
-    const Zone* zone = sim->zone;
-    int K = ring->n_modes, Z = sim->n_zone, history = get_int(in, 2), has_last = get_int(in, 3);
-    int n, q, j;
-    size_t o_q = STATE_HEAD, o_df = o_q + 2 * (size_t)K, o_pen = o_df + (size_t)Z;
-    size_t o_rate = o_pen + (size_t)Z, o_heights = o_rate + (size_t)Z;
-    size_t o_slopes = o_heights + (size_t)Z, o_t = o_slopes + (size_t)Z;
-    double start = get_double(in, 0), elapsed = get_double(in, 1), carry = get_double(in, 2);
-    double last = get_double(in, 3), time = start + elapsed;
-    double length = SPEC_MAX_STATE_DISPLACEMENT_M, rate = SPEC_MAX_STATE_VELOCITY_M_S;
-    double reach = 0.0, speed = 0.0, total_bound = 0.0, contact = 0.0, scale = 0.0;
-    int pulls = 0, exceeds = 0;
-    char text[512], a[40], b[40];
-    if (!(elapsed >= 0.0 && fabs(carry) <= nextafter(elapsed, INFINITY) - elapsed)) {
-        py_repr(elapsed, a, sizeof a);
-        py_repr(carry, b, sizeof b);
-        snprintf(text, sizeof text, "its clock reads %s s since the start with a carry of %s s: "
-                 "a run's clock is >= 0, and its carry below one rounding of it", a, b);
-        add_why(why, why_size, text);
-    }
-    if (has_last != (elapsed != 0.0)) {
-        py_repr(elapsed, a, sizeof a);
-        py_repr(has_last ? last : NAN, b, sizeof b);
-        snprintf(text, sizeof text, "its clock reads %s s since the start and its last step is "
-                 "%s s: only steps advance the clock", a, b);
-        add_why(why, why_size, text);
-    } else if (has_last && !(last <= SPEC_MAX_STEP_S)) {
-        py_repr(last, a, sizeof a);
-        snprintf(text, sizeof text, "its last step is %s s; the FMU takes at most %g s", a,
-                 SPEC_MAX_STEP_S);
-        add_why(why, why_size, text);
-    } else if (has_last && !clock_resolves(time - last, last)) {
-        py_repr(last, a, sizeof a);
-        py_repr(time, b, sizeof b);
-        snprintf(text, sizeof text, "its last step of %s s ends at t = %s s, where the clock "
-                 "does not resolve it", a, b);
-        add_why(why, why_size, text);
-    }
-    if (start != layer_start || time != layer_time) {
-        char c[40], d[40];
-        py_repr(layer_time, a, sizeof a);
-        py_repr(layer_start, b, sizeof b);
-        py_repr(time, c, sizeof c);
-        py_repr(start, d, sizeof d);
-        snprintf(text, sizeof text, "its time is %s s from a start at %s s, but its model is at "
-                 "%s s from a start at %s s", a, b, c, d);
-        add_why(why, why_size, text);
-    }
-    history_problems(sim, in, o_t, history, elapsed, last, has_last, why, why_size);
-    for (j = 0; j < Z; j++) {
-        double f = sim->f_static[j] + get_double(in, o_df + (size_t)j);
-        double bound = sim->f_static[j] + zone->stiffness * (length + fabs(sim->pen_static[j]))
-                       + zone->damping * rate;
-        if (!sim->linear && f < 0.0) pulls = 1;
-        if (!(fabs(f) <= bound)) exceeds = 1;
-        total_bound += bound;
-        contact += zone->cos[j] * f;
-        scale += fabs(f) + fabs(sim->f_static[j]);
-    }
-    if (pulls) add_why(why, why_size, "its contact forces pull on the tread (the unilateral "
-                       "contact only pushes)");
-    if (exceeds) {
-        snprintf(text, sizeof text, "its contact forces exceed what the zone springs give at %g "
-                 "m and %g m/s", length, rate);
-        add_why(why, why_size, text);
-    }
-    for (n = 0; n < ring->n_orders; n++) {
-        for (q = ring->order_start[n]; q < ring->order_start[n + 1]; q++) {
-            double size = hypot(get_double(in, o_q + 2 * (size_t)q),
-                                get_double(in, o_q + 2 * (size_t)q + 1));
-            reach = fmax(reach, size * cx_abs(ring->gamma[q]));
-            speed = fmax(speed, size * cx_abs(ring->eta[q]));
-        }
-    }
-    {
-        const char* whats[7] = {"the tread's excursion at the zone nodes from a mode",
-                                "the tread's rate at the zone nodes from a mode",
-                                "its penetrations", "its penetration rates",
-                                "the rim and road positions it saw", "the road rates it saw",
-                                "the tread deflection it holds"};
-        double found[7], bounds[7] = {0};
-        const char* units[7] = {"m", "m/s", "m", "m/s", "m", "m/s", "m"};
-        int i;
-        found[0] = reach;
-        found[1] = speed;
-        found[2] = largest_abs(in, o_pen, Z);
-        found[3] = largest_abs(in, o_rate, Z);
-        found[4] = fmax(fabs(get_double(in, 4)), largest_abs(in, o_heights, Z));
-        found[5] = largest_abs(in, o_slopes, Z);
-        found[6] = fabs(get_double(in, 8));
-        for (i = 0; i < 7; i++) {
-            bounds[i] = (i % 2 == 1 && i != 6) ? rate : length;
-            if (!(found[i] <= bounds[i])) {
-                snprintf(text, sizeof text, "%s reach %.3g %s, beyond the %g %s a state may hold",
-                         whats[i], found[i], units[i], bounds[i], units[i]);
-                add_why(why, why_size, text);
-            }
-        }
-    }
-    if (!(fabs(get_double(in, 5)) <= SPEC_MAX_VELOCITY_M_S)) {
-        py_repr(get_double(in, 5), a, sizeof a);
-        snprintf(text, sizeof text, "the rim velocity it saw, %s m/s, is beyond the input limit "
-                 "%g m/s", a, SPEC_MAX_VELOCITY_M_S);
-        add_why(why, why_size, text);
-    }
-    if (!(fabs(get_double(in, 6)) <= total_bound && fabs(get_double(in, 7)) <= total_bound)) {
-        snprintf(text, sizeof text, "its rim forces exceed what the zone springs give at %g m "
-                 "and %g m/s", length, rate);
-        add_why(why, why_size, text);
-    }
-    if (why[0] != '\0') return;
-    {   /* its outputs, the ones its own values give (the core's _output_problems) */
-        double* pen = sim->work;
-        char* active = sim->cwork;
-        double expected[6], tolerance[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0}, front, rear;
-        int wrong = 0, i;
-        for (j = 0; j < Z; j++) {
-            pen[j] = get_double(in, o_pen + (size_t)j);
-            active[j] = (char)(sim->f_static[j] + get_double(in, o_df + (size_t)j) > 0.0);
-        }
-        footprint_edges(sim->x_road, pen, active, Z, &front, &rear);
-        expected[0] = sim->static_ring[0] + get_double(in, 6);
-        expected[1] = sim->static_ring[1] + get_double(in, 7);
-        expected[2] = contact;
-        tolerance[2] = 1e-9 * scale;
-        expected[3] = sim->static_deflection + get_double(in, o_heights + (size_t)zone->centre)
-                      - get_double(in, 4);
-        expected[4] = front - rear;
-        tolerance[4] = 1e-9 * (sim->x_road[0] - sim->x_road[Z - 1]);
-        expected[5] = sim->static_ring[2] + get_double(in, 8);
-        for (i = 0; i < 6; i++) {
-            double given = get_double(in, 9 + (size_t)i);
-            if (!(fabs(given - expected[i]) <= tolerance[i])) wrong = 1;
-            if (values[SPEC_BLOCK_OUTPUTS_FIRST + i] != given) wrong = 2;
-        }
-        if (values[SPEC_BLOCK_IN_CONTACT] != (get_double(in, 11) > 0.0 ? 1.0 : 0.0)) wrong = 2;
-        if (wrong == 1) add_why(why, why_size, "its outputs are not the ones it gives");
-        if (wrong == 2) add_why(why, why_size, "the outputs it shows are not its model's");
-    }
-}
-
 int model_state_check(const Model* model, const unsigned char* in, size_t size,
                       const double* values, double time, double start_time, char* why,
                       size_t why_size)
 {
-    const Simulator* sim = &model->sim;
-    int K, Z, history, i;
-    size_t count, expected;
-    const unsigned char* doubles = in + STATE_INTS * 4;
+    const unsigned char* kernel_part = in + FLAGS * 4;
+    int i;
     why[0] = '\0';
-    if (size < STATE_INTS * 4) {
+    if (size < FLAGS * 4) {
         snprintf(why, why_size, "its model part is %lu bytes, shorter than its header",
                  (unsigned long)size);
         return MODEL_ERROR;
     }
-    K = get_int(in, 0);
-    Z = get_int(in, 1);
-    history = get_int(in, 2);
-    if (K != sim->ring->n_modes || Z != sim->n_zone) {
-        snprintf(why, why_size, "it holds %d modes and %d zone nodes, this model %d and %d",
-                 K, Z, sim->ring->n_modes, sim->n_zone);
-        return MODEL_ERROR;
-    }
-    if (history < 0 || history > (int)((size - STATE_INTS * 4) / 24)) {
-        snprintf(why, why_size, "its road history length %d is impossible", history);
-        return MODEL_ERROR;
-    }
-    expected = STATE_INTS * 4 + doubles_for(K, Z, history) * 8 + (size_t)Z;
-    if (size != expected) {
-        snprintf(why, why_size, "its model part is %lu bytes, expected %lu",
-                 (unsigned long)size, (unsigned long)expected);
-        return MODEL_ERROR;
-    }
-    for (i = 3; i < STATE_INTS; i++) {
-        int flag = get_int(in, i);
-        if (flag != 0 && flag != 1) {
-            snprintf(why, why_size, "flag %d of its model part is %d, not 0 or 1", i, flag);
+    for (i = 0; i < FLAGS; i++) {
+        if (get_int(in, i) != 0 && get_int(in, i) != 1) {
+            snprintf(why, why_size, "flag %d of its model part is %d, not 0 or 1", i,
+                     get_int(in, i));
             return MODEL_ERROR;
         }
     }
-    count = doubles_for(K, Z, history);
-    for (i = 0; i < (int)count; i++) {
-        double v;
-        memcpy(&v, doubles + 8 * (size_t)i, 8);
-        if (!isfinite(v)) {
-            snprintf(why, why_size, "value %d of its model part is not finite", i);
-            return MODEL_ERROR;
-        }
-    }
-    if (get_int(in, 3) && !(get_double(in, 3) > 0.0)) {
-        snprintf(why, why_size, "its last step is %g s, not > 0", get_double(in, 3));
+    if (kernel_state_check(model->kernel, kernel_part, size - FLAGS * 4, why, why_size) !=
+        KERNEL_OK) {
         return MODEL_ERROR;
     }
-    for (i = 0; i < Z; i++) {
-        unsigned char a = in[size - (size_t)Z + (size_t)i];
-        if (a > 1) {
-            snprintf(why, why_size, "its contact flags are not 0 or 1");
-            return MODEL_ERROR;
+    {   /* the FMU's part against the kernel's: one time, one start, the outputs it shows */
+        char text[512], a[40], b[40], c[40], d[40];
+        double outputs[KERNEL_N_OUTPUTS];
+        int wrong = 0;
+        if (kernel_state_start(kernel_part) != start_time ||
+            kernel_state_time(kernel_part) != time) {
+            py_repr(time, a, sizeof a);
+            py_repr(start_time, b, sizeof b);
+            py_repr(kernel_state_time(kernel_part), c, sizeof c);
+            py_repr(kernel_state_start(kernel_part), d, sizeof d);
+            snprintf(text, sizeof text, "its time is %s s from a start at %s s, but its model "
+                     "is at %s s from a start at %s s", a, b, c, d);
+            add_why(why, why_size, text);
         }
+        kernel_state_outputs(kernel_part, outputs);
+        for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
+            if (values[SPEC_BLOCK_OUTPUTS_FIRST + i] != outputs[i]) wrong = 1;
+        }
+        /* (the model's own in-contact flag is the last one it logged an event for, which
+         * outputs read after new inputs, before a step, may have left behind) */
+        if (values[SPEC_BLOCK_IN_CONTACT] != (outputs[2] > 0.0 ? 1.0 : 0.0)) wrong = 1;
+        if (wrong) add_why(why, why_size, "the outputs it shows are not its model's");
     }
-    meaning_problems(model, in, values, time, start_time, why, why_size);
     return why[0] == '\0' ? MODEL_OK : MODEL_ERROR;
 }
 
 void model_state_apply(Model* model, const unsigned char* in)
 {
-    Simulator* sim = &model->sim;
-    int K = get_int(in, 0), Z = get_int(in, 1), history = get_int(in, 2), i;
-    const unsigned char* p = in + STATE_INTS * 4;
-    double head[STATE_HEAD];
-    const double *t, *z, *v;
-    double* scratch;
-    memcpy(head, p, sizeof head);
-    p += sizeof head;
-    sim->has_last = get_int(in, 3);
-    model->zone_warning_armed = get_int(in, 4);
-    model->in_contact = get_int(in, 5);
-    sim->start_time = head[0];
-    sim->elapsed = head[1];
-    sim->carry = head[2];
-    sim->last_step = head[3];
-    sim->seen_z = head[4];
-    sim->seen_vz = head[5];
-    memcpy(sim->ring_out, head + 6, sizeof(double) * 3);
-    memcpy(sim->outputs, head + 9, sizeof(double) * 6);
-    memcpy(sim->q, p, sizeof(double) * (size_t)(2 * K));
-    p += sizeof(double) * (size_t)(2 * K);
-#define TAKE(field)                                        \
-    memcpy(sim->field, p, sizeof(double) * (size_t)Z);     \
-    p += sizeof(double) * (size_t)Z
-    TAKE(df);
-    TAKE(penetration);
-    TAKE(rate);
-    TAKE(seen_heights);
-    TAKE(seen_slopes);
-#undef TAKE
-    /* the history arrays may be unaligned in the bytes: copy them out first */
-    scratch = (double*)mem_alloc(&model->host.mem, (size_t)(3 * history), sizeof(double));
-    if (scratch != NULL) {
-        memcpy(scratch, p, sizeof(double) * (size_t)(3 * history));
-        t = scratch;
-        z = scratch + history;
-        v = scratch + 2 * history;
-        road_set_history(&sim->road, &model->host.mem, t, z, v, history);
-        mem_free(&model->host.mem, scratch);
+    model->zone_warning_armed = get_int(in, 0);
+    model->in_contact = get_int(in, 1);
+    if (kernel_state_apply(model->kernel, in + FLAGS * 4) != KERNEL_OK) {
+        say(model, MODEL_ERROR, "logStatusError",
+            "fmi2SetFMUstate: out of memory restoring the road history");
     }
-    sim->road.origin = sim->start_time;
-    p += sizeof(double) * (size_t)(3 * history);
-    for (i = 0; i < Z; i++) sim->active[i] = (char)p[i];
-    sim->dft_ok = 0;
-    sim->pending = 0;
-    sim_restore_last(sim);
 }

@@ -1,0 +1,610 @@
+"""The step of the tire in plain numpy: the readable reference of ``native/c/kernel.c``.
+
+Both step a :class:`~.contract.StepContract` with the same algorithm; this one writes it with
+dense matrices and no caching, the C with the order structure and caches, and a test holds
+them to 1e-10 of each other. Over a communication step h, split into n equal substeps of at
+most the contract's ``substep_s``:
+
+1. the road under each contact point is read at the current time (its window average of the
+   host's road history, :mod:`.road`);
+2. the contact forces at the current time are solved again for the inputs given now (the last
+   substep's end re-solved: the penetrations move with the inputs' change and with the end
+   forces through that substep's own interface flexibility), or, after a reset, taken from the
+   law at the instant;
+3. each substep advances the modal state exactly with the rim and the force deviations ramped
+   from their values at its start to their values at its end, those end forces solving the
+   law at the end:
+
+       q(t+h) = e^{λh} q + hφ₁ b_rim z + h²φ₂ b_rim ż + h(φ₁-φ₂) B Δf(t) + hφ₂ B Δf(t+h),
+       [σ; p; ṗ](t+h) = base + M f(t+h),  f = max(0, σ) where p > 0 and σ > 0, else 0,
+
+   with σ = k p + c ṗ, a primal-dual active-set iteration warm-started from the last set (and
+   projected Gauss-Seidel should it cycle).
+
+The ring's modes act on the zone nodes (B, C from the order structure written out); the
+contact points read the nodes through the interpolation matrix I (P x Z) and load them through
+Iᵀ, the virtual work of the interpolation.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+
+from . import clock
+from .contract import StepContract
+from .road import SAME_POINT_EPS, RoadReader, RoadWindows
+from .stepping import phi_functions
+
+#: Active-set iterations per solve: this many per contact point, plus ACTIVE_SET_EXTRA; then PGS.
+ACTIVE_SET_PER_NODE = 2
+ACTIVE_SET_EXTRA = 4
+#: Projected Gauss-Seidel fallback: sweeps, and the relative change that ends it.
+PGS_SWEEPS = 1000
+PGS_TOLERANCE = 1e-13
+#: A step within this relative distance of a multiple of the substep needs no extra substep.
+SUBSTEP_SLACK = 1e-12
+#: Communication step sizes whose coefficients are kept (a host varying h evicts the oldest).
+KERNEL_CACHE_SIZE = 32
+
+
+class _Interface:
+    """One substep length h: the modal step coefficients and the contact interface
+    [σ; p; ṗ] = base + M f on the total end forces f (M = [S; W_p; W_r])."""
+
+    def __init__(self, kernel: NumpyKernel, h: float, instant: bool = False):
+        self.h = h
+        k = kernel
+        if instant:  # a truncated ring couples the forces at an instant: its direct terms only
+            w_nodes, r_nodes, out_nodes = k.d_f[k.w_rows], k.d_f[k.r_rows], k.d_f[:3]
+            self.decay = self.g_start = self.g_end = self.g_z = self.g_vz = None
+        else:
+            lam = k.contract.lam
+            phi1, phi2 = phi_functions(lam * h)
+            self.decay = np.exp(lam * h)
+            self.g_start = (h * (phi1 - phi2))[:, None] * k.b_f  # on Δf at the start (nodes)
+            self.g_end = (h * phi2)[:, None] * k.b_f  # on Δf at the end
+            self.g_z = h * phi1 * k.b_rim
+            self.g_vz = h * h * phi2 * k.b_rim
+            per_force = np.real(k.c_ring @ self.g_end) + k.d_f + k.e_f / h  # rows x Z
+            w_nodes, r_nodes, out_nodes = per_force[k.w_rows], per_force[k.r_rows], per_force[:3]
+        interp = k.interp
+        w_p = interp @ w_nodes @ interp.T
+        w_r = interp @ r_nodes @ interp.T
+        self.out_f = out_nodes @ interp.T  # ring outputs per unit end force at the points
+        self.m = np.vstack([k.k[:, None] * w_p + k.c[:, None] * w_r, w_p, w_r])
+        self.pen_const = k.contract.pen_static - w_p @ k.f_static
+        self.rate_const = -w_r @ k.f_static
+
+
+class NumpyKernel:
+    """Steps a contract: the same calls and state as the C kernel (``kernel.h``)."""
+
+    def __init__(self, contract: StepContract, start_time: float = 0.0):
+        self.contract = c = contract
+        n_orders = np.repeat(np.arange(c.n_orders), np.diff(c.order_start))
+        theta = c.zone_offset * (2 * np.pi / c.n_elements)
+        phase = np.exp(1j * np.outer(n_orders, theta))  # (K, Z)
+        self.b_f = c.beta[:, None] * np.conj(phase)  # a node force into each mode
+        z = c.n_zone
+        # ring rows: rim_Fz, rim_Fx, deflection, w (Z), ẇ (Z) on the modal state
+        self.c_ring = np.vstack([c.c_rim, -c.gamma[None, :], (c.gamma[:, None] * phase).T,
+                                 (c.eta[:, None] * phase).T])
+        self.b_rim = c.b_rim
+        self.w_rows, self.r_rows = slice(3, 3 + z), slice(3 + z, 3 + 2 * z)
+        self.d_rim, self.e_rim = c.d[:, 0], c.e[:, 0]
+        self.d_f, self.e_f = c.d[:, 1:], c.e[:, 1:]
+        self.truncated = bool(np.any(self.d_f) or np.any(self.e_f))
+        self.interp = np.zeros((c.n_points, z))
+        np.add.at(self.interp, (np.repeat(np.arange(c.n_points), c.n_support),
+                                c.point_support.ravel()), c.point_weight.ravel())
+        self.k, self.c = c.point_stiffness, c.point_damping
+        self.sec = c.point_sec
+        self.f_static = c.f_static
+        self.static_active = c.f_static > 0
+        self.linear = bool(c.linear)
+        # how the rim's own motion moves each point's penetration and rate at an instant
+        self.pen_rim = self.interp @ self.d_rim[self.w_rows] - self.sec
+        self.rate_rim = self.interp @ self.e_rim[self.r_rows] - self.sec
+        windows = RoadWindows(c.window_early_s, c.window_late_s, 0.0)
+        self.road = RoadReader(windows)
+        self.horizon_s = windows.horizon_s
+        self._interfaces: dict[float, tuple[int, _Interface]] = {}
+        self._instant = _Interface(self, 0.0, instant=True) if self.truncated else None
+        self.solver_fallbacks = 0
+        self.reset(start_time)
+
+    # -- state ---------------------------------------------------------------------------
+    def reset(self, start_time: float = 0.0) -> None:
+        c = self.contract
+        p = c.n_points
+        self.start_time = float(start_time)
+        self.elapsed_s, self.carry_s = 0.0, 0.0
+        self.q = np.zeros(c.n_modes, dtype=complex)
+        self.df = np.zeros(p)
+        self.active = self.static_active.copy()
+        self.penetration = c.pen_static.copy()
+        self.rate = np.zeros(p)
+        self.seen = (0.0, 0.0, np.zeros(p), np.zeros(p))  # z, ż, heights, slopes
+        self.ring_out = np.zeros(3)
+        self.last: _Interface | None = None
+        self.last_step = math.nan
+        self.road.reset(self.start_time)
+        self.outputs = self._outputs()
+
+    @property
+    def time(self) -> float:
+        """The clock: the start time plus the time since it (core/clock.py)."""
+        return self.start_time + self.elapsed_s
+
+    # -- stepping ------------------------------------------------------------------------
+    def interface(self, h: float) -> tuple[int, _Interface]:
+        """The communication step h: (substeps, the substep's interface); a step within
+        rounding of a cached one is that step (hosts jitter h in the last bits)."""
+        for cached_h, entry in self._interfaces.items():
+            if cached_h == h or abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
+                return entry
+        n_sub = max(1, math.ceil(h / self.contract.substep_s * (1 - SUBSTEP_SLACK)))
+        entry = (n_sub, _Interface(self, h / n_sub))
+        if len(self._interfaces) >= KERNEL_CACHE_SIZE:
+            self._interfaces.pop(next(iter(self._interfaces)))
+        self._interfaces[h] = entry
+        return entry
+
+    @property
+    def cached_steps(self) -> int:
+        """How many communication step sizes have their coefficients cached."""
+        return len(self._interfaces)
+
+    def _road(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        p = self.contract.n_points
+        out = np.empty(2 * p)
+        self.road.read(self.elapsed_s, self._road_z, self._road_vz, h, out)
+        return out[:p].copy(), out[p:].copy()
+
+    def step_problems(self, h: float, inputs) -> int:
+        """Why a step is refused, as the bits of kernel.h's kernel_step_problems (0: it is
+        not): h not finite and > 0 (1), shorter than the contract's shortest step (2), not
+        resolved by the clock (4); input i not finite or beyond its limit (8 << i)."""
+        from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
+
+        problems = 0
+        if not 0.0 < h < math.inf:
+            problems |= 1
+        elif h < self.contract.min_step_s:
+            problems |= 2
+        elif not clock.resolves(self.time, h):
+            problems |= 4
+        for i, value in enumerate(inputs):
+            if not abs(value) <= (MAX_VELOCITY_M_S if i % 2 else MAX_DISPLACEMENT_M):
+                problems |= 8 << i
+        return problems
+
+    def step(self, h: float, inputs) -> np.ndarray | None:
+        """One communication step from ``time`` with the inputs (rim_z, rim_vz, road_z,
+        road_vz) given at ``time``; the outputs at the new time, or None (nothing changed)
+        for a step step_problems finds fault with."""
+        inputs = tuple(float(x) for x in inputs)
+        if self.step_problems(h, inputs):
+            return None
+        z, vz, self._road_z, self._road_vz = inputs
+        n_sub, interface = self.interface(h)
+        heights, slopes = self._road(h)
+        self._start(z, vz, heights, slopes)
+        for i in range(n_sub):
+            heights, slopes = self._substep(interface, z + i * interface.h * vz, vz, heights,
+                                            slopes)
+        self.elapsed_s, self.carry_s = clock.advance(self.elapsed_s, self.carry_s, h)
+        self.last_step = h
+        self.outputs = self._outputs()
+        return self.outputs.copy()
+
+    def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
+        out = self.step(h, (z, vz, road_z, road_vz))
+        return None if out is None else [float(x) for x in out]
+
+    def raw_step(self):
+        """(function, handle, inputs, report): the compiled kernel's hot-path calling
+        convention (native/kernel.py) over this kernel, for callers written against it."""
+        inputs, report = [0.0] * 4, [0.0] * 8  # plain floats, as the ctypes arrays read
+
+        def step(handle, h, inputs, report):
+            out = self.step(h, inputs)
+            if out is None:
+                return -3
+            report[:6] = [float(x) for x in out]
+            report[6] = self.time
+            report[7] = float(self.at_zone_edge())
+            return 0
+
+        return step, None, inputs, report
+
+    def outputs_with(self, inputs) -> np.ndarray | None:
+        """The outputs at ``time`` for inputs given there (the forces stay re-solved), or
+        None if an input is refused."""
+        inputs = tuple(float(x) for x in inputs)
+        if self.step_problems(1.0, inputs) & ~6:
+            return None
+        z, vz, self._road_z, self._road_vz = inputs
+        heights, slopes = self._road(self.last_step)
+        self._start(z, vz, heights, slopes)
+        self.outputs = self._outputs()
+        return self.outputs.copy()
+
+    def _start(self, z, vz, heights, slopes) -> None:
+        z_seen, vz_seen, heights_seen, slopes_seen = self.seen
+        dz, dvz = z - z_seen, vz - vz_seen
+        pen = self.penetration + self.pen_rim * dz + self.sec * (heights - heights_seen)
+        rate = self.rate + self.rate_rim * dvz + self.sec * (slopes - slopes_seen)
+        self.ring_out = self.ring_out + self.d_rim[:3] * dz + self.e_rim[:3] * dvz
+        interface = self.last if self.last is not None else (
+            self._instant if not self.linear else None)
+        if interface is not None:
+            f_old = self.f_static + self.df
+            base = np.concatenate([self.k * pen + self.c * rate, pen, rate]) - interface.m @ f_old
+            f, combined = self._solve(interface, base)
+            change = f - f_old
+            if self.last is not None:
+                self.q = self.q + interface.g_end @ (self.interp.T @ change)
+            self.ring_out = self.ring_out + interface.out_f @ change
+            p = self.contract.n_points
+            pen, rate = combined[p:2 * p], combined[2 * p:]
+        elif self.linear:
+            f = np.where(self.static_active, self.f_static + self.k * (
+                pen - self.contract.pen_static) + self.c * rate, 0.0)
+        else:
+            push = self.k * pen + self.c * rate
+            f = np.where(pen > 0.0, np.maximum(push, 0.0), 0.0)
+            self.active = f > 0.0
+        self.df = f - self.f_static
+        self.penetration, self.rate = pen, rate
+        self.seen = (z, vz, heights.copy(), slopes.copy())
+
+    def _substep(self, k: _Interface, z, vz, heights, slopes):
+        h = k.h
+        p = self.contract.n_points
+        df_nodes = self.interp.T @ self.df
+        self.q = k.decay * self.q + k.g_start @ df_nodes + k.g_z * z + k.g_vz * vz
+        y = np.real(self.c_ring @ self.q) + self.d_rim * (z + h * vz) + self.e_rim * vz \
+            - self.e_f @ df_nodes / h
+        w_pt, r_pt = self.interp @ y[self.w_rows], self.interp @ y[self.r_rows]
+        pen0 = w_pt - self.sec * (z + h * vz) + self.sec * (heights + h * slopes) + k.pen_const
+        rate0 = r_pt - self.sec * vz + self.sec * slopes + k.rate_const
+        base = np.concatenate([self.k * pen0 + self.c * rate0, pen0, rate0])
+        f, combined = self._solve(k, base)
+        df_end = f - self.f_static
+        self.q = self.q + k.g_end @ (self.interp.T @ df_end)
+        self.ring_out = y[:3] + k.out_f @ df_end
+        self.df = df_end
+        self.penetration, self.rate = combined[p:2 * p], combined[2 * p:]
+        heights = heights + h * slopes  # the road ramps on into the next substep
+        self.seen = (z + h * vz, vz, heights.copy(), slopes.copy())
+        self.last = k
+        return heights, slopes
+
+    def _solve(self, k: _Interface, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Total end forces with [σ; p; ṗ] = base + M f and the law (two-sided springs on the
+        static footprint's points for the linear law), and base + M f."""
+        p = self.contract.n_points
+        s = k.m[:p]
+        if self.linear:
+            f = self._active_forces(s, self.static_active, base[:p])
+            return f, base + k.m @ f
+        active = self.active
+        for _ in range(ACTIVE_SET_PER_NODE * p + ACTIVE_SET_EXTRA):
+            f = self._active_forces(s, active, base[:p])
+            combined = base + k.m @ f
+            new = (combined[p:2 * p] > 0.0) & (combined[:p] > 0.0)
+            if np.array_equal(new, active):
+                self.active = active
+                return np.maximum(f, 0.0), combined
+            active = new
+        f = self._fallback(k, base)
+        return f, base + k.m @ f
+
+    @staticmethod
+    def _active_forces(s: np.ndarray, active: np.ndarray, sigma0: np.ndarray) -> np.ndarray:
+        f = np.zeros(sigma0.size)
+        if active.any():
+            block = np.eye(int(active.sum())) - s[np.ix_(active, active)]
+            f[active] = np.linalg.solve(block, sigma0[active])
+        return f
+
+    def _fallback(self, k: _Interface, base: np.ndarray) -> np.ndarray:
+        """Projected Gauss-Seidel on the same law, for an active set that cycles."""
+        self.solver_fallbacks += 1
+        p = self.contract.n_points
+        s, w_p = k.m[:p], k.m[p:2 * p]
+        f = np.maximum(self.f_static + self.df, 0.0)
+        for _ in range(PGS_SWEEPS):
+            previous = f.copy()
+            for j in range(p):
+                pen_j = base[p + j] + w_p[j] @ f
+                rest = base[j] + s[j] @ f - s[j, j] * f[j]
+                f[j] = max(0.0, rest / (1.0 - s[j, j])) if pen_j > 0.0 else 0.0
+            if np.max(np.abs(f - previous)) <= PGS_TOLERANCE * max(1.0, float(np.max(np.abs(f)))):
+                break
+        self.active = f > 0.0
+        return f
+
+    # -- outputs -------------------------------------------------------------------------
+    def _outputs(self) -> np.ndarray:
+        c = self.contract
+        forces = self.f_static + self.df
+        ring = c.static_ring_out + self.ring_out
+        # deflection: the rim's lowering at the contact centre (the static one, the road's
+        # rise under the centre point, less the rim's); tread_deflection: the ring's own
+        deflection = c.static_deflection_m + self.seen[2][c.centre_point] - self.seen[0]
+        return np.array([ring[0], ring[1], float(c.point_cos @ forces), deflection,
+                         self.contact_length(), ring[2]])
+
+    def contact_length(self) -> float:
+        """Footprint length on the road (m): between the edges where the penetration,
+        interpolated between the outermost pushing point and its neighbour, crosses zero."""
+        from .contact import _edges
+
+        front, rear = _edges(self.contract.point_x_road, self.penetration,
+                             (self.f_static + self.df) > 0.0)
+        return front - rear
+
+    @property
+    def forces(self) -> np.ndarray:
+        return self.f_static + self.df
+
+    def at_zone_edge(self) -> bool:
+        forces = self.forces
+        return bool(forces[0] > 0.0 or forces[-1] > 0.0)
+
+    # -- the state as bytes: the layout of kernel.c ------------------------------------------
+    def state_bytes(self) -> bytes:
+        t, z, v = self.road.history()
+        return state_data({
+            "start_time": self.start_time, "elapsed_s": self.elapsed_s, "carry_s": self.carry_s,
+            "last_step_s": self.last_step if self.last is not None else math.nan,
+            "seen_z": self.seen[0], "seen_vz": self.seen[1], "ring_out": self.ring_out,
+            "outputs": self.outputs, "q": self.q, "df": self.df,
+            "penetration": self.penetration, "rate": self.rate, "seen_heights": self.seen[2],
+            "seen_slopes": self.seen[3], "history_t": t, "history_z": z, "history_v": v,
+            "active": self.active})
+
+    def state_problem(self, data: bytes) -> str | None:
+        """Why ``data`` is no state of this kernel (kernel.c's kernel_state_check), or None."""
+        problems = state_problems(self, data)
+        return "; ".join(problems) if problems else None
+
+    def set_state_bytes(self, data: bytes) -> None:
+        """Restore bytes of :meth:`state_bytes` (or of the C kernel) that state_problem
+        accepted."""
+        fields = _StateFields(self.contract, data)
+        self.start_time, self.elapsed_s, self.carry_s = fields.start, fields.elapsed, fields.carry
+        self.last_step = fields.last if fields.has_last else math.nan
+        self.ring_out = fields.ring_out.copy()
+        self.outputs = fields.outputs.copy()
+        self.q = fields.q.copy()
+        self.df, self.penetration, self.rate = (x.copy() for x in (
+            fields.df, fields.penetration, fields.rate))
+        self.seen = (fields.seen_z, fields.seen_vz, fields.heights.copy(), fields.slopes.copy())
+        self.road.reset(self.start_time)
+        self.road.history_t, self.road.history_z, self.road.history_v = (
+            x.copy() for x in (fields.t, fields.z, fields.v))
+        self.active = fields.active.copy()
+        self.last = self.interface(self.last_step)[1] if fields.has_last else None
+
+
+#: The state layout (kernel.c's kernel_state_write): four int32 (modes, points, road samples,
+#: whether a step was taken), the head's doubles, the arrays of doubles, then one byte per
+#: contact point (pushing or not). Names as ContactState.fields gives them.
+_STATE_INTS = 4
+STATE_HEAD = ("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z", "seen_vz",
+              "ring_out", "ring_out", "ring_out", *("outputs",) * 6)
+_STATE_HEAD = len(STATE_HEAD)
+STATE_ARRAYS = ("q", "df", "penetration", "rate", "seen_heights", "seen_slopes", "history_t",
+                "history_z", "history_v")
+
+
+def state_fields(data: bytes) -> dict:
+    """The named fields of state bytes whose layout is sound (sizes from their header)."""
+    modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
+    values = np.frombuffer(data, "<f8", _STATE_HEAD + 2 * modes + 5 * points + 3 * history,
+                           4 * _STATE_INTS)
+    head = values[:_STATE_HEAD]
+    out = {"start_time": float(head[0]), "elapsed_s": float(head[1]),
+           "carry_s": float(head[2]),
+           "last_step_s": float(head[3]) if has_last else math.nan,
+           "seen_z": float(head[4]), "seen_vz": float(head[5]),
+           "ring_out": head[6:9].copy(), "outputs": head[9:15].copy()}
+    rest = values[_STATE_HEAD:]
+    out["q"] = rest[:2 * modes].copy().view(complex)
+    sizes = (points,) * 5 + (history,) * 3
+    offset = 2 * modes
+    for name, size in zip(STATE_ARRAYS[1:], sizes):
+        out[name] = rest[offset:offset + size].copy()
+        offset += size
+    out["active"] = np.frombuffer(data, np.uint8, points, len(data) - points).astype(bool)
+    return out
+
+
+def state_data(fields: dict) -> bytes:
+    """State bytes from named fields (the inverse of :func:`state_fields`)."""
+    q = np.ascontiguousarray(fields["q"], dtype=complex)
+    history = np.asarray(fields["history_t"]).size
+    last = fields["last_step_s"]
+    has_last = not math.isnan(last)
+    head = [fields["start_time"], fields["elapsed_s"], fields["carry_s"],
+            last if has_last else 0.0, fields["seen_z"], fields["seen_vz"],
+            *fields["ring_out"], *fields["outputs"]]
+    active = np.asarray(fields["active"])
+    return b"".join([
+        struct.pack("<4i", q.size, active.size, history, int(has_last)),
+        struct.pack(f"<{len(head)}d", *head), q.view("<f8").tobytes(),
+        *(np.asarray(fields[name], "<f8").tobytes() for name in STATE_ARRAYS[1:]),
+        active.astype(np.uint8).tobytes()])
+
+
+class _StateFields:
+    """State bytes read into named fields (the layout of kernel.c's kernel_state_write)."""
+
+    def __init__(self, contract: StepContract, data: bytes):
+        f = state_fields(data)
+        self.history = f["history_t"].size
+        self.has_last = not math.isnan(f["last_step_s"])
+        self.values = np.frombuffer(data, "<f8", (len(data) - contract.n_points - 16) // 8, 16)
+        self.start, self.elapsed, self.carry = f["start_time"], f["elapsed_s"], f["carry_s"]
+        self.last = f["last_step_s"] if self.has_last else 0.0
+        self.seen_z, self.seen_vz = f["seen_z"], f["seen_vz"]
+        self.ring_out, self.outputs, self.q = f["ring_out"], f["outputs"], f["q"]
+        self.df, self.penetration, self.rate = f["df"], f["penetration"], f["rate"]
+        self.heights, self.slopes = f["seen_heights"], f["seen_slopes"]
+        self.t, self.z, self.v = f["history_t"], f["history_z"], f["history_v"]
+        self.active = f["active"]
+
+
+def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
+    """Everything that makes ``data`` no state of this kernel: its layout (sizes, finite
+    values, flags), then what it means (the same rules as kernel.c's kernel_state_check): a
+    clock a run reaches, a road history as the reader keeps it, contact forces that do not
+    pull, displacements and rates within MAX_STATE_DISPLACEMENT_M and MAX_STATE_VELOCITY_M_S,
+    and outputs that are the ones its own values give."""
+    from .step_limits import (
+        MAX_DELAY_STEPS,
+        MAX_DISPLACEMENT_M,
+        MAX_HISTORY_SAMPLES,
+        MAX_STATE_DISPLACEMENT_M,
+        MAX_STATE_VELOCITY_M_S,
+        MAX_STEP_S,
+        MAX_VELOCITY_M_S,
+    )
+
+    c = kernel.contract
+    k, p = c.n_modes, c.n_points
+    if len(data) < 4 * _STATE_INTS:
+        return [f"its model part is {len(data)} bytes, shorter than its header"]
+    modes, points, history, has_last = struct.unpack_from("<4i", data, 0)
+    if (modes, points) != (k, p):
+        return [f"state of another model (build both with the same parameters): it holds "
+                f"{modes} modes and {points} contact points, this model {k} and {p}"]
+    if not 0 <= history <= (len(data) - 4 * _STATE_INTS) // 24:
+        return [f"its road history length {history} is impossible"]
+    expected = 4 * _STATE_INTS + 8 * (_STATE_HEAD + 2 * k + 5 * p + 3 * history) + p
+    if len(data) != expected:
+        return [f"its model part is {len(data)} bytes, expected {expected}"]
+    if has_last not in (0, 1):
+        return [f"its has-last flag is {has_last}, not 0 or 1"]
+    s = _StateFields(c, data)
+    bad = np.flatnonzero(~np.isfinite(s.values))
+    if bad.size:
+        return [f"value {int(bad[0])} of its model part is not finite"]
+    if has_last and not s.last > 0.0:
+        return [f"its last step is {s.last:g} s, not > 0"]
+    if np.any(np.frombuffer(data, np.uint8, p, len(data) - p) > 1):
+        return ["its contact flags are not 0 or 1"]
+    problems = []
+    time = s.start + s.elapsed
+    if not (s.elapsed >= 0.0 and abs(s.carry) <= math.nextafter(s.elapsed, math.inf)
+            - s.elapsed):
+        problems.append(f"its clock reads {s.elapsed!r} s since the start with a carry of "
+                        f"{s.carry!r} s: a run's clock is >= 0, and its carry below one "
+                        "rounding of it")
+    last = s.last if has_last else math.nan
+    if bool(has_last) != (s.elapsed != 0.0):
+        problems.append(f"its clock reads {s.elapsed!r} s since the start and its last step "
+                        f"is {last!r} s: only steps advance the clock")
+    elif has_last and not s.last <= MAX_STEP_S:
+        problems.append(f"its last step is {s.last!r} s; the FMU takes at most {MAX_STEP_S:g} s")
+    elif has_last and not clock.resolves(time - s.last, s.last):
+        problems.append(f"its last step of {s.last!r} s ends at t = {time!r} s, where the "
+                        "clock does not resolve it")
+    problems += _history_problems(kernel, s, MAX_HISTORY_SAMPLES, MAX_DELAY_STEPS,
+                                  MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S)
+    length, rate = MAX_STATE_DISPLACEMENT_M, MAX_STATE_VELOCITY_M_S
+    forces = kernel.f_static + s.df
+    bound = kernel.f_static + kernel.k * (length + np.abs(c.pen_static)) + kernel.c * rate
+    if not kernel.linear and np.any(forces < 0.0):
+        problems.append("its contact forces pull on the tread (the unilateral contact only "
+                        "pushes)")
+    if not np.all(np.abs(forces) <= bound):
+        problems.append(f"its contact forces exceed what the zone springs give at "
+                        f"{length:g} m and {rate:g} m/s")
+    size = np.abs(s.q)
+    for what, found, limit, unit in (
+            ("the tread's excursion at the zone nodes from a mode",
+             np.max(size * np.abs(c.gamma), initial=0.0), length, "m"),
+            ("the tread's rate at the zone nodes from a mode",
+             np.max(size * np.abs(c.eta), initial=0.0), rate, "m/s"),
+            ("its penetrations", np.max(np.abs(s.penetration)), length, "m"),
+            ("its penetration rates", np.max(np.abs(s.rate)), rate, "m/s"),
+            ("the rim and road positions it saw",
+             max(abs(s.seen_z), float(np.max(np.abs(s.heights)))), length, "m"),
+            ("the road rates it saw", np.max(np.abs(s.slopes)), rate, "m/s"),
+            ("the tread deflection it holds", abs(s.ring_out[2]), length, "m")):
+        if not found <= limit:
+            problems.append(f"{what} reach {float(found):.3g} {unit}, beyond the {limit:g} "
+                            f"{unit} a state may hold")
+    if not abs(s.seen_vz) <= MAX_VELOCITY_M_S:
+        problems.append(f"the rim velocity it saw, {s.seen_vz!r} m/s, is beyond the input "
+                        f"limit {MAX_VELOCITY_M_S:g} m/s")
+    if not (abs(s.ring_out[0]) <= bound.sum() and abs(s.ring_out[1]) <= bound.sum()):
+        problems.append(f"its rim forces exceed what the zone springs give at {length:g} m "
+                        f"and {rate:g} m/s")
+    if problems:
+        return problems
+    from .contact import _edges
+
+    front, rear = _edges(c.point_x_road, s.penetration, forces > 0.0)
+    scale = float(np.abs(forces).sum() + np.abs(kernel.f_static).sum())
+    expected_out = (c.static_ring_out[0] + s.ring_out[0], c.static_ring_out[1] + s.ring_out[1],
+                    float(c.point_cos @ forces),
+                    c.static_deflection_m + s.heights[c.centre_point] - s.seen_z, front - rear,
+                    c.static_ring_out[2] + s.ring_out[2])
+    tolerance = (0.0, 0.0, 1e-9 * scale, 0.0,
+                 1e-9 * float(c.point_x_road[0] - c.point_x_road[-1]), 0.0)
+    from .simulator import OUTPUT_NAMES
+
+    wrong = [f"{name} = {float(g)!r}, but the state gives {float(e)!r}"
+             for name, g, e, tol in zip(OUTPUT_NAMES, s.outputs, expected_out, tolerance)
+             if not abs(g - e) <= tol]
+    if wrong:
+        problems.append("its outputs are not the ones it gives: " + "; ".join(wrong))
+    return problems
+
+
+def _history_problems(kernel: NumpyKernel, s: _StateFields, max_samples: int,
+                      max_steps: int, max_height: float, max_rate: float) -> list[str]:
+    """The road history as the reader keeps it: none at rest; then at most max_samples,
+    times increasing, the newest at the last step's start, none before the start, all but
+    the oldest within the windows' reach, samples within the inputs' limits."""
+    horizon = kernel.horizon_s
+    history = s.history
+    if not kernel.road.delayed:
+        return [f"its road history holds {history} samples, but at rest the whole zone reads "
+                "the road at the instant and keeps none"] if history else []
+    if history > max_samples:
+        return [f"its road history holds {history} samples; the FMU keeps at most "
+                f"{max_samples} (one a step, over at most {max_steps} steps)"]
+    problems = []
+    now, last = s.elapsed, s.last if s.has_last else 0.0
+    slack = SAME_POINT_EPS * (abs(now) + horizon + 1.0)
+    t = s.t
+    if not np.all(np.diff(t) > 0.0):
+        problems.append("its road history times do not increase")
+    if history:
+        newest = float(t[-1])
+        if not (now - last - slack <= newest <= now + slack):
+            problems.append(f"its newest road sample is at {newest!r} s, but the state is at "
+                            f"{now!r} s after a step of {s.last if s.has_last else math.nan!r}"
+                            " s: the road is sampled at each step's start")
+        if t[0] < -slack:
+            problems.append(f"its road history starts at {float(t[0])!r} s, before the start")
+        if history > 1 and t[1] < newest - horizon - slack:
+            problems.append(f"its road history reaches back {newest - float(t[1]):.6g} s from "
+                            f"its newest sample, beyond the {horizon:.6g} s the contact zone "
+                            "reads (older samples are dropped)")
+    elif s.has_last:
+        problems.append("its road history is empty, but a step was taken (each step samples "
+                        "the road at its start)")
+    if not (np.all(np.abs(s.z) <= max_height) and np.all(np.abs(s.v) <= max_rate)):
+        problems.append(f"its road samples go beyond the inputs' limits ({max_height:g} m, "
+                        f"{max_rate:g} m/s)")
+    return problems

@@ -1,0 +1,41 @@
+"""What one communication step may be: the limits both FMUs and the step kernels enforce.
+
+Written once here; the FMUs' spec (``fmu/spec.py`` -> ``spec.h``) carries them to the C.
+"""
+
+#: The longest communication step (s). The contact is solved in sub-steps of at most
+#: contact_dynamics.MAX_SUBSTEP_S (0.1 ms), so this is 10^4 of them (a fraction of a second of
+#: work); 1e6 s, the former limit, meant 10^10 sub-steps and hung the host (found by fuzzing).
+MAX_STEP_S = 1.0
+#: At speed the FMU keeps the road's history back to the patch's last node, one sample per
+#: step, and reads it through a delay line of that many steps: at most this many.
+MAX_DELAY_STEPS = 100_000
+#: The most road samples the FMU ever holds: a delay line of MAX_DELAY_STEPS + 2 (the older
+#: sample of the last window end and the newest), or as many recorded one a step over the
+#: same reach, and the current point's; a state holding more is none of the FMU's.
+MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
+
+#: Largest input magnitudes a step accepts (m, m/s): far beyond any tire's travel, but
+#: finite enough that no product inside a step can overflow.
+MAX_DISPLACEMENT_M = 10.0
+MAX_VELOCITY_M_S = 1000.0
+#: Largest displacement and rate a state may hold (m, m/s): the tread's excursion at the zone
+#: nodes from any one mode, penetrations, the rim and road it saw. A step of an FMU moves the
+#: rim and road at most MAX_DISPLACEMENT_M + MAX_VELOCITY_M_S x 1 s = 1010 m from equilibrium;
+#: these are ten times that (and the rates a thousand times the input limit), so no run within
+#: the inputs' limits reaches them, while a state beyond them is no tire's (1e300 in a mode gave
+#: outputs of 3e307) and a step from it could overflow.
+MAX_STATE_DISPLACEMENT_M = 1e4
+MAX_STATE_VELOCITY_M_S = 1e6
+#: The shortest step (s) of a ring truncated with static correction. Its dropped modes enter
+#: through their static compliance and a rate term E ṙ, which a step of h weighs as E/h: the
+#: shorter the step, the more the rate term outweighs the compliance, until the step's contact
+#: problem loses its unique solution (from 6e-6 s down, the longest of 40 random tires around
+#: GL073A at up to 15 m/s; 1e-6 s at N = 100, 10 m/s, f_max = 150 Hz) and, below 1e-300 s, E/h
+#: overflows (found by fuzzing both FMUs). The ring with every mode, or without the static
+#: correction, has no rate term and steps any h.
+MIN_CORRECTED_STEP_S = 1e-5
+#: The refusal of a shorter step: h (repr) and the bound.
+SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring truncated with "
+                       "static correction (the dropped modes' rate term grows as 1/h); keep "
+                       "every mode, or turn the static correction off, to step shorter")

@@ -1,0 +1,16 @@
+/* contract_pack.h: the native FMU's model as a step contract (contract_pack.c). */
+#ifndef TIRE_CONTRACT_PACK_H
+#define TIRE_CONTRACT_PACK_H
+
+#include "tire.h" /* numerics.h first: contract.h uses its types */
+#include "contract.h"
+
+/* fill c (its arrays allocated with mem); 0, or -1 out of memory (nothing allocated then) */
+int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zone* zone,
+                  const Footprint* fp, const Windows* windows, const double* compliance,
+                  double deflection, double substep_s, int linear, double speed,
+                  double min_step_s);
+/* free the arrays of a packed contract */
+void contract_free(TireContract* c, const Memory* mem);
+
+#endif

@@ -1,0 +1,300 @@
+"""The compiled step kernel (``native/c/kernel.c``) from Python, through ctypes.
+
+The Python FMU and :class:`~tire_fmu.core.contact_dynamics.ContactSimulator` step the tire
+with the same C as the native FMU: the contract the Python core built is handed to
+``kernel_new`` once, and each communication step is one call of ``kernel_step`` with the four
+inputs and five outputs in preallocated arrays. The library is compiled from the package's C
+(the kernel, the road reader, the numerics) with the machine's C compiler: by the FMU builder
+into the FMU (``binaries/<platform>/tire_kernel.so``), or on first use here into a cache folder
+keyed by the sources' hash, so a changed source is never run stale.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..core.contract import StepContract
+from .contract import to_ctypes
+
+#: The C files of the kernel library, and what they include.
+KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c")
+KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h")
+KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
+LIBRARY_NAME = "tire_kernel"
+#: The compiler, flags and file name of the kernel library per FMI platform (mingw's own
+#: printf, and no DLL needed beyond the C runtime Windows ships, as the native FMU's).
+PLATFORMS = {
+    "linux64": (None, KERNEL_FLAGS, ("-lm",), LIBRARY_NAME + ".so"),
+    "win64": ("x86_64-w64-mingw32-gcc", ("-shared", "-O2", "-std=c99",
+                                         "-D__USE_MINGW_ANSI_STDIO=1", "-static-libgcc"), (),
+              LIBRARY_NAME + ".dll"),
+}
+N_INPUTS, N_OUTPUTS = 4, 6
+#: a step's report (kernel.h): the outputs, the time, whether the footprint is at a zone end
+REPORT, REPORT_TIME, REPORT_ZONE_EDGE = N_OUTPUTS + 2, N_OUTPUTS, N_OUTPUTS + 1
+REFUSED = -3
+_WHY_SIZE = 512
+
+
+class KernelUnavailable(RuntimeError):
+    """No compiled kernel here (no C compiler, or the library does not load)."""
+
+
+def _c_folder() -> Path:
+    """The package's C (importlib.resources: the builder's c_folder, without importing it)."""
+    from importlib import resources
+
+    return Path(str(resources.files("tire_fmu.native") / "c"))
+
+
+def sources_digest() -> str:
+    """A hash of the kernel's C: the cache key, and what an FMU's library was built from."""
+    digest = hashlib.sha256()
+    folder = _c_folder()
+    for name in KERNEL_SOURCES + KERNEL_HEADERS:
+        digest.update(name.encode() + b"\0" + (folder / name).read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def compiler() -> str | None:
+    cc = os.environ.get("CC", "").split() or ["gcc"]
+    return shutil.which(cc[0]) and cc[0]
+
+
+def host_platform() -> str | None:
+    """The FMI platform this process runs on, where the kernel library is built for it."""
+    import struct
+    import sys
+
+    if struct.calcsize("P") != 8:
+        return None
+    return {"linux": "linux64", "win32": "win64"}.get(sys.platform)
+
+
+def compile_kernel(destination: Path, platform: str = "linux64") -> Path:
+    """Compile the kernel library for ``platform`` (linux64 with $CC or gcc, win64 with
+    mingw-w64) to ``destination`` (a file path); KernelUnavailable when there is no such
+    compiler or it fails (with its output)."""
+    tool, flags, libraries, _ = PLATFORMS[platform]
+    command = shutil.which(tool) and tool if tool else compiler()
+    if command is None:
+        raise KernelUnavailable(f"no C compiler for {platform} found ("
+                                + ("install gcc, or set CC" if tool is None else
+                                   f"install {tool}") + ")")
+    folder = _c_folder()
+    destination = Path(destination)
+    destination.parent.mkdir(parents=True, exist_ok=True)
+    handle, partial = tempfile.mkstemp(prefix=destination.name + ".", suffix=".partial",
+                                       dir=destination.parent)
+    os.close(handle)
+    try:
+        result = subprocess.run(
+            [command, *flags, "-o", partial, *(str(folder / s) for s in KERNEL_SOURCES),
+             *libraries], capture_output=True, text=True)
+        if result.returncode != 0:
+            raise KernelUnavailable(f"compiling the step kernel failed:\n{result.stderr}")
+        os.replace(partial, destination)
+    finally:
+        if os.path.exists(partial):
+            os.unlink(partial)
+    return destination
+
+
+def _cache_folder() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "tire_fmu"
+
+
+_LOADED: dict[str, ctypes.CDLL] = {}
+
+
+def load_library(path: str | Path | None = None) -> ctypes.CDLL:
+    """The kernel library at ``path``, or the one compiled for this package's sources (made
+    on first use); KernelUnavailable if neither can be had."""
+    if path is None:
+        path = _cache_folder() / f"{LIBRARY_NAME}-{sources_digest()}.so"
+        if not path.exists():
+            try:
+                compile_kernel(path)
+            except OSError:  # no writable cache: a private folder then
+                path = Path(tempfile.mkdtemp(prefix="tire_fmu_kernel_")) / path.name
+                compile_kernel(path)
+    key = str(path)
+    if key not in _LOADED:
+        try:
+            library = ctypes.CDLL(key)
+        except OSError as error:
+            raise KernelUnavailable(f"the step kernel {key} does not load: {error}") from error
+        _declare(library)
+        _LOADED[key] = library
+    return _LOADED[key]
+
+
+def _declare(lib: ctypes.CDLL) -> None:
+    handle, double, p_double = ctypes.c_void_p, ctypes.c_double, ctypes.POINTER(ctypes.c_double)
+    size, p_byte = ctypes.c_size_t, ctypes.POINTER(ctypes.c_ubyte)
+    lib.kernel_new.restype = handle
+    lib.kernel_new.argtypes = [ctypes.c_void_p, double, ctypes.c_char_p, size]
+    lib.kernel_destroy.restype = None
+    lib.kernel_destroy.argtypes = [handle]
+    lib.kernel_reset.restype = None
+    lib.kernel_reset.argtypes = [handle, double]
+    lib.kernel_step.restype = ctypes.c_int
+    lib.kernel_step.argtypes = [handle, double, p_double, p_double]
+    lib.kernel_outputs_with.restype = ctypes.c_int
+    lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
+    lib.kernel_step_problems.restype = ctypes.c_int
+    lib.kernel_step_problems.argtypes = [handle, double, p_double]
+    lib.kernel_outputs.restype = None
+    lib.kernel_outputs.argtypes = [handle, p_double]
+    for name in ("kernel_time", "kernel_start_time", "kernel_elapsed", "kernel_min_step",
+                 "kernel_horizon"):
+        getattr(lib, name).restype = double
+        getattr(lib, name).argtypes = [handle]
+    for name in ("kernel_in_contact", "kernel_at_zone_edge", "kernel_cached_steps",
+                 "kernel_delay_line_on"):
+        getattr(lib, name).restype = ctypes.c_int
+        getattr(lib, name).argtypes = [handle]
+    lib.kernel_solver_fallbacks.restype = ctypes.c_long
+    lib.kernel_solver_fallbacks.argtypes = [handle]
+    lib.kernel_forces.restype = None
+    lib.kernel_forces.argtypes = [handle, p_double]
+    lib.kernel_state_size.restype = size
+    lib.kernel_state_size.argtypes = [handle]
+    lib.kernel_state_write.restype = None
+    lib.kernel_state_write.argtypes = [handle, p_byte]
+    lib.kernel_state_check.restype = ctypes.c_int
+    lib.kernel_state_check.argtypes = [handle, p_byte, size, ctypes.c_char_p, size]
+    lib.kernel_state_apply.restype = ctypes.c_int
+    lib.kernel_state_apply.argtypes = [handle, p_byte]
+
+
+class CompiledKernel:
+    """The C kernel stepping one contract: the calls of :class:`~tire_fmu.core.kernel_numpy.
+    NumpyKernel`, each one call into the library."""
+
+    def __init__(self, contract: StepContract, start_time: float = 0.0,
+                 library: ctypes.CDLL | None = None):
+        self.contract = contract
+        self._lib = lib = library or load_library()
+        why = ctypes.create_string_buffer(_WHY_SIZE)
+        struct = to_ctypes(contract)
+        handle = lib.kernel_new(ctypes.byref(struct), float(start_time), why, _WHY_SIZE)
+        if not handle:
+            raise KernelUnavailable(f"the step kernel refused the contract: "
+                                    f"{why.value.decode(errors='replace')}")
+        self._handle = handle
+        self._in = (ctypes.c_double * N_INPUTS)()
+        self._out = (ctypes.c_double * REPORT)()
+        self._step = lib.kernel_step
+        self.horizon_s = lib.kernel_horizon(handle)
+
+    def __del__(self):
+        handle, self._handle = getattr(self, "_handle", None), None
+        if handle:
+            self._lib.kernel_destroy(handle)
+
+    def _check(self, status: int, call: str) -> None:
+        if status != 0:
+            raise MemoryError(f"{call}: the step kernel ran out of memory")
+
+    def reset(self, start_time: float = 0.0) -> None:
+        self._lib.kernel_reset(self._handle, float(start_time))
+
+    @property
+    def time(self) -> float:
+        return self._lib.kernel_time(self._handle)
+
+    @property
+    def start_time(self) -> float:
+        return self._lib.kernel_start_time(self._handle)
+
+    @property
+    def elapsed_s(self) -> float:
+        return self._lib.kernel_elapsed(self._handle)
+
+    def step_values(self, h: float, z: float, vz: float, road_z: float, road_vz: float):
+        """One communication step; the outputs at the new time as a list, or None (nothing
+        changed) for a step the kernel's rules refuse."""
+        inputs = self._in
+        inputs[0], inputs[1], inputs[2], inputs[3] = z, vz, road_z, road_vz
+        status = self._step(self._handle, h, inputs, self._out)
+        if status:
+            if status == REFUSED:
+                return None
+            self._check(status, "kernel_step")
+        return self._out[0:N_OUTPUTS]
+
+    def raw_step(self):
+        """(function, handle, inputs, report) of the hot path: function(handle, h, inputs,
+        report) steps with the four inputs in ``inputs`` and writes the report (the outputs,
+        the time, the zone-edge flag) into ``report``; 0, or -3 refused, or -1 no memory."""
+        return self._step, self._handle, self._in, self._out
+
+
+    def outputs_with(self, inputs):
+        """The outputs at the current time for inputs given there, or None if refused."""
+        self._in[:] = [float(x) for x in inputs]
+        status = self._lib.kernel_outputs_with(self._handle, self._in, self._out)
+        if status == REFUSED:
+            return None
+        self._check(status, "kernel_outputs_with")
+        return self._out[0:N_OUTPUTS]
+
+    @property
+    def outputs(self) -> np.ndarray:
+        out = (ctypes.c_double * N_OUTPUTS)()
+        self._lib.kernel_outputs(self._handle, out)
+        return np.array(out[:])
+
+    @property
+    def forces(self) -> np.ndarray:
+        out = np.zeros(self.contract.n_points)
+        self._lib.kernel_forces(self._handle, out.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+        return out
+
+    def at_zone_edge(self) -> bool:
+        return bool(self._lib.kernel_at_zone_edge(self._handle))
+
+    @property
+    def cached_steps(self) -> int:
+        """How many communication step sizes have their coefficients cached."""
+        return int(self._lib.kernel_cached_steps(self._handle))
+
+    @property
+    def delay_line_on(self) -> bool:
+        """Whether the road is read by road.c's delay line (a run of equal steps)."""
+        return bool(self._lib.kernel_delay_line_on(self._handle))
+
+    @property
+    def solver_fallbacks(self) -> int:
+        return int(self._lib.kernel_solver_fallbacks(self._handle))
+
+    def state_bytes(self) -> bytes:
+        size = self._lib.kernel_state_size(self._handle)
+        buffer = (ctypes.c_ubyte * size)()
+        self._lib.kernel_state_write(self._handle, buffer)
+        return bytes(buffer)
+
+    def state_problem(self, data: bytes) -> str | None:
+        """Why ``data`` is not a state of this kernel, or None."""
+        buffer = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
+        why = ctypes.create_string_buffer(_WHY_SIZE)
+        if self._lib.kernel_state_check(self._handle, buffer, len(data), why, _WHY_SIZE):
+            return why.value.decode(errors="replace")
+        return None
+
+    def set_state_bytes(self, data: bytes) -> None:
+        problem = self.state_problem(data)
+        if problem:
+            raise ValueError(problem)
+        buffer = (ctypes.c_ubyte * len(data)).from_buffer_copy(data)
+        self._check(self._lib.kernel_state_apply(self._handle, buffer), "kernel_state_apply")
