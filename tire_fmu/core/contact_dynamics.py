@@ -42,9 +42,9 @@ from .model import TireModel, build_model, check_resolved
 from .parameters import OperatingPoint, TireParameters
 from .step_limits import (  # noqa: F401  (the limits a step checks, for the FMUs' spec)
     MAX_DISPLACEMENT_M,
-    MAX_STEP_WORK,
     MAX_STATE_DISPLACEMENT_M,
     MAX_STATE_VELOCITY_M_S,
+    MAX_STEP_WORK,
     MAX_VELOCITY_M_S,
     MIN_CORRECTED_STEP_S,
     SHORT_STEP_TEMPLATE,
