@@ -367,13 +367,14 @@ def fmu_init_fresh() -> str:
 @generator("fmu-step-cost")
 def fmu_step_cost() -> str:
     data = record("bench_fmu")
-    costs = data["results"]["step_us"]
-    floor = costs.get("(b) minimal pythonfmu")
-    lines = ["| per communication step through fmpy | µs | × (b) minimal slave |",
-             "|---|---|---|"]
-    for name, us in costs.items():
-        ratio = f"{us / floor:.2f}" if floor else "-"
-        lines.append(f"| {name} | {us:.1f} | {ratio} |")
+    costs, ratios = data["results"]["step_us"], data["results"]["ratios"]
+    names = list(next(iter(costs.values())))
+    lines = ["| per communication step through fmpy, µs | " + " | ".join(names)
+             + " | (a)/(b) | (c)/(d) |", "|---" * (len(names) + 3) + "|"]
+    for regime, row in costs.items():
+        lines.append(f"| {regime} | " + " | ".join(f"{row[n]:.1f}" for n in names)
+                     + f" | {ratios[regime]['python_over_minimal']:.2f} | "
+                     f"{ratios[regime]['native_over_trivial']:.2f} |")
     lines += ["", provenance(data)]
     return "\n".join(lines)
 

@@ -303,6 +303,41 @@ def test_tiny_values_are_refused_alike_naming_the_parameter(native, python, para
     assert line.startswith(f"parameter problem 1/1: {field} = ") and ": must be " in line
 
 
+@pytest.mark.parametrize("parameters, phrase", [
+    ({"k_cw": 1e13, "rhoA": 1e-3}, "which would be below 1e-07 s"),  # the issue's case
+    ({"k_cw": 1e11, "rhoA": 1e-3, "n_elements": 800, "load": 100.0},
+     "more than the 500000000 a step may take"),
+])
+def test_a_contact_the_step_cannot_afford_is_refused_alike(native, python, parameters, phrase):
+    """Issue 20: the native FMU ran k_cw = 1e13 on a 1e-3 kg/m tread for 45 s in one 1 s
+    doStep (the refusal of sub-steps below 1e-7 s was the Python core's alone). Both FMUs now
+    refuse such a tire at initialisation, naming k_cw, with one message; so too a contact
+    whose millisecond would take more work than a step may (a fine mesh)."""
+    status, native_lines, _ = _problems(native, parameters)
+    _, python_lines, _ = _problems(python, parameters)
+    assert status == 3 and native_lines == python_lines
+    [line] = native_lines
+    assert line.startswith("parameter problem 1/1: k_cw = ") and phrase in line
+
+
+def test_a_step_of_more_work_than_a_step_may_take_is_refused_alike(native, python):
+    """A stiff contact on a 400-node mesh: a 1 s step would take 1.2e9 units of work (about
+    2 s of CPU); both FMUs refuse it with one message naming the longest step they take, and
+    take that one."""
+    parameters = {"n_elements": 400, "k_cw": 100 * TireParameters().k_cw}
+    said = []
+    for fmu in (native, python):
+        instance = Instance(fmu)
+        assert instance.initialise(**parameters) == 0
+        with pytest.raises(FMICallException):
+            instance.slave.doStep(0.0, 1.0)
+        said.append([m for s, _, m in instance.log if s >= 3])
+        instance.slave.freeInstance()
+    assert said[0] == said[1] and len(said[0]) == 1
+    assert "more than the 500000000 a step may take (about 1 s of CPU); take steps of at " \
+        "most" in said[0][0]
+
+
 def test_light_heavily_damped_sidewalls_run_as_in_python(native, python):
     """Sidewall masses 2e4 times lighter than the tread and heavily damped (m_s = 1e-3 kg/m,
     beta = 0.1 s), which the native FMU's former quartic solver could not resolve: both FMUs

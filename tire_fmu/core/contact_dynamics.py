@@ -44,9 +44,14 @@ from .step_limits import (  # noqa: F401  (the limits a step checks, for the FMU
     MAX_DISPLACEMENT_M,
     MAX_STATE_DISPLACEMENT_M,
     MAX_STATE_VELOCITY_M_S,
+    MAX_STEP_WORK,
     MAX_VELOCITY_M_S,
     MIN_CORRECTED_STEP_S,
     SHORT_STEP_TEMPLATE,
+    STIFF_CONTACT_ALLOWED,
+    STIFF_CONTACT_REASON,
+    WORK_INTERVAL_S,
+    substep_work,
 )
 
 LAWS = ("unilateral", "linear")
@@ -56,6 +61,11 @@ MAX_SUBSTEP_S = 1e-4
 #: 1e-7 s is 1000 sub-steps per 0.1 ms communication step. Stiffer contacts on lighter treads
 #: are refused rather than run for hours (a property test over the ranges found one).
 MIN_SUBSTEP_S = 1e-7
+#: How a tire that would need shorter sub-steps is refused (the k_cw problem's texts): the
+#: largest k_cw and rhoA; then the shortest sub-step.
+SUBSTEP_ALLOWED = "at most %.3g N/m^2 with rhoA = %g kg/m"
+SUBSTEP_REASON = ("the contact is sub-stepped at 1/sqrt(k_cw/rhoA), which would be below %g s: "
+                  "more than 10^4 sub-steps per millisecond")
 
 
 class ContactZoneWarning(UserWarning):
@@ -135,10 +145,20 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
 
         raise ParameterError([Problem(
             "k_cw", tire.k_cw, TIRE_FIELDS["k_cw"].unit,
-            f"at most {tire.rhoA / MIN_SUBSTEP_S**2:.3g} N/m^2 with rhoA = {tire.rhoA:g} kg/m",
-            f"the contact is sub-stepped at 1/sqrt(k_cw/rhoA), which would be below "
-            f"{MIN_SUBSTEP_S:g} s: more than 10^4 sub-steps per millisecond")])
+            SUBSTEP_ALLOWED % (tire.rhoA / MIN_SUBSTEP_S**2, tire.rhoA),
+            SUBSTEP_REASON % MIN_SUBSTEP_S)])
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
+    zone = model.patch.zone
+    work = substep_work(modes.n_modes, model.grid.n_elements // 2 + 1, zone.size, zone.size)
+    per_interval = math.ceil(WORK_INTERVAL_S / substep * (1 - 1e-12))
+    if per_interval * work > MAX_STEP_WORK:
+        from .parameters import TIRE_FIELDS, ParameterError, Problem
+
+        most = tire.rhoA * (MAX_STEP_WORK / work / WORK_INTERVAL_S) ** 2
+        raise ParameterError([Problem(
+            "k_cw", tire.k_cw, TIRE_FIELDS["k_cw"].unit,
+            STIFF_CONTACT_ALLOWED % (most, tire.rhoA, model.grid.n_elements),
+            STIFF_CONTACT_REASON % (per_interval, work, MAX_STEP_WORK))])
     return ContactModel(model=model, modes=modes, settings=settings, substep_s=substep)
 
 

@@ -64,6 +64,7 @@ class StepContract:
     # scalars
     linear: int = _field("int", doc="1: two-sided springs on the static footprint's points")
     centre_point: int = _field("int", doc="the contact point at the contact centre")
+    substep_work: int = _field("int", doc="work of one sub-step (units, step_limits)")
     substep_s: float = _field("float", doc="longest internal step (s)")
     speed_m_s: float = _field("float", doc="rolling speed (m/s)")
     static_deflection_m: float = _field("float", doc="the rim's static lowering (m)")
@@ -171,7 +172,7 @@ CONTRACT_VERSION = int(hashlib.sha256(layout_text().encode()).hexdigest()[:7], 1
 def build_contract(contact) -> StepContract:
     """The contract of a :class:`~.contact_dynamics.ContactModel`: its free ring's modes, the
     static footprint, the road windows. Contact points are the zone nodes themselves."""
-    from .step_limits import MIN_CORRECTED_STEP_S
+    from .step_limits import MIN_CORRECTED_STEP_S, substep_work
 
     model, patch, modes = contact.model, contact.patch, contact.modes
     zone, grid = patch.zone, model.grid
@@ -205,6 +206,7 @@ def build_contract(contact) -> StepContract:
         n_modes=modes.n_modes, n_zone=n_zone, n_points=n_zone, n_support=1,
         n_ring_rows=3 + 2 * n_zone, n_ring_cols=1 + n_zone,
         linear=int(contact.settings.law == "linear"), centre_point=int(zone.centre),
+        substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_zone),
         substep_s=float(contact.substep_s), speed_m_s=float(model.speed_m_s),
         static_deflection_m=float(patch.deflection_m),
         min_step_s=float(MIN_CORRECTED_STEP_S if truncated else 0.0), **arrays)

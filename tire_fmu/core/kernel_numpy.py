@@ -168,15 +168,18 @@ class NumpyKernel:
         """Why a step is refused, as the bits of kernel.h's kernel_step_problems (0: it is
         not): h not finite and > 0 (1), shorter than the contract's shortest step (2), not
         resolved by the clock (4); input i not finite or beyond its limit (8 << i)."""
-        from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
+        from .step_limits import MAX_DISPLACEMENT_M, MAX_STEP_WORK, MAX_VELOCITY_M_S
 
         problems = 0
+        c = self.contract
         if not 0.0 < h < math.inf:
             problems |= 1
-        elif h < self.contract.min_step_s:
+        elif h < c.min_step_s:
             problems |= 2
         elif not clock.resolves(self.time, h):
             problems |= 4
+        elif math.ceil(h / c.substep_s * (1 - SUBSTEP_SLACK)) * c.substep_work > MAX_STEP_WORK:
+            problems |= 128
         for i, value in enumerate(inputs):
             if not abs(value) <= (MAX_VELOCITY_M_S if i % 2 else MAX_DISPLACEMENT_M):
                 problems |= 8 << i

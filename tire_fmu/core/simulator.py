@@ -29,8 +29,14 @@ import numpy as np
 
 from . import clock
 from .contract import StepContract, build_contract
-from .kernel_numpy import NumpyKernel, state_data, state_fields
-from .step_limits import MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S, SHORT_STEP_TEMPLATE
+from .kernel_numpy import SUBSTEP_SLACK, NumpyKernel, state_data, state_fields
+from .step_limits import (
+    LONG_STEP_TEMPLATE,
+    MAX_DISPLACEMENT_M,
+    MAX_STEP_WORK,
+    MAX_VELOCITY_M_S,
+    SHORT_STEP_TEMPLATE,
+)
 
 OUTPUT_NAMES = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
                 "tread_deflection")
@@ -226,6 +232,13 @@ class ContactSimulator:
             problems.append(SHORT_STEP_TEMPLATE % (repr(h), self.min_step_s))
         elif not clock.resolves(self.time, h):
             problems.append(clock.resolution_problem(self.time, h))
+        else:
+            c = self.contract
+            n_sub = math.ceil(h / c.substep_s * (1 - SUBSTEP_SLACK))
+            if n_sub * c.substep_work > MAX_STEP_WORK:
+                longest = (MAX_STEP_WORK // c.substep_work) * c.substep_s
+                problems.append(LONG_STEP_TEMPLATE % (repr(h), n_sub, c.substep_s,
+                                                      c.substep_work, MAX_STEP_WORK, longest))
         for name, value in zip(INPUT_NAMES, values):
             limit, unit = ((MAX_VELOCITY_M_S, "m/s") if name.endswith("vz")
                            else (MAX_DISPLACEMENT_M, "m"))

@@ -39,3 +39,37 @@ MIN_CORRECTED_STEP_S = 1e-5
 SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring truncated with "
                        "static correction (the dropped modes' rate term grows as 1/h); keep "
                        "every mode, or turn the static correction off, to step shorter")
+
+#: The work of one internal sub-step of the kernel, in units: a fixed part (the road read, the
+#: solve's set-up, the outputs), one per mode kept (its decay and ramp), two per order and zone
+#: node pair (the forces' DFT and the readout's inverse at the zone nodes) and three per pair
+#: of contact points (the interface the contact solve reads). benchmarks/bench_step_work.py
+#: measures a unit at 0.5-1.5 ns on the machines this was written on.
+SUBSTEP_WORK_BASE = 1000
+#: The most work one communication step may take (units): about a second of CPU. A tire whose
+#: millisecond would take more (a stiff contact on a light tread, sub-stepped at
+#: 1/sqrt(k_cw/rhoA), on a fine mesh) is refused when it is built, and a longer step than the
+#: tire allows when it is taken, so no host waits minutes on one call.
+MAX_STEP_WORK = 500_000_000
+#: The longest interval a tire must step within MAX_STEP_WORK (s).
+WORK_INTERVAL_S = 1e-3
+
+
+def substep_work(n_modes: int, n_orders: int, n_zone: int, n_points: int) -> int:
+    """The work of one sub-step (see SUBSTEP_WORK_BASE), the same sum in both builders."""
+    return SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone // 2 + 1) + 3 * n_points ** 2
+
+
+#: How a step that would take more than MAX_STEP_WORK is refused: h (repr), the sub-steps it
+#: needs, the sub-step (s), the work of each, the limit, the longest step allowed (s).
+LONG_STEP_TEMPLATE = ("step size h = %s s: would take %d sub-steps of %.3g s at %d units of "
+                      "work each, more than the %d a step may take (about 1 s of CPU); take "
+                      "steps of at most %.3g s with this tire and mesh")
+#: How a tire whose millisecond would take more is refused (the k_cw problem's allowed text):
+#: the largest k_cw, rhoA, n_elements, the sub-steps a millisecond takes at the given k_cw and
+#: the work of each, the limit.
+STIFF_CONTACT_ALLOWED = ("at most %.3g N/m^2 with rhoA = %g kg/m on this mesh (n_elements = "
+                         "%d)")
+STIFF_CONTACT_REASON = ("the contact is sub-stepped at 1/sqrt(k_cw/rhoA): a millisecond would "
+                        "take %d sub-steps of %d units of work each, more than the %d a step "
+                        "may take (about 1 s of CPU)")

@@ -31,6 +31,7 @@ from ..core import (
     parameters,
     road,
     standing_waves,
+    step_limits,
     stepping,
 )
 from .interface import (
@@ -63,6 +64,10 @@ CONSTANTS: dict[str, float | int] = {
     "LAG_SLACK": road.LAG_SLACK,
     "MAX_SUBSTEP_S": contact_dynamics.MAX_SUBSTEP_S,
     "MIN_CORRECTED_STEP_S": contact_dynamics.MIN_CORRECTED_STEP_S,
+    "MIN_SUBSTEP_S": contact_dynamics.MIN_SUBSTEP_S,
+    "SUBSTEP_WORK_BASE": step_limits.SUBSTEP_WORK_BASE,
+    "MAX_STEP_WORK": step_limits.MAX_STEP_WORK,
+    "WORK_INTERVAL_S": step_limits.WORK_INTERVAL_S,
     "SUBSTEP_SLACK": kernel_numpy.SUBSTEP_SLACK,
     "SERIES_LIMIT": stepping.SERIES_LIMIT,
     "KERNEL_CACHE_SIZE": kernel_numpy.KERNEL_CACHE_SIZE,
@@ -174,6 +179,11 @@ MESSAGES: dict[str, str] = {
                         "clock of doubles resolves no step the FMU takes (at most %g s)",
     # the running FMU
     "SHORT_STEP_CORRECTED": contact_dynamics.SHORT_STEP_TEMPLATE,
+    "LONG_STEP": step_limits.LONG_STEP_TEMPLATE,
+    "STIFF_CONTACT_ALLOWED": step_limits.STIFF_CONTACT_ALLOWED,
+    "STIFF_CONTACT_REASON": step_limits.STIFF_CONTACT_REASON,
+    "SUBSTEP_ALLOWED": contact_dynamics.SUBSTEP_ALLOWED,
+    "SUBSTEP_REASON": contact_dynamics.SUBSTEP_REASON,
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
                  "beyond it are missing; raise contact_zone_length (logged once until the "
                  "footprint is back inside)",

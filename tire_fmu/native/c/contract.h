@@ -9,7 +9,7 @@
 #error "include numerics.h before contract.h"
 #endif
 
-#define TIRE_CONTRACT_VERSION 48865725u
+#define TIRE_CONTRACT_VERSION 195522104u
 
 typedef struct {
     unsigned int version; /* TIRE_CONTRACT_VERSION */
@@ -23,6 +23,7 @@ typedef struct {
     int n_ring_cols; /* columns of d and e: 1 + Z */
     int linear; /* 1: two-sided springs on the static footprint's points */
     int centre_point; /* the contact point at the contact centre */
+    int substep_work; /* work of one sub-step (units, step_limits) */
     double substep_s; /* longest internal step (s) */
     double speed_m_s; /* rolling speed (m/s) */
     double static_deflection_m; /* the rim's static lowering (m) */

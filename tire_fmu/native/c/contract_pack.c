@@ -7,6 +7,12 @@
 #include "contract_pack.h"
 #include "spec.h"
 
+int contract_substep_work(int n_modes, int n_orders, int n_zone, int n_points)
+{
+    return SPEC_SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone / 2 + 1)
+           + 3 * n_points * n_points;
+}
+
 void contract_free(TireContract* c, const Memory* mem)
 {
 #define FREE_ARRAY(name) mem_free(mem, (void*)c->name);
@@ -41,6 +47,7 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     c->n_ring_cols = cols;
     c->linear = linear;
     c->centre_point = zone->centre;
+    c->substep_work = contract_substep_work(K, ring->n_orders, Z, P);
     c->substep_s = substep_s;
     c->speed_m_s = speed;
     c->static_deflection_m = deflection;

@@ -667,6 +667,21 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                     "changed", t, h, text);
         return fmi2Error;
     }
+    {   /* more work than a step may take (core/simulator.py: the kernel's rule) */
+        int n_sub, work;
+        double substep, longest;
+        if (model_step_work(inst->model, communicationStepSize, &n_sub, &substep, &work,
+                            &longest)) {
+            char why[MESSAGE_SIZE];
+            number(t, currentCommunicationPoint);
+            number(h, communicationStepSize);
+            snprintf(why, sizeof why, SPEC_MSG_LONG_STEP, h, n_sub, substep, work,
+                     SPEC_MAX_STEP_WORK, longest);
+            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
+                        "changed", t, h, why);
+            return fmi2Error;
+        }
+    }
     /* the model's own clock goes on: the host's t, within rounding of it, would bring its
      * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);

@@ -46,7 +46,7 @@ struct TireKernel {
     Memory mem;
     /* the contract */
     int n_elements, n_orders, K, Z, P, S, half, linear, rows, cols;
-    double substep_s, speed, static_deflection, min_step;
+    double substep_s, speed, static_deflection, min_step, substep_work;
     int centre;
     int32_t* order_start;
     cx *lam, *beta, *gamma, *eta;
@@ -883,6 +883,9 @@ int kernel_step_problems(const TireKernel* kn, double h, const double inputs[KER
         problems |= KERNEL_SHORT_H;
     } else if (!clock_resolves(kn->start_time + kn->elapsed, h)) {
         problems |= KERNEL_UNRESOLVED_H;
+    } else if (ceil(h / kn->substep_s * (1 - SPEC_SUBSTEP_SLACK)) * kn->substep_work >
+               SPEC_MAX_STEP_WORK) {
+        problems |= KERNEL_LONG_H;
     }
     for (i = 0; i < KERNEL_N_INPUTS; i++) {
         double limit = i % 2 ? SPEC_MAX_VELOCITY_M_S : SPEC_MAX_DISPLACEMENT_M;
@@ -999,7 +1002,8 @@ static int layout_problem(const TireContract* c, char* why, size_t why_size)
     if (c->n_elements < 1 || c->n_orders != c->n_elements / 2 + 1 || c->n_modes < 0 ||
         c->n_zone < 1 || c->n_zone % 2 != 1 || c->n_points < 1 || c->n_support < 1 ||
         c->n_ring_rows != 3 + 2 * c->n_zone || c->n_ring_cols != 1 + c->n_zone ||
-        !(c->substep_s > 0.0) || c->centre_point < 0 || c->centre_point >= c->n_points) {
+        !(c->substep_s > 0.0) || c->centre_point < 0 || c->centre_point >= c->n_points ||
+        c->substep_work < 1) {
         snprintf(why, why_size, "the contract's sizes are inconsistent");
         return 1;
     }
@@ -1130,6 +1134,7 @@ int kernel_create(const TireContract* c, const Memory* mem, double start_time,
     kn->static_deflection = c->static_deflection_m;
     kn->min_step = c->min_step_s;
     kn->centre = c->centre_point;
+    kn->substep_work = c->substep_work;
     for (j = 0; j < 3; j++) kn->static_ring[j] = c->static_ring_out[j];
     if (COPY(order_start, order_start, kn->n_orders + 1) || COPY(lam, lam, K) ||
         COPY(beta, beta, K) || COPY(gamma, gamma, K) || COPY(eta, eta, K) ||

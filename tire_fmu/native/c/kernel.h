@@ -33,8 +33,10 @@ enum { KERNEL_OK = 0, KERNEL_NO_MEMORY = -1, KERNEL_BAD_CONTRACT = -2, KERNEL_RE
 
 /* why a step is refused, as bits (0: it is not): h not finite and > 0, shorter than the
  * shortest step the contract takes, or not resolved by a clock of doubles at the kernel's
- * time; input i not finite or beyond its limit (bit 3 + i) */
-enum { KERNEL_BAD_H = 1, KERNEL_SHORT_H = 2, KERNEL_UNRESOLVED_H = 4, KERNEL_BAD_INPUT = 8 };
+ * time; input i not finite or beyond its limit (bit 3 + i); more sub-steps than the work one
+ * step may take (SPEC_MAX_STEP_WORK) */
+enum { KERNEL_BAD_H = 1, KERNEL_SHORT_H = 2, KERNEL_UNRESOLVED_H = 4, KERNEL_BAD_INPUT = 8,
+       KERNEL_LONG_H = 128 };
 int kernel_step_problems(const TireKernel* kernel, double h, const double inputs[KERNEL_N_INPUTS]);
 
 /* a kernel for the contract, at time start_time; KERNEL_BAD_CONTRACT for another version or

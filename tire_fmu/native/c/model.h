@@ -43,6 +43,10 @@ double model_road_horizon(const Model* model);
 /* the shortest step it takes (s): SPEC_MIN_CORRECTED_STEP_S for a ring truncated with static
  * correction, else 0 */
 double model_min_step(const Model* model);
+/* whether a step of h takes more work than a step may (SPEC_MAX_STEP_WORK): its sub-steps,
+ * their length and work, and the longest step that does not */
+int model_step_work(const Model* model, double h, int* n_sub, double* substep, int* work,
+                    double* longest);
 /* does the model hold a built simulator for exactly these parameter values? */
 int model_built_for(const Model* model, const double* values);
 /* its part of an FMU state */

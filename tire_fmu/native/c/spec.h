@@ -12,6 +12,10 @@
 #define SPEC_LAG_SLACK 1e-12
 #define SPEC_MAX_SUBSTEP_S 0.0001
 #define SPEC_MIN_CORRECTED_STEP_S 1e-05
+#define SPEC_MIN_SUBSTEP_S 1e-07
+#define SPEC_SUBSTEP_WORK_BASE 1000
+#define SPEC_MAX_STEP_WORK 500000000
+#define SPEC_WORK_INTERVAL_S 0.001
 #define SPEC_SUBSTEP_SLACK 1e-12
 #define SPEC_SERIES_LIMIT 0.001
 #define SPEC_KERNEL_CACHE_SIZE 32
@@ -213,6 +217,11 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_CLOCK_RESOLUTION "step size h = %s s at t = %s s: shorter than the resolution of the clock there (%.3g s between one double and the next), so the communication points would not advance by h; take steps of at least %.3g s, or run at times below %.4g s (a start time nearer 0)"
 #define SPEC_MSG_START_UNRESOLVED "startTime = %s s: must be at most %.4g s in magnitude: beyond it a clock of doubles resolves no step the FMU takes (at most %g s)"
 #define SPEC_MSG_SHORT_STEP_CORRECTED "step size h = %s s: must be at least %g s for a ring truncated with static correction (the dropped modes' rate term grows as 1/h); keep every mode, or turn the static correction off, to step shorter"
+#define SPEC_MSG_LONG_STEP "step size h = %s s: would take %d sub-steps of %.3g s at %d units of work each, more than the %d a step may take (about 1 s of CPU); take steps of at most %.3g s with this tire and mesh"
+#define SPEC_MSG_STIFF_CONTACT_ALLOWED "at most %.3g N/m^2 with rhoA = %g kg/m on this mesh (n_elements = %d)"
+#define SPEC_MSG_STIFF_CONTACT_REASON "the contact is sub-stepped at 1/sqrt(k_cw/rhoA): a millisecond would take %d sub-steps of %d units of work each, more than the %d a step may take (about 1 s of CPU)"
+#define SPEC_MSG_SUBSTEP_ALLOWED "at most %.3g N/m^2 with rhoA = %g kg/m"
+#define SPEC_MSG_SUBSTEP_REASON "the contact is sub-stepped at 1/sqrt(k_cw/rhoA), which would be below %g s: more than 10^4 sub-steps per millisecond"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
 
 #endif

@@ -385,6 +385,32 @@ static int resolved_problem(const Tire* t, const Ring* ring, int n_elements, Pro
     return 1;
 }
 
+/* a contact the step cannot afford (contact_dynamics.build_contact_model): sub-steps below
+ * SPEC_MIN_SUBSTEP_S, or a millisecond of more work than a step may take */
+static int contact_problem(const Tire* t, const Ring* ring, const Zone* zone, int n_elements,
+                           Problems* p)
+{
+    double rate = sqrt(t->k_cw / t->rhoA), substep = fmin(SPEC_MAX_SUBSTEP_S, 1.0 / rate);
+    double per_interval = ceil(SPEC_WORK_INTERVAL_S / substep * (1 - 1e-12));
+    int work = contract_substep_work(ring->n_modes, ring->n_orders, zone->n_zone, zone->n_zone);
+    char allowed[256], reason[256];
+    if (1.0 / rate < SPEC_MIN_SUBSTEP_S) {
+        snprintf(allowed, sizeof allowed, SPEC_MSG_SUBSTEP_ALLOWED,
+                 t->rhoA / (SPEC_MIN_SUBSTEP_S * SPEC_MIN_SUBSTEP_S), t->rhoA);
+        snprintf(reason, sizeof reason, SPEC_MSG_SUBSTEP_REASON, SPEC_MIN_SUBSTEP_S);
+    } else if (per_interval * work > SPEC_MAX_STEP_WORK) {
+        double most = SPEC_MAX_STEP_WORK / (double)work / SPEC_WORK_INTERVAL_S;
+        snprintf(allowed, sizeof allowed, SPEC_MSG_STIFF_CONTACT_ALLOWED, t->rhoA * most * most,
+                 t->rhoA, n_elements);
+        snprintf(reason, sizeof reason, SPEC_MSG_STIFF_CONTACT_REASON, (int)per_interval, work,
+                 SPEC_MAX_STEP_WORK);
+    } else {
+        return 0;
+    }
+    add_problem(p, "k_cw", t->k_cw, field_unit("k_cw"), allowed, reason);
+    return 1;
+}
+
 /* the zone length on this mesh (contact.zone_problems); 0 when usable */
 static int zone_problem(double radius, int n_elements, double length, Problems* p)
 {
@@ -474,6 +500,7 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     }
     footprint_free(&limit, mem);
     if (resolved_problem(tire, &model->ring, n, p)) return MODEL_ERROR;
+    if (contact_problem(tire, &model->ring, &model->zone, n, p)) return MODEL_ERROR;
     if (footprint_alloc(&model->footprint, mem, model->zone.n_zone) != 0) goto memory;
     if (footprint_at_load(&model->path, &model->zone, tire->R, load, &model->footprint) != 0) {
         PROBLEM(p, "load = %g N needs a rim deflection beyond %g m", load,
@@ -632,6 +659,18 @@ const TireContract* model_contract(const Model* model)
 double model_road_horizon(const Model* model) { return kernel_horizon(model->kernel); }
 
 double model_min_step(const Model* model) { return kernel_min_step(model->kernel); }
+
+int model_step_work(const Model* model, double h, int* n_sub, double* substep, int* work,
+                    double* longest)
+{
+    double count;
+    *substep = model->contract.substep_s;
+    *work = model->contract.substep_work;
+    count = ceil(h / *substep * (1 - SPEC_SUBSTEP_SLACK));
+    *n_sub = count < 2147483647.0 ? (int)count : 2147483647;
+    *longest = floor((double)SPEC_MAX_STEP_WORK / *work) * *substep;
+    return count * *work > SPEC_MAX_STEP_WORK;
+}
 
 /* -- the model's part of an FMU state --------------------------------------------------------
  * int32: zone warning armed, in contact; then the step kernel's state (kernel.c: its layout,
