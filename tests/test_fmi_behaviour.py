@@ -372,6 +372,35 @@ def test_bad_references_types_outputs_and_strings_are_refused_alike(fmu):
 
 # -- steps and inputs ------------------------------------------------------------------------
 
+def test_the_input_range_message_is_the_cores_step_error():
+    """spec INPUT_RANGE, filled in as both FMUs fill it, is the core's StepError text for the
+    same input (the core refuses it at a step, the FMUs at the set)."""
+    from tire_fmu.core import validate
+    from tire_fmu.core.contact_dynamics import ContactSimulator, StepError, build_contact_model
+
+    simulator = ContactSimulator(build_contact_model(*validate({}, {"n_elements": N})),
+                                 backend="numpy")
+    for name, value, unit, limit in (("rim_z", math.nan, "m", CONSTANTS["MAX_DISPLACEMENT_M"]),
+                                     ("road_vz", -1e300, "m/s", CONSTANTS["MAX_VELOCITY_M_S"])):
+        inputs = {"rim_z": 0.0, "rim_vz": 0.0, "road_z": 0.0, "road_vz": 0.0, name: value}
+        with pytest.raises(StepError) as caught:
+            simulator._check(None, tuple(inputs.values()))
+        assert str(caught.value) == M["INPUT_RANGE"] % (name, repr(value), unit, limit, limit,
+                                                        unit)
+
+
+def test_both_fmus_declare_the_tables_start_values(both):
+    """pythonfmu reads a slave's start values through its getters, which FMI does not allow
+    while instantiated: the Python FMU's model description has them all the same."""
+    for fmu in both:
+        starts = {v.name: v.start for v in fmu.model_description.modelVariables}
+        for v in fmu_variables():
+            if v.causality != "output":
+                assert starts[v.name] is not None and (
+                    float(starts[v.name]) == float(v.start) if v.type != "Boolean"
+                    else starts[v.name] in ("true", "false", True, False)), (fmu.path, v.name)
+
+
 @pytest.mark.parametrize("bad, name", [
     (math.nan, "rim_z"), (math.inf, "road_z"), (-math.inf, "rim_vz"), (1e308, "rim_z"),
     (math.nan, "road_vz")])
@@ -735,6 +764,8 @@ def _bad_states(fmu, data: bytes) -> dict[str, tuple[bytes, str]]:
     huge_q[0] = 1e300
     future = kernel["history_t"].copy()
     future[-1] = 1.0
+    nan_road = kernel["history_z"].copy()
+    nan_road[0] = math.nan
     count = MAX_HISTORY_SAMPLES + 1
 
     def changed(name, x):
@@ -791,6 +822,8 @@ def _bad_states(fmu, data: bytes) -> dict[str, tuple[bytes, str]]:
         "nan modal state": (_forge(data, kernel_q=nan_q), "of its model part is not finite"),
         "modal state 1e300": (_forge(data, kernel_q=huge_q),
                               "the tread's excursion at the zone nodes from a mode reach"),
+        "nan road sample": (_forge(data, kernel_history_z=nan_road),
+                            "of its model part is not finite"),
         "road sample in the future": (_forge(data, kernel_history_t=future),
                                       "its newest road sample is at 1.0 s, but the state is"),
         "road history too long": (

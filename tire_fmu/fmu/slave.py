@@ -150,6 +150,16 @@ class TireModal(Fmi2Slave):
         # units go into the model description at build time, from the same table
         self.register_variable(_KINDS[v.type](v.name, **kwargs))
 
+    def to_xml(self, model_options=None):
+        # pythonfmu's builder reads each start value with get_real and friends, which FMI
+        # does not allow while instantiated (refused there): its instance, never a host's,
+        # reads them as in initialisation mode, where they are the same values
+        phase, self._phase = self._phase, Phase.INITIALISATION
+        try:
+            return super().to_xml({} if model_options is None else model_options)
+        finally:
+            self._phase = phase
+
     # -- messages ----------------------------------------------------------------------------
     def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
         super().log(fmi_message(msg), status, category)
