@@ -85,6 +85,9 @@ from tire_fmu.fmu.spec import (
 
 MODEL_IDENTIFIER = "TireModal"
 _REFUSED = -3  # the step kernels' status for a step their rules refuse (kernel.h)
+# the hot path's constants as module globals (cheaper to read than attributes)
+_RUNNING = Phase.RUNNING
+_MAX_M, _MAX_M_S = MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
 
 #: pythonfmu's variable class for each FMI type of the shared table
 _KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
@@ -122,6 +125,7 @@ class TireModal(Fmi2Slave):
                                if v.causality == "parameter"]
         self._input_vrs = list(range(INPUTS.start, INPUTS.stop))
         self._output_vrs = list(range(OUTPUTS.start, OUTPUTS.stop))
+        self._contact_vrs = [IN_CONTACT]
         self._phase = Phase.INSTANTIATED
         self._error_reason = ""  # in the error phase: why (spec.MESSAGES FAILED, ...)
         self._start_time = 0.0
@@ -222,7 +226,7 @@ class TireModal(Fmi2Slave):
             self._phase = Phase.TERMINATED
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        if self._phase != Phase.RUNNING:
+        if self._phase != _RUNNING:
             return self._allowed("fmi2DoStep")
         now = self._now
         values = self._values
@@ -422,7 +426,7 @@ class TireModal(Fmi2Slave):
         return True
 
     def get_real(self, vrs):
-        if vrs == self._output_vrs and self._phase == Phase.RUNNING:  # the host's usual call
+        if vrs == self._output_vrs and self._phase == _RUNNING:  # the host's usual call
             if self._stale:
                 self._refresh()
             return self._values[OUTPUTS]
@@ -432,6 +436,10 @@ class TireModal(Fmi2Slave):
         return self._get("fmi2GetInteger", vrs, "Integer", int, 0)
 
     def get_boolean(self, vrs):
+        if vrs == self._contact_vrs and self._phase == _RUNNING:  # in_contact, each step
+            if self._stale:
+                self._refresh()
+            return [self._values[IN_CONTACT]]
         return self._get("fmi2GetBoolean", vrs, "Boolean", bool, False)
 
     def get_string(self, vrs):
@@ -461,10 +469,11 @@ class TireModal(Fmi2Slave):
         return None
 
     def set_real(self, vrs, values):
-        if vrs == self._input_vrs and self._phase == Phase.RUNNING:  # the host's usual call
+        if vrs == self._input_vrs and self._phase == _RUNNING:  # the host's usual call
             z, vz, road_z, road_vz = values
-            if (abs(z) <= MAX_DISPLACEMENT_M and abs(road_z) <= MAX_DISPLACEMENT_M
-                    and abs(vz) <= MAX_VELOCITY_M_S and abs(road_vz) <= MAX_VELOCITY_M_S):
+            # within the inputs' limits (false for nan): else refused below, naming it
+            if (-_MAX_M <= z <= _MAX_M and -_MAX_M <= road_z <= _MAX_M
+                    and -_MAX_M_S <= vz <= _MAX_M_S and -_MAX_M_S <= road_vz <= _MAX_M_S):
                 self._values[INPUTS] = values
                 self._stale = True
                 return
