@@ -785,6 +785,10 @@ def _bad_states(fmu, data: bytes) -> dict[str, tuple[bytes, str]]:
                             M["STATE_VERSION"] % (2, 3)),
         "another FMU": (_forge(data, guid="{another}"), M["STATE_GUID"] % ("{another}",
                                                                            "<guid>")),
+        # a model part and a reason whose sizes add up, modulo 2**64, to what follows
+        "sizes that wrap around": (state_reseal(
+            data[:92] + struct.pack("<I", f["model_size"] + 8) + data[96:f["model_at"] - 8]
+            + struct.pack("<Q", 2**64 - 8) + data[f["model_at"]:]), M["STATE_MODEL_SIZE"]),
         "unknown phase": (state_reseal(data[:12] + struct.pack("<I", 7) + data[16:]),
                           M["STATE_PHASE"] % 7),
         "nan time": (_forge(data, time=math.nan), M["STATE_CLOCK"] % ("nan", "0.0")),

@@ -1001,7 +1001,9 @@ static size_t state_problem(const unsigned char* bytes, size_t size, char* why,
         }
     }
     memcpy(&model_size, bytes + SPEC_STATE_HEAD + STATE_VALUES, 8);
-    if (model_size + reason_size != size - STATE_FIXED) {
+    /* (the sizes of the model part and the reason fill what the header leaves, exactly; no
+     * sum that could wrap around) */
+    if (reason_size > size - STATE_FIXED || model_size != size - STATE_FIXED - reason_size) {
         snprintf(why, why_size, "%s", SPEC_MSG_STATE_MODEL_SIZE);
         return 0;
     }
