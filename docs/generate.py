@@ -982,10 +982,15 @@ def _fmu_messages() -> dict[str, list[str]]:
         slave = initialised()
         said(slave)
         slave.set_real([vr(slave, n) for n in INPUT_NAMES], [float("nan"), 0.0, 0.0, 0.0])
-        slave.do_step(0.0, 1e-3)
         out["input"] = said(slave)
-        slave.get_real([vr(slave, "rim_Fz")])
-        out["outputs"] = said(slave)
+        state = slave._get_fmu_state()
+        slave._set_fmu_state(state[:-1] + bytes([state[-1] ^ 1]))
+        out["state-damaged"] = said(slave)
+        slave._set_fmu_state(_forged_mode(state, len(slave._table)))
+        out["state-meaning"] = said(slave)
+        fresh = new()
+        fresh.get_real([vr(fresh, "rim_Fz")])
+        out["instantiated"] = said(fresh)
         slave = initialised()
         said(slave)
         slave.do_step(0.0, 1e-3)
@@ -1010,6 +1015,69 @@ def _fmu_messages() -> dict[str, list[str]]:
         slave.get_real([999])
         out["reference"] = said(slave)
     return out
+
+
+def _forged_mode(state: bytes, n_values: int) -> bytes:
+    """``state`` with its first mode set to 1e300 and the checksum recomputed."""
+    from tire_fmu.core import kernel_numpy
+    from tire_fmu.fmu.spec import STATE_MODEL_FLAGS, state_pack, state_unpack
+
+    f = state_unpack(state, n_values)
+    flags, kernel = f["model"][:4 * STATE_MODEL_FLAGS], f["model"][4 * STATE_MODEL_FLAGS:]
+    fields = kernel_numpy.state_fields(kernel)
+    fields["q"][0] = 1e300
+    return state_pack(f["phase"], f["guid"], f["time"], f["start_time"], f["stale"],
+                      f["values"], flags + kernel_numpy.state_data(fields))
+
+
+@generator("fmi-state-machine")
+def fmi_state_machine() -> str:
+    """The FMI 2.0 co-simulation state machine both FMUs follow (spec.CALLS)."""
+    from tire_fmu.fmu.spec import CALLS, PHASES, PYTHONFMU_ANSWERS
+
+    shared = [c for c in CALLS if c not in PYTHONFMU_ANSWERS or "FMUstate" in c
+              or c == "fmi2Reset"]
+    own = [c for c in CALLS if c not in shared]
+    lines = ["| call | " + " | ".join(PHASES) + " |", "|---" * (len(PHASES) + 1) + "|"]
+    for call in shared + own:
+        marks = " | ".join("yes" if phase in CALLS[call] else "refused" for phase in PHASES)
+        lines.append(f"| `{call}`{' †' if call in own else ''} | {marks} |")
+    lines += ["", "† answered in the Python FMU by pythonfmu's wrapper (and the Linux guard in "
+              "front of it) without asking the slave; in the native FMU by this table. "
+              "fmi2CancelStep is FMI's in stepInProgress only, which never occurs (a step "
+              "always completes): while running it is refused for that reason.", "",
+              "A refused call: `" + _spec_message("REFUSED") + "`, with `" +
+              _spec_message("PHASE") + "` and the phase's text: " +
+              "; ".join(f"{name}: \"{text}\"" for name, text in PHASES.items()) +
+              " (in the error state, why the FMU is there, e.g. `" +
+              _spec_message("PARAMETERS_REFUSED") + "`, or `" + _spec_message("FAILED") +
+              "`)."]
+    return "\n".join(lines)
+
+
+@generator("fmu-state-layout")
+def fmu_state_layout() -> str:
+    """The one FMU-state byte format (spec.STATE_LAYOUT)."""
+    from tire_fmu.fmu.spec import STATE_LAYOUT
+
+    lines = ["| field | bytes | what |", "|---|---|---|"]
+    for name, form, meaning in STATE_LAYOUT:
+        if form == "<V d":
+            size = "8 each"
+        elif form.startswith("<") or form[0].isdigit():
+            import struct
+
+            size = str(struct.calcsize(form))
+        else:
+            size = f"`{form}`"
+        lines.append(f"| `{name}` | {size} | {meaning} |")
+    return "\n".join(lines)
+
+
+def _spec_message(key: str) -> str:
+    from tire_fmu.fmu.spec import MESSAGES
+
+    return MESSAGES[key]
 
 
 def _message(case: str, index: int = 0, strip: str = "", clip: str = "") -> str:
@@ -1072,8 +1140,8 @@ def _msg_precision() -> str:
             f"{_message('k_r2', strip=strip, clip='weaker than the stiffest term, ')}")
 
 
-for _case in ("speed-warning", "setup", "delay", "input", "outputs", "step-size", "time",
-              "fixed", "reference"):
+for _case in ("speed-warning", "setup", "delay", "input", "step-size", "time", "fixed",
+              "reference", "state-damaged", "state-meaning", "instantiated"):
     value(f"fmu-msg-{_case}")(functools.partial(_message, _case))
 
 

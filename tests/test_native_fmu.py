@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import re
-import struct
 import subprocess
 import sys
 import zipfile
@@ -35,7 +34,7 @@ from tire_fmu.core.parameters import (
     ParameterError,
     TireParameters,
 )
-from tire_fmu.fmu.spec import MESSAGES, STATE_MAGIC, c_header, fmu_message
+from tire_fmu.fmu.spec import MESSAGES, c_header, fmu_message
 from tire_fmu.native.builder import C_SOURCES, c_folder, write_sources
 
 pytestmark = pytest.mark.fmu
@@ -363,15 +362,6 @@ def test_speed_near_critical_warns_with_the_core_message(native):
     assert "84 % of the critical speed 42.67 m/s" in native_warnings[0]
 
 
-def test_refused_parameters_can_be_fixed_in_initialisation_mode(native):
-    instance = Instance(native)
-    assert instance.initialise(load=1e7) == 3
-    instance.set(load=27700.0)
-    assert instance.call("fmi2ExitInitializationMode") == 0
-    assert instance.outputs_now()[0] == pytest.approx(27700.0, rel=1e-12)
-    instance.free()
-
-
 # -- statuses ------------------------------------------------------------------------------------
 
 def _started(native, **parameters) -> Instance:
@@ -390,182 +380,16 @@ def _continue(instance: Instance, t0: float, steps: int, signal=road_drop) -> np
     return np.array(rows)
 
 
-def test_refused_steps_change_nothing(native):
-    """NaN or another t, h <= 0 or not finite: fmi2Error with the reason logged; the run then
-    goes on exactly as one that never saw them."""
-    undisturbed, disturbed = _started(native), _started(native)
-    a = _continue(undisturbed, 0.0, 200)
-    b = _continue(disturbed, 0.0, 100)
-    for t, h in ((math.nan, 1e-4), (0.5, 1e-4), (0.01, 0.0), (0.01, -1e-4), (0.01, math.inf),
-                 (0.01, math.nan), (math.inf, 1e-4), (0.01, 1e300)):
-        assert disturbed.step(t, h) == 3
-    reasons = disturbed.errors()
-    assert len(reasons) == 8 and all("refused" in r and "nothing changed" in r for r in reasons)
-    assert "t must be finite" in reasons[0] and "last communication point" in reasons[1]
-    assert "step size h = 0.0 s: must be in (0, 1] s" in reasons[2]
-    # 1e300 s gave nan outputs with status OK before (the long fuzz run found it)
-    assert "step size h = 1e+300 s: must be in (0, 1] s" in reasons[7]
-    assert disturbed.slave.getRealStatus(2) == pytest.approx(0.01, abs=1e-15)
-    b = np.vstack([b, _continue(disturbed, 0.01, 100)])
-    assert np.array_equal(a, b)
-    undisturbed.free()
-    disturbed.free()
-
-
-def test_a_step_too_short_for_the_road_history_at_a_crawl_is_refused_as_in_python(native,
-                                                                                  python):
-    """At 1 mm/s the road takes minutes to cross the zone: 1e-4 s steps would keep millions of
-    samples of road history. Both FMUs refuse, in the same words, and take a longer step."""
-    reasons = []
-    for fmu in (native, python):
-        instance = Instance(fmu)
-        assert instance.initialise(speed=1e-3) == 0
-        assert instance.step(0.0, 1e-4) == 3
-        reasons.append(instance.errors()[-1])
-        assert instance.step(0.0, 1e-2) == 0
-        instance.free()
-    assert reasons[0] == reasons[1]
-    assert "step size h = 0.0001 s: must be at least" in reasons[0]
-
-
-def test_a_step_too_short_for_a_truncated_rings_rate_term_is_refused_as_in_python(native,
-                                                                                 python):
-    """A ring truncated with static correction weighs its dropped modes' rate term by 1/h: a
-    step of 5e-324 s made both FMUs' outputs infinite (their error state: the fuzz found it),
-    and below 1e-5 s the contact problem can lose its unique solution. Both refuse such steps
-    in the same words, change nothing, and go on; the full ring steps them."""
-    runs, reasons = [], []
-    for fmu in (native, python):
-        undisturbed, disturbed = _started(fmu, f_max=150.0), _started(fmu, f_max=150.0)
-        a = _continue(undisturbed, 0.0, 60)
-        b = _continue(disturbed, 0.0, 30)
-        for h in (5e-324, 1e-6):
-            assert disturbed.step(0.003, h) == 3
-        reasons.append(disturbed.errors())
-        runs.append((a, np.vstack([b, _continue(disturbed, 0.003, 30)])))
-        full = _started(fmu)
-        assert full.step(0.0, 1e-6) == 0 and full.step(1e-6, 1e-5) == 0
-        for instance in (undisturbed, disturbed, full):
-            instance.free()
-    assert reasons[0] == reasons[1] and len(reasons[0]) == 2
-    assert reasons[0][1].startswith("fmi2DoStep(t = 0.003 s, h = 1e-06 s) refused: step size "
-                                    "h = 1e-06 s: must be at least 1e-05 s for a ring truncated "
-                                    "with static correction")
-    for a, b in runs:
-        assert np.array_equal(a, b)
-    errors = relative_errors(runs[1][0], runs[0][0])
-    assert errors.max() < 1e-9, dict(zip(OUTPUTS, errors))
-
-
-def test_calls_outside_their_phase_are_refused(native):
-    """The FMI 2.0 state machine, one table in the C: a call its phase does not allow is
-    refused with fmi2Error and the phase named."""
+def test_terminated_is_the_status_after_fmi2terminate(native):
+    """fmi2GetBooleanStatus(fmi2Terminated): the native FMU answers it from its phase (in the
+    Python FMU pythonfmu's wrapper does, true only after a discarded step); the phases of
+    every call: tests/test_fmi_behaviour.py."""
     instance = Instance(native)
-    assert instance.step(0.0) == 3  # not initialised
-    from fmpy.fmi2 import fmi2Real, fmi2ValueReference
-
-    outputs = (fmi2ValueReference * 1)(instance.vr["rim_Fz"])
-    assert instance.call("fmi2GetReal", outputs, 1, (fmi2Real * 1)()) == 3  # instantiated
-    assert instance.call("fmi2ExitInitializationMode") == 3  # not in initialisation mode
     assert instance.initialise() == 0
-    assert instance.call("fmi2EnterInitializationMode") == 3
+    assert instance.slave.getBooleanStatus(3) is False
     instance.slave.terminate()
-    assert instance.step(0.0) == 3  # terminated
     assert instance.slave.getBooleanStatus(3) is True  # fmi2Terminated
-    assert all("refused: the FMU is" in m for m in instance.errors())
-    assert "terminated" in instance.errors()[-1]
     instance.slave.freeInstance()
-
-
-def test_setup_experiment_refuses_non_finite_times(native):
-    instance = Instance(native)
-    for start, stop in ((math.nan, None), (math.inf, None), (-math.inf, None), (0.0, -1.0)):
-        with pytest.raises(FMICallException):
-            instance.slave.setupExperiment(startTime=start, stopTime=stop)
-    assert len(instance.errors()) == 4
-    assert "startTime = nan s: must be finite" in instance.errors()[0]
-    instance.slave.setupExperiment(startTime=0.25)
-    instance.slave.enterInitializationMode()
-    assert instance.call("fmi2ExitInitializationMode") == 0
-    assert instance.step(0.25) == 0
-    instance.free()
-
-
-@pytest.mark.parametrize("bad, message", [
-    (math.nan, "rim_z = nan m: must be in [-10, 10] m"),
-    (1e308, "rim_z = 1e+308 m: must be in [-10, 10] m"),  # a product would overflow
-])
-def test_a_non_finite_or_huge_input_is_refused_at_the_set(native, bad, message):
-    instance = _started(native)
-    _continue(instance, 0.0, 10)
-    before = instance.outputs_now()
-    with pytest.raises(FMICallException):
-        instance.slave.setReal([instance.vr["road_z"], instance.vr["rim_z"]], [0.01, bad])
-    assert message in instance.errors()[-1]
-    assert instance.slave.getReal([instance.vr["road_z"]]) == [0.0]  # none of the two was set
-    assert instance.outputs_now() == before
-    assert instance.slave.getRealStatus(2) == pytest.approx(0.001, abs=1e-15)
-    instance.free()
-
-
-def test_simulate_fmu_stops_on_a_nan_input(native_fmu_path, tmp_path):
-    """A NaN sample in fmpy.simulate_fmu's input ends the run with an error (it never hangs:
-    the FMU answers fmi2Error, not fmi2Discard, which fmpy would retry forever)."""
-    script = tmp_path / "nan_input.py"
-    script.write_text(f"""
-import numpy as np
-from fmpy import simulate_fmu
-from fmpy.fmi1 import FMICallException
-t = np.arange(0.0, 0.02, 1e-4)
-signals = np.zeros(t.size, dtype=[("time", float), ("road_z", float)])
-signals["time"] = t
-signals["road_z"][50] = np.nan
-try:
-    simulate_fmu({str(native_fmu_path)!r}, input=signals, output=["rim_Fz"],
-                 output_interval=1e-4, stop_time=t[-1])
-except FMICallException as error:
-    print("stopped:", error)
-""")
-    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                            timeout=120)
-    assert "stopped: fmi2SetReal failed with status 3" in result.stdout, result.stderr
-
-
-def test_loss_of_contact_is_ok_and_logged_as_an_event(native):
-    instance = _started(native)
-    lifted = []
-    for k in range(1500):
-        t = k * 1e-4
-        instance.slave.setReal(instance.inputs, list(road_drop(t)))
-        assert instance.step(t) == 0
-        lifted.append(not instance.slave.getBoolean([instance.vr["in_contact"]])[0])
-    assert any(lifted) and not lifted[-1]
-    events = [m for s, c, m in instance.log if c == "logEvents"]
-    assert events and all(s == 0 for s, c, _ in instance.log if c == "logEvents")
-    assert "left the road (in_contact = false)" in events[0]
-    assert not [m for s, _, m in instance.log if s > 0]
-    instance.free()
-
-
-def test_footprint_at_the_zone_edge_warns_once_per_episode(native):
-    """Pressed down 3 cm twice (a slow cosine of the rim), the footprint reaches the end of a
-    0.2 m zone each time: one warning logged per press, and every step OK (as the Python FMU:
-    a strict host must not stop on it)."""
-    instance = Instance(native)
-    assert instance.initialise(contact_zone_length=0.2, load=15000.0) == 0
-    statuses, w, warned = [], 2 * math.pi / 0.1, []
-    for k in range(2000):
-        t = k * 1e-4
-        rim = [-0.015 * (1 - math.cos(w * t)), -0.015 * w * math.sin(w * t), 0.0, 0.0]
-        instance.slave.setReal(instance.inputs, rim)
-        before = len(instance.log)
-        statuses.append(instance.step(t))
-        warned += [k for s, _, _ in instance.log[before:] if s == 1]
-    warnings = [m for s, _, m in instance.log if s == 1]
-    assert set(statuses) == {0} and len(warned) == 2 == len(warnings)
-    assert warned[0] < 1000 <= warned[1]  # one per press
-    assert "reached the end of the contact zone" in warnings[0]
-    instance.free()
 
 
 def test_logged_text_is_never_read_as_a_format(native):
@@ -581,84 +405,6 @@ def test_logged_text_is_never_read_as_a_format(native):
 
 # -- FMU states ---------------------------------------------------------------------------------
 
-def test_state_restores_exactly_and_rebuilds_in_a_fresh_instance(native):
-    instance = _started(native)
-    _continue(instance, 0.0, 300)
-    state = instance.slave.getFMUstate()
-    serialized = instance.slave.serializeFMUstate(state)
-    reference = _continue(instance, 0.03, 300)
-    instance.slave.setFMUstate(state)
-    again = _continue(instance, 0.03, 300)
-    assert np.array_equal(reference, again) or relative_errors(reference, again).max() < 1e-12
-    fresh = Instance(native)  # only instantiated: the state brings its parameters along
-    fresh.slave.setFMUstate(fresh.slave.deSerializeFMUstate(serialized))
-    rebuilt = _continue(fresh, 0.03, 300)
-    assert relative_errors(reference, rebuilt).max() < 1e-12
-    instance.slave.freeFMUstate(state)
-    instance.free()
-    fresh.free()
-
-
-def _fnv1a(data: bytes) -> int:
-    value = 14695981039346656037
-    for byte in data:
-        value = ((value ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-    return value
-
-
-def _reseal(data: bytearray) -> bytes:
-    data[-8:] = struct.pack("<Q", _fnv1a(bytes(data[:-8])))
-    return bytes(data)
-
-
-def test_a_flipped_byte_anywhere_in_a_state_is_refused(native):
-    """Every byte of a serialized state (header, GUID, variables, modal state, contact state,
-    road history, checksum) is covered: flipping any one of them gives fmi2Error."""
-    instance = _started(native)
-    _continue(instance, 0.0, 200)
-    data = bytes(instance.slave.serializeFMUstate(instance.slave.getFMUstate()))
-    assert data.startswith(STATE_MAGIC.encode()) and _fnv1a(data[:-8]) == struct.unpack(
-        "<Q", data[-8:])[0]
-    accepted = []
-    for position in range(len(data)):
-        damaged = bytearray(data)
-        damaged[position] ^= 0x5A
-        try:
-            state = instance.slave.deSerializeFMUstate(bytes(damaged))
-        except FMICallException:
-            continue
-        try:
-            instance.slave.setFMUstate(state)
-            accepted.append(position)
-        except FMICallException:
-            pass
-    assert accepted == []
-    assert len(instance.errors()) >= len(data)
-    after = _continue(instance, 0.02, 5)
-    assert np.isfinite(after).all()
-    instance.free()
-
-
-@pytest.mark.parametrize("where", ["time", "value", "modal", "history"])
-def test_a_state_holding_nan_is_refused_even_with_a_valid_checksum(native, where):
-    instance = _started(native)
-    _continue(instance, 0.0, 200)
-    data = bytearray(instance.slave.serializeFMUstate(instance.slave.getFMUstate()))
-    head = 8 + 4 + 4 + 48 + 8
-    n_values = len(instance.fmu.model_description.modelVariables)
-    model = head + 8 + 8 + 4 + 4 + 8 * n_values + 8
-    offsets = {"time": head, "value": head + 24 + 8 * instance.vr["road_z"],
-               "modal": model + 6 * 4 + 12 * 8, "history": len(data) - 8 - 13 - 8}
-    data[offsets[where]:offsets[where] + 8] = struct.pack("<d", math.nan)
-    before = instance.outputs_now()
-    with pytest.raises(FMICallException):
-        instance.slave.setFMUstate(instance.slave.deSerializeFMUstate(_reseal(data)))
-    assert "not" in instance.errors()[-1] and "nothing changed" in instance.errors()[-1] or \
-        "refused" in instance.errors()[-1]
-    assert instance.outputs_now() == before
-    instance.free()
-
-
 def test_a_state_of_another_export_is_refused(native, tmp_path):
     from tire_fmu.native import build_native_fmu
 
@@ -669,7 +415,9 @@ def test_a_state_of_another_export_is_refused(native, tmp_path):
     target = _started(native)
     with pytest.raises(FMICallException):
         target.slave.deSerializeFMUstate(data)
-    assert "belongs to the FMU with GUID" in target.errors()[-1]
+    assert target.errors()[-1] == MESSAGES["REFUSED"] % (
+        "fmi2DeSerializeFMUstate", MESSAGES["STATE_GUID"] % (
+            other.model_description.guid, native.model_description.guid))
     source.free()
     target.free()
 

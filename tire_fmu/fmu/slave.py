@@ -3,12 +3,15 @@
 A thin adapter: parameters are FMI variables; when initialisation ends they go through the
 core's validation and :func:`~tire_fmu.core.contact_dynamics.build_contact_model` (the static
 footprint for the load, the free ring's modes for the speed); ``do_step`` hands the four inputs
-to :class:`~tire_fmu.core.contact_dynamics.ContactSimulator`. No physics and no parameter
-ranges live here.
+to the step kernel (:class:`~tire_fmu.core.contact_dynamics.ContactSimulator`'s). No physics
+and no parameter ranges live here, and no FMI rule either: the state machine (which call each
+phase allows), every message about a call and the FMU-state byte format are
+:mod:`tire_fmu.fmu.spec`'s, which the native FMU's C reads too (spec.h), so the two FMUs
+answer alike (tests/test_fmi_behaviour.py runs one suite against both).
 
 How failures surface (docs/fmu.md has the table):
 
-- Every call is checked against the FMI 2.0 co-simulation state machine (:data:`ALLOWED`), and
+- Every call is checked against the FMI 2.0 co-simulation state machine (spec.CALLS), and
   every value against what it may be. A refused call logs one message at status error that
   names the call and the variable and value it refuses, and changes nothing.
 - The FMU's Linux binary (``pythonfmu_guard.c``, in front of pythonfmu's wrapper) returns
@@ -24,25 +27,25 @@ How failures surface (docs/fmu.md has the table):
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 import os
+import re
+import struct
 import time
 import warnings
-from dataclasses import dataclass
 
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 import tire_fmu
-from tire_fmu.core import clock
+from tire_fmu.core import clock, kernel_numpy
 from tire_fmu.core.contact_dynamics import (
+    MAX_DISPLACEMENT_M,
+    MAX_VELOCITY_M_S,
     ContactSettings,
     ContactSimulator,
-    ContactState,
-    StateError,
     StepError,
     build_contact_model,
 )
@@ -55,7 +58,6 @@ from tire_fmu.fmu.interface import (
     IN_CONTACT,
     INPUTS,
     MAX_DELAY_STEPS,
-    MAX_HISTORY_SAMPLES,
     MAX_STEP_S,
     OUTPUTS,
     TIME_ABS_TOLERANCE_S,
@@ -63,7 +65,29 @@ from tire_fmu.fmu.interface import (
     FmuVariable,
     fmu_variables,
 )
-from tire_fmu.fmu.spec import MESSAGES, fmu_message
+from tire_fmu.fmu.spec import (
+    CALL_MASKS,
+    LOG_CATEGORIES,
+    MESSAGES,
+    PHASES,
+    STATE_GUID_BYTES,
+    STATE_MAGIC,
+    STATE_MODEL_FLAGS,
+    STATE_VERSION,
+    Phase,
+    fmu_message,
+    phase_refusal,
+    state_checksum,
+    state_fixed_size,
+    state_pack,
+    state_unpack,
+)
+
+MODEL_IDENTIFIER = "TireModal"
+_REFUSED = -3  # the step kernels' status for a step their rules refuse (kernel.h)
+# the hot path's constants as module globals (cheaper to read than attributes)
+_RUNNING = Phase.RUNNING
+_MAX_M, _MAX_M_S = MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
 
 #: pythonfmu's variable class for each FMI type of the shared table
 _KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
@@ -78,66 +102,6 @@ def fmi_message(text: str) -> str:
     return text.replace("%", "%%").replace("#", "##")
 
 
-class Phase:
-    """Where the slave is in the FMI 2.0 co-simulation state machine."""
-
-    INSTANTIATED = "instantiated"
-    INITIALISING = "initialisation mode"
-    RUNNING = "running"
-    TERMINATED = "terminated"
-    ERROR = "error"  # the parameters were refused, or a step failed unexpectedly
-
-    ALL = (INSTANTIATED, INITIALISING, RUNNING, TERMINATED, ERROR)
-
-
-#: The calls each phase allows (FMI 2.0, section 4.3); getters and the FMU state functions
-#: are allowed in every phase. Which variable a set may change is decided per variable.
-ALLOWED = {
-    "fmi2SetupExperiment": {Phase.INSTANTIATED},
-    "fmi2EnterInitializationMode": {Phase.INSTANTIATED},
-    "fmi2ExitInitializationMode": {Phase.INITIALISING},
-    "fmi2DoStep": {Phase.RUNNING},
-    "fmi2Terminate": {Phase.RUNNING},
-    "fmi2SetReal": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
-    "fmi2SetInteger": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
-    "fmi2SetBoolean": {Phase.INSTANTIATED, Phase.INITIALISING, Phase.RUNNING},
-}
-
-#: What each phase is, for the message of a call it does not allow.
-_PHASE_TEXT = {
-    Phase.INSTANTIATED: "instantiated (call fmi2SetupExperiment and "
-                        "fmi2EnterInitializationMode first)",
-    Phase.INITIALISING: "in initialisation mode (call fmi2ExitInitializationMode first)",
-    Phase.RUNNING: "running (initialisation ended; fmi2Reset starts over)",
-    Phase.TERMINATED: "terminated (fmi2Reset starts over)",
-    Phase.ERROR: "in the error state",
-}
-
-_STATE_MAGIC = b"tire_fmu.fmu-state/2"
-_DIGEST_HEX = 64  # sha256
-_MAX_STATE_BYTES = 1 << 30
-
-
-@dataclass(frozen=True, eq=False)
-class _Snapshot:
-    """An FMU state: every variable's value, the phase, the simulator's state and flags."""
-
-    values: tuple
-    phase: str
-    why_not_running: str
-    start_time: float
-    simulator: ContactState | None
-    contact_warning_armed: bool
-    stale: bool
-
-
-@dataclass(frozen=True)
-class _InvalidState:
-    """What deserialising bad bytes gives: setting it is refused with ``reason``."""
-
-    reason: str
-
-
 class TireModal(Fmi2Slave):
     """In-plane modal ring tire (GL073A defaults): rim and road motion in, rim force out."""
 
@@ -148,6 +112,8 @@ class TireModal(Fmi2Slave):
     version = tire_fmu.__version__
     license = "MIT"
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=1.0, step_size=1e-4)
+    # the native FMU's categories too: the lift-off events are logged in logEvents
+    log_categories = {**Fmi2Slave.log_categories, "logEvents": LOG_CATEGORIES["logEvents"]}
 
     def __init__(self, **kwargs):
         # Cheap on purpose: pythonfmu instantiates the slave at build time and on every reset.
@@ -159,15 +125,18 @@ class TireModal(Fmi2Slave):
                                if v.causality == "parameter"]
         self._input_vrs = list(range(INPUTS.start, INPUTS.stop))
         self._output_vrs = list(range(OUTPUTS.start, OUTPUTS.stop))
+        self._contact_vrs = [IN_CONTACT]
         self._phase = Phase.INSTANTIATED
-        self._why_not_running = _PHASE_TEXT[Phase.INSTANTIATED]
+        self._error_reason = ""  # in the error phase: why (spec.MESSAGES FAILED, ...)
         self._start_time = 0.0
         self._simulator: ContactSimulator | None = None
         self._built_for: tuple | None = None  # parameter values the simulator was built with
         self._raw_step = None  # the kernel's hot path: (function, handle, inputs, report)
-        self._now = math.nan  # the simulator's time, as its last step reported it
+        # the last communication point (the start time before initialisation)
+        self._now = 0.0
         self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
+        self._contact_logged = True  # the in_contact the last lift-off event was logged for
         # Inputs set since the outputs were last computed: the next read recomputes the
         # forces at the current point with them (see ContactSimulator.outputs_with).
         self._stale = False
@@ -185,36 +154,41 @@ class TireModal(Fmi2Slave):
         # units go into the model description at build time, from the same table
         self.register_variable(_KINDS[v.type](v.name, **kwargs))
 
+    def to_xml(self, model_options=None):
+        # pythonfmu's builder reads each start value with get_real and friends, which FMI
+        # does not allow while instantiated (refused there): its instance, never a host's,
+        # reads them as in initialisation mode, where they are the same values
+        phase, self._phase = self._phase, Phase.INITIALISATION
+        try:
+            return super().to_xml({} if model_options is None else model_options)
+        finally:
+            self._phase = phase
+
     # -- messages ----------------------------------------------------------------------------
     def log(self, msg: str, status: Fmi2Status = Fmi2Status.ok, category=None, debug=None):
         super().log(fmi_message(msg), status, category)
 
     def _refuse(self, call: str, why: str) -> bool:
         """Log that ``call`` was refused and why (status error); nothing was changed."""
-        self.log(f"{call} refused: {why}; nothing changed", Fmi2Status.error)
+        self.log(MESSAGES["REFUSED"] % (call, why), Fmi2Status.error)
         return False
 
     def _allowed(self, call: str) -> bool:
-        if self._phase in ALLOWED[call]:
+        if CALL_MASKS[call] >> self._phase & 1:
             return True
-        why = ((self._why_not_running or f"the FMU is {_PHASE_TEXT[Phase.ERROR]}; reset it or "
-                "set an FMU state") if self._phase == Phase.ERROR
-               else f"the FMU is {_PHASE_TEXT[self._phase]}")
-        return self._refuse(call, why)
+        return self._refuse(call, phase_refusal(self._phase, self._error_reason))
 
-    def _fail(self, what: str, error: Exception) -> None:
+    def _fail(self, what: str, cause: str) -> None:
         """An unexpected failure: the FMU goes to the error state (reset or set a state)."""
         self._phase = Phase.ERROR
-        self._why_not_running = (f"the FMU is in the error state: {what} failed "
-                                 f"({type(error).__name__}: {error}); reset it or set an FMU "
-                                 "state")
-        self.log(self._why_not_running, Fmi2Status.error)
+        self._error_reason = MESSAGES["FAILED"] % (what, cause)
+        self.log(self._error_reason, Fmi2Status.error)
 
-    def _warn_zone_edge(self, at_time: float) -> None:
-        self._contact_warning_armed = False
-        self.log(f"t = {at_time:.9g} s: the footprint reached the end of the contact zone, so "
-                 "road forces beyond it are missing; raise contact_zone_length (logged once "
-                 "until the footprint is back inside)", Fmi2Status.warning)
+    def _contact_event(self, in_contact: bool) -> None:
+        """The tread left the road or landed: physics, logged as information (logEvents)."""
+        self._contact_logged = in_contact
+        self.log(MESSAGES["TOUCH_DOWN" if in_contact else "LIFT_OFF"] % self._now,
+                 Fmi2Status.ok, "logEvents")
 
     # -- lifecycle ---------------------------------------------------------------------------
     def setup_experiment(self, start_time: float, stop_time: float | None = None,
@@ -222,24 +196,22 @@ class TireModal(Fmi2Slave):
         call = "fmi2SetupExperiment"
         if not self._allowed(call):
             return
+        start = repr(float(start_time))
         if not math.isfinite(start_time):
-            self._refuse(call, f"startTime = {start_time!r} s: must be finite")
+            self._refuse(call, MESSAGES["START_NOT_FINITE"] % start)
         elif not clock.resolves(start_time, MAX_STEP_S):
             self._refuse(call, MESSAGES["START_UNRESOLVED"] % (
-                repr(float(start_time)), clock.resolved_until(MAX_STEP_S) - MAX_STEP_S,
-                MAX_STEP_S))
+                start, clock.resolved_until(MAX_STEP_S) - MAX_STEP_S, MAX_STEP_S))
         elif stop_time is not None and not (math.isfinite(stop_time) and stop_time >= start_time):
-            self._refuse(call, f"stopTime = {stop_time!r} s: must be finite and >= startTime "
-                         f"= {start_time!r} s")
+            self._refuse(call, MESSAGES["STOP_TIME"] % (repr(float(stop_time)), start))
         elif tolerance is not None and not (math.isfinite(tolerance) and tolerance > 0.0):
-            self._refuse(call, f"tolerance = {tolerance!r}: must be finite and > 0")
+            self._refuse(call, MESSAGES["TOLERANCE"] % repr(float(tolerance)))
         else:
-            self._start_time = float(start_time)
+            self._start_time = self._now = float(start_time)
 
     def enter_initialization_mode(self) -> None:
         if self._allowed("fmi2EnterInitializationMode"):
-            self._phase = Phase.INITIALISING
-            self._why_not_running = _PHASE_TEXT[Phase.INITIALISING]
+            self._phase = Phase.INITIALISATION
 
     def exit_initialization_mode(self) -> None:
         if not self._allowed("fmi2ExitInitializationMode"):
@@ -247,15 +219,14 @@ class TireModal(Fmi2Slave):
         try:
             self._initialise()
         except Exception as error:  # an escaping exception would be fmi2Fatal (module doc)
-            self._fail("building the model", error)
+            self._fail("building the model", _cause(error))
 
     def terminate(self) -> None:
         if self._allowed("fmi2Terminate"):
             self._phase = Phase.TERMINATED
-            self._why_not_running = f"the FMU is {_PHASE_TEXT[Phase.TERMINATED]}"
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        if self._phase != Phase.RUNNING:
+        if self._phase != _RUNNING:
             return self._allowed("fmi2DoStep")
         now = self._now
         values = self._values
@@ -263,10 +234,8 @@ class TireModal(Fmi2Slave):
             # also refuses a non-finite t: every comparison with nan is false
             if not abs(current_time - now) <= max(TIME_ABS_TOLERANCE_S,
                                                   TIME_REL_TOLERANCE * abs(now)):
-                return self._refuse_step(
-                    current_time, step_size,
-                    f"t = {current_time!r} s: must be the last communication point t = {now!r} "
-                    "s (roll back with fmi2SetFMUstate to step from an earlier time)")
+                return self._refuse_step(current_time, step_size, MESSAGES["NOT_LAST_POINT"] % (
+                    repr(float(current_time)), repr(now)))
         if step_size != self._checked_h:  # false for nan too: checked, and refused
             problem = self._step_size_problem(step_size)
             if problem:
@@ -280,24 +249,27 @@ class TireModal(Fmi2Slave):
         try:
             status = step(handle, step_size, kernel_inputs, report)
         except Exception as error:  # an escaping exception would be fmi2Fatal (numpy kernel)
-            self._fail(f"the step from t = {current_time!r} s", error)
+            self._fail(MESSAGES["STEP_FAILED"] % repr(float(current_time)), _cause(error))
             return False
         if status:
             return self._step_refused(status, current_time, step_size)
         outputs = report[0:6]
         if not math.isfinite(outputs[0] + outputs[1] + outputs[2] + outputs[3] + outputs[5]):
-            self._fail(f"the step from t = {current_time!r} s",
-                       ArithmeticError(f"non-finite outputs {outputs}"))
+            self._fail(MESSAGES["STEP_FAILED"] % repr(float(current_time)),
+                       MESSAGES["NOT_FINITE_OUTPUTS"])
             return False
         values[OUTPUTS] = outputs
         self._now = report[6]
         self._stale = False
-        values[IN_CONTACT] = outputs[2] > 0.0
-        # contact loss is physics (logged by nobody, in_contact says it); a footprint at the
-        # end of the zone is the model's limit, and warns
+        in_contact = values[IN_CONTACT] = outputs[2] > 0.0
+        # contact loss is physics (an event, in_contact says it); a footprint at the end of
+        # the zone is the model's limit, and warns
+        if in_contact is not self._contact_logged:
+            self._contact_event(in_contact)
         if report[7]:
             if self._contact_warning_armed:
-                self._warn_zone_edge(self._now)
+                self._contact_warning_armed = False
+                self.log(MESSAGES["ZONE_EDGE"] % self._now, Fmi2Status.warning)
         elif not self._contact_warning_armed:
             self._contact_warning_armed = True
         return True
@@ -305,28 +277,26 @@ class TireModal(Fmi2Slave):
     def _step_refused(self, status: int, t: float, h: float) -> bool:
         """A step the kernel did not take: refused for a reason the core names (nothing
         changed), or its memory ran out (the FMU's error state)."""
-        if status == -3:
+        if status == _REFUSED:
             try:
                 self._simulator._check(h, tuple(self._values[:4]))
             except StepError as error:
                 return self._refuse_step(t, h, str(error))
-            status = "refused with no reason the core finds"
-        self._fail(f"the step from t = {t!r} s", MemoryError(f"step kernel status {status}"))
+        self._fail(MESSAGES["STEP_FAILED"] % repr(float(t)), MESSAGES["OUT_OF_MEMORY"]
+                   if status != _REFUSED else "refused with no reason the core finds")
         return False
 
     def _step_size_problem(self, h: float) -> str | None:
         if not 0.0 < h <= MAX_STEP_S:  # false for nan too
-            return f"step size h = {h!r} s: must be in (0, {MAX_STEP_S:g}] s"
-        reach = self._simulator.contact.windows.horizon_s
+            return MESSAGES["STEP_RANGE"] % (repr(float(h)), MAX_STEP_S)
+        reach = self._simulator.kernel.horizon_s
         if not reach / h <= MAX_DELAY_STEPS:
-            return (f"step size h = {h!r} s: must be at least {reach / MAX_DELAY_STEPS:.3g} s "
-                    f"at this speed: the road reaches the contact zone's last node "
-                    f"{reach:.3g} s after its front, and the FMU keeps at most "
-                    f"{MAX_DELAY_STEPS} steps of its history")
+            return MESSAGES["STEP_DELAY"] % (repr(float(h)), reach / MAX_DELAY_STEPS, reach,
+                                             MAX_DELAY_STEPS)
         return None
 
     def _refuse_step(self, t: float, h: float, why: str) -> bool:
-        return self._refuse(f"fmi2DoStep(t = {t!r} s, h = {h!r} s)", why)
+        return self._refuse(MESSAGES["STEP_CALL"] % (repr(float(t)), repr(float(h))), why)
 
     def _set_simulator(self, simulator, built_for) -> None:
         self._simulator, self._built_for = simulator, built_for
@@ -402,21 +372,21 @@ class TireModal(Fmi2Slave):
         except ParameterError as error:
             problems = _fmu_problems(error)
             for number, problem in enumerate(problems, 1):
-                self.log(f"parameter problem {number}/{len(problems)}: {problem}",
+                self.log(MESSAGES["PROBLEM_LINE"] % (number, len(problems), problem),
                          Fmi2Status.error)
+            # no model to step: FMI's error state, every later refusal saying why
             self._phase = Phase.ERROR
-            self._why_not_running = (
-                f"the parameters were refused at fmi2ExitInitializationMode ({len(problems)} "
-                f"problem(s): {'; '.join(problems)}); reset the FMU and set valid parameters")
-            self.log("fmi2ExitInitializationMode refused: " + self._why_not_running,
-                     Fmi2Status.error)
+            self._error_reason = MESSAGES["PARAMETERS_REFUSED"] % (len(problems),
+                                                                    "; ".join(problems))
+            self.log(MESSAGES["EXIT_REFUSED"] % self._error_reason, Fmi2Status.error)
             return
         for text in said:
             self.log(text, Fmi2Status.warning)
         self._set_simulator(simulator, parameters)
         self._checked_h = math.nan
-        self._phase, self._why_not_running = Phase.RUNNING, ""
+        self._phase = Phase.RUNNING
         self._contact_warning_armed = True
+        self._contact_logged = simulator.in_contact
         self._show(simulator.output_dict(), simulator.in_contact)
         # inputs set during initialisation feed through on the first read
         self._stale = any(self._values[INPUTS])
@@ -439,26 +409,26 @@ class TireModal(Fmi2Slave):
 
     # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
     # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
-    def _refresh(self) -> None:
+    def _refresh(self) -> bool:
         """Outputs at the current time for the inputs set since the last step."""
         values = self._values
         try:
             outputs = self._simulator.outputs_with(values[0], values[1], values[2], values[3])
-        except StepError as error:
-            self.log(f"the outputs at t = {self._simulator.time!r} s cannot follow the inputs "
-                     f"set there ({error}): they are those of the last step", Fmi2Status.error)
-            return
+        except StepError as error:  # the inputs were checked when set: not from a host
+            self._fail(MESSAGES["OUTPUTS_FAILED"], str(error))
+            return False
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self._fail("computing the outputs", error)
-            return
+            self._fail(MESSAGES["OUTPUTS_FAILED"], _cause(error))
+            return False
         self._stale = False
         values[OUTPUTS] = outputs
         values[IN_CONTACT] = outputs[2] > 0.0
+        return True
 
     def get_real(self, vrs):
-        if self._stale:
-            self._refresh()
-        if vrs == self._output_vrs:  # the host's usual call: the four forces, in order
+        if vrs == self._output_vrs and self._phase == _RUNNING:  # the host's usual call
+            if self._stale:
+                self._refresh()
             return self._values[OUTPUTS]
         return self._get("fmi2GetReal", vrs, "Real", float, 0.0)
 
@@ -466,42 +436,48 @@ class TireModal(Fmi2Slave):
         return self._get("fmi2GetInteger", vrs, "Integer", int, 0)
 
     def get_boolean(self, vrs):
-        if self._stale:
-            self._refresh()
+        if vrs == self._contact_vrs and self._phase == _RUNNING:  # in_contact, each step
+            if self._stale:
+                self._refresh()
+            return [self._values[IN_CONTACT]]
         return self._get("fmi2GetBoolean", vrs, "Boolean", bool, False)
 
     def get_string(self, vrs):
-        if vrs:
-            self._refuse("fmi2GetString", f"value references {list(vrs)}: TireModal has no "
-                         "String variables")
+        if self._allowed("fmi2GetString") and vrs:
+            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
         return ["" for _ in vrs]
 
     def _get(self, call, vrs, kind, convert, fallback):
-        result = []
+        """Every value, or (refused: the call's phase or a reference) the fallbacks."""
+        if not self._allowed(call):
+            return [fallback for _ in vrs]
         for vr in vrs:
             problem = self._reference_problem(vr, kind)
             if problem:
-                self.log(f"{call} refused for value reference {vr!r}: {problem}; "
-                         f"{fallback!r} returned", Fmi2Status.error)
-                result.append(fallback)
-            else:
-                result.append(convert(self._values[vr]))
-        return result
+                self._refuse(call, problem)
+                return [fallback for _ in vrs]
+        if self._stale and self._phase == Phase.RUNNING and not self._refresh():
+            return [fallback for _ in vrs]
+        return [convert(self._values[vr]) for vr in vrs]
 
     def _reference_problem(self, vr, kind: str) -> str | None:
         if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
-            return f"it does not exist (TireModal has {len(self._table)} variables)"
+            return MESSAGES["REFERENCE_MISSING"] % (vr, MODEL_IDENTIFIER, len(self._table))
         v = self._table[vr]
         if v.type != kind:
-            return f"{v.name} has FMI type {v.type}: use fmi2Get{v.type} and fmi2Set{v.type}"
+            return MESSAGES["REFERENCE_TYPE"] % (vr, v.name, v.type, v.type, v.type)
         return None
 
     def set_real(self, vrs, values):
-        if vrs == self._input_vrs and self._phase == Phase.RUNNING:  # the host's usual call
-            self._values[INPUTS] = values
-            self._stale = True
-        else:
-            self._set("fmi2SetReal", vrs, values, "Real")
+        if vrs == self._input_vrs and self._phase == _RUNNING:  # the host's usual call
+            z, vz, road_z, road_vz = values
+            # within the inputs' limits (false for nan): else refused below, naming it
+            if (-_MAX_M <= z <= _MAX_M and -_MAX_M <= road_z <= _MAX_M
+                    and -_MAX_M_S <= vz <= _MAX_M_S and -_MAX_M_S <= road_vz <= _MAX_M_S):
+                self._values[INPUTS] = values
+                self._stale = True
+                return
+        self._set("fmi2SetReal", vrs, values, "Real")
 
     def set_integer(self, vrs, values):
         self._set("fmi2SetInteger", vrs, values, "Integer")
@@ -510,246 +486,232 @@ class TireModal(Fmi2Slave):
         self._set("fmi2SetBoolean", vrs, [bool(v) for v in values], "Boolean")
 
     def set_string(self, vrs, values):
-        if vrs:
-            self._refuse("fmi2SetString", f"value references {list(vrs)}: TireModal has no "
-                         "String variables")
+        if self._allowed("fmi2SetString") and vrs:
+            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
 
     def _set(self, call, vrs, values, kind) -> None:
         """Set every value or, if one is refused, none."""
         if not self._allowed(call):
             return
         for vr, value in zip(vrs, values):
-            problem = self._reference_problem(vr, kind)
+            problem = self._reference_problem(vr, kind) or self._value_problem(
+                self._table[vr], value)
             if problem:
-                self._refuse(call, f"value reference {vr!r}: {problem}")
-                return
-            v = self._table[vr]
-            problem = self._value_problem(v)
-            if problem:
-                self._refuse(call, f"{v.name} = {value_text(value, v.unit)}: {problem}")
+                self._refuse(call, problem)
                 return
         for vr, value in zip(vrs, values):
             self._values[vr] = value
             v = self._table[vr]
             if v.causality == "input":
-                self._stale = self._phase == Phase.RUNNING
-            elif v.name == "load" and math.isfinite(value):
+                self._stale = self._stale or self._phase == Phase.RUNNING
+            elif v.name == "load" and self._phase != Phase.RUNNING and math.isfinite(value):
                 # the outputs echo the static load until initialised
                 self._show({"rim_Fz": value, "contact_Fz": value}, value > 0)
 
-    def _value_problem(self, v: FmuVariable) -> str | None:
-        """Why ``v`` cannot be set now, or None."""
+    def _value_problem(self, v: FmuVariable, value) -> str | None:
+        """Why ``v`` cannot take ``value`` now, or None."""
+        if v.causality == "input":
+            return _input_problem(v, value)
+        text = value_text(value, v.unit)
         if v.causality == "output":
-            return "it is an output"
-        if v.causality == "parameter" and self._phase not in (Phase.INSTANTIATED,
-                                                              Phase.INITIALISING):
-            return ("parameters are fixed after initialisation (they define the reduced "
-                    "basis); reset the FMU to change them")
+            return MESSAGES["OUTPUT_SET"] % (v.name, text)
+        if self._phase == Phase.RUNNING:  # a parameter (other phases refuse every set)
+            return MESSAGES["PARAMETER_FIXED"] % (v.name, text)
         return None
 
-    # -- FMU state ---------------------------------------------------------------------------
+    # -- FMU state: the bytes of spec.STATE_LAYOUT, as the native FMU writes them -------------
+    def _guid(self) -> str:
+        """This FMU's GUID (its modelDescription.xml beside resources/; none in plain
+        Python)."""
+        return _model_guid(self.resources)
+
     def _get_fmu_state(self):
         try:
-            simulator = self._simulator.get_state() if self._simulator is not None else None
-            return _Snapshot(tuple(self._values), self._phase, self._why_not_running,
-                             self._start_time, simulator, self._contact_warning_armed,
-                             self._stale)
+            if self._stale and self._phase == Phase.RUNNING and not self._refresh():
+                return b""
+            model = b""
+            if self._phase in (Phase.RUNNING, Phase.TERMINATED):
+                model = (struct.pack("<2i", self._contact_warning_armed, self._contact_logged)
+                         + self._simulator.kernel.state_bytes())
+            reason = self._error_reason if self._phase == Phase.ERROR else ""
+            return state_pack(self._phase, self._guid(), self._now, self._start_time,
+                              self._stale, self._values, model, reason)
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self.log(f"fmi2GetFMUstate failed: {type(error).__name__}: {error}",
-                     Fmi2Status.error)
-            return _InvalidState(f"it was taken when fmi2GetFMUstate failed ({error})")
+            self.log(f"fmi2GetFMUstate failed: {_cause(error)}", Fmi2Status.error)
+            return b""
 
     def _set_fmu_state(self, state) -> None:
         try:
-            self._restore(state)
+            self._restore(bytes(state) if isinstance(state, (bytes, bytearray)) else b"")
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            self._refuse("fmi2SetFMUstate", f"{type(error).__name__}: {error}")
+            self._refuse("fmi2SetFMUstate", _cause(error))
 
-    def _restore(self, state) -> None:
+    def _restore(self, data: bytes) -> None:
         """Everything is checked, and the model built if need be, before anything changes."""
         call = "fmi2SetFMUstate"
-        if isinstance(state, _InvalidState):
-            self._refuse(call, state.reason)
+        problem = state_problem(data, self._table, self._guid())
+        if problem:
+            self._refuse(call, problem)
             return
-        if not isinstance(state, _Snapshot):
-            self._refuse(call, f"it is not a TireModal state ({type(state).__name__})")
-            return
-        parameters = tuple(state.values[vr] for vr in self._parameter_vrs)
-        simulator, built_for = None, None
-        if state.simulator is not None:
-            simulator, built_for = self._simulator, self._built_for
-            if parameters != self._built_for:
+        fields = state_unpack(data, len(self._table))
+        values = [float(x) if v.type == "Real" else int(x) if v.type == "Integer" else x != 0.0
+                  for v, x in zip(self._table, fields["values"])]
+        model = fields["model"]
+        simulator, built_for = self._simulator, self._built_for
+        if model:
+            parameters = tuple(values[vr] for vr in self._parameter_vrs)
+            if simulator is None or parameters != built_for:
                 # a state of other parameters, or restored into a fresh instance: build its
-                # model (with the state's start time, which the simulator state overrides)
+                # model (with the state's start time, which the kernel's state overrides)
                 try:
                     simulator = self._build(parameters)[0]
                 except ParameterError as error:
-                    self._refuse(call, "its parameters do not build a model: "
-                                 + "; ".join(_fmu_problems(error)))
+                    self._refuse(call, MESSAGES["STATE_PARAMETERS"] % "; ".join(
+                        _fmu_problems(error)))
                     return
                 built_for = parameters
-            try:
-                simulator.set_state(state.simulator)  # checks the shapes before it changes
-            except StateError as error:
-                self._refuse(call, str(error))
+            problem = _model_part_problem(simulator, model, values, fields["time"],
+                                          fields["start_time"])
+            if problem:
+                self._refuse(call, problem)
                 return
-        self._set_simulator(simulator, built_for)
+            simulator.kernel.set_state_bytes(model[4 * STATE_MODEL_FLAGS:])
+            self._set_simulator(simulator, built_for)
+            self._contact_warning_armed, self._contact_logged = (
+                bool(flag) for flag in struct.unpack_from("<2i", model))
         self._checked_h = math.nan
-        self._values[:] = state.values
-        self._phase, self._why_not_running = state.phase, state.why_not_running
-        self._start_time = state.start_time
-        self._contact_warning_armed = state.contact_warning_armed
-        self._stale = state.stale and simulator is not None  # nothing to feed through else
+        self._values[:] = values
+        self._phase = fields["phase"]
+        self._error_reason = fields["reason"].decode("utf-8", errors="replace")
+        self._start_time, self._now = fields["start_time"], fields["time"]
+        self._stale = bool(fields["stale"])
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
-        # A line with the format and a sha256 of the rest, a JSON header, a newline (JSON
-        # escapes its own), then the simulator's npz bytes: no pickle, so a state file cannot
-        # run code when read, and the checksum refuses any byte changed, cut or appended.
-        if isinstance(state, _InvalidState):
-            header, payload = {"invalid": state.reason}, b""
-        else:
-            payload = state.simulator.to_bytes() if state.simulator is not None else b""
-            header = {"values": list(state.values), "phase": state.phase,
-                      "why_not_running": state.why_not_running, "start_time": state.start_time,
-                      "contact_warning_armed": state.contact_warning_armed,
-                      "stale": state.stale, "simulator_bytes": len(payload)}
-        body = json.dumps(header, sort_keys=True).encode() + b"\n" + payload
-        return _STATE_MAGIC + b" " + hashlib.sha256(body).hexdigest().encode() + b"\n" + body
+        # the state is its bytes already (spec.STATE_LAYOUT): no pickle, so a state file
+        # cannot run code when read
+        return bytes(state) if isinstance(state, (bytes, bytearray)) else b""
 
     @staticmethod
     def _fmu_state_from_bytes(data: bytes):
+        # pythonfmu calls this on the class (no instance, no logger, no GUID): the bytes are
+        # checked in full when set
+        return bytes(data)
+
+
+def state_problem(data: bytes, table: tuple[FmuVariable, ...], guid: str) -> str | None:
+    """Why ``data`` is no FMU state of this FMU, the model part aside (the native FMU's
+    fmi2_layer.c state_problem: the same checks, in its order and words), or None."""
+    m = MESSAGES
+    fixed = state_fixed_size(len(table))
+    if len(data) < fixed or data[:8] != STATE_MAGIC.encode():
+        return m["STATE_NOT_OURS"] % (m["STATE_TOO_SHORT"] if len(data) < fixed
+                                      else m["STATE_NO_HEADER"])
+    f = state_unpack(data, len(table))
+    if f["size"] != len(data):
+        return m["STATE_SIZE"] % (f["size"], len(data))
+    if f["checksum"] != state_checksum(data[:-4]):
+        return m["STATE_DAMAGED"]
+    if f["version"] != STATE_VERSION:
+        return m["STATE_VERSION"] % (f["version"], STATE_VERSION)
+    if f["guid"] != guid:
+        return m["STATE_GUID"] % (f["guid"], guid)
+    phase = f["phase"]
+    if phase >= len(PHASES):
+        return m["STATE_PHASE"] % phase
+    time_s, start = f["time"], f["start_time"]
+    if not (math.isfinite(time_s) and math.isfinite(start)) or f["stale"] > 1:
+        return m["STATE_CLOCK"] % (repr(time_s), repr(start))
+    if not clock.resolves(start, MAX_STEP_S):
+        return m["STATE_START"] % (m["START_UNRESOLVED"] % (
+            repr(start), clock.resolved_until(MAX_STEP_S) - MAX_STEP_S, MAX_STEP_S))
+    if phase in (Phase.INSTANTIATED, Phase.INITIALISATION) and time_s != start:
+        return m["STATE_BEFORE_INIT"] % (repr(time_s), repr(start))
+    for v, x in zip(table, f["values"]):
+        if v.causality == "input":
+            problem = _input_problem(v, x)
+            if problem:
+                return m["STATE_INPUT"] % problem
+        elif ((v.type == "Integer" and not (math.isfinite(x) and x == math.floor(x)
+                                            and abs(x) <= 2147483647.0))
+              or (v.type == "Boolean" and x not in (0.0, 1.0))
+              or (v.causality == "output" and not math.isfinite(x))):
+            # a Real parameter holds whatever a set gave it: checked when it is used
+            return m["STATE_VALUE"] % (v.name, v.type)
+    model_size, reason_size = f["model_size"], f["reason_size"]
+    if model_size + reason_size != len(data) - fixed:
+        return m["STATE_MODEL_SIZE"]
+    if (phase in (Phase.RUNNING, Phase.TERMINATED)) != (model_size > 0):
+        return m["STATE_MODEL_PHASE"]
+    if (phase == Phase.ERROR) != (reason_size > 0):
+        return (m["STATE_NO_REASON"] if phase == Phase.ERROR
+                else m["STATE_REASON_PHASE"] % Phase.NAMES[phase])
+    if b"\0" in f["reason"]:
+        return m["STATE_REASON_NUL"]
+    return None
+
+
+def _model_part_problem(simulator: ContactSimulator, model: bytes, values: list,
+                        time_s: float, start: float) -> str | None:
+    """Why the model part is no state of this simulator shown by these values at this time
+    (tire_model.c's model_state_check: the two flags, the kernel's own checks, then the
+    FMU's part against the kernel's), or None."""
+    m = MESSAGES
+    flags_size = 4 * STATE_MODEL_FLAGS
+    if len(model) < flags_size:
+        return m["STATE_MODEL_SHORT"] % len(model)
+    for i, flag in enumerate(struct.unpack_from(f"<{STATE_MODEL_FLAGS}i", model)):
+        if flag not in (0, 1):
+            return m["STATE_MODEL_FLAG"] % (i, flag)
+    kernel_part = model[flags_size:]
+    problem = simulator.kernel.state_problem(kernel_part)  # kernel.c's kernel_state_check
+    if problem:
+        return problem
+    fields = kernel_numpy.state_fields(kernel_part)
+    problems = []
+    kernel_start = fields["start_time"]
+    kernel_time = kernel_start + fields["elapsed_s"]
+    if kernel_start != start or kernel_time != time_s:
+        problems.append(m["STATE_MODEL_CLOCK"] % (repr(time_s), repr(start), repr(kernel_time),
+                                                  repr(kernel_start)))
+    outputs = fields["outputs"]
+    # (the in-contact flag is the last one an event was logged for, which outputs read
+    # after new inputs, before a step, may have left behind)
+    if (any(values[OUTPUTS.start + i] != outputs[i] for i in range(len(outputs)))
+            or float(values[IN_CONTACT]) != (1.0 if outputs[2] > 0.0 else 0.0)):
+        problems.append(m["STATE_MODEL_OUTPUTS"])
+    return "; ".join(problems) or None
+
+
+def _input_problem(v: FmuVariable, value) -> str | None:
+    """Why input ``v`` cannot take ``value`` (spec INPUT_RANGE), or None."""
+    limit = MAX_VELOCITY_M_S if v.unit == "m/s" else MAX_DISPLACEMENT_M
+    if abs(value) <= limit:
+        return None
+    return MESSAGES["INPUT_RANGE"] % (v.name, repr(float(value)), v.unit, limit, limit, v.unit)
+
+
+def _cause(error: Exception) -> str:
+    return f"{type(error).__name__}: {error}"
+
+
+_GUIDS: dict[str, str] = {}
+
+
+def _model_guid(resources: str | None) -> str:
+    """The GUID in the modelDescription.xml of the FMU whose resources/ folder this is (read
+    once per process), or "" outside an FMU."""
+    folder = os.path.dirname(os.path.abspath(resources)) if resources else ""
+    if folder not in _GUIDS:
+        guid = ""
         try:
-            return _decode_state(bytes(data))
-        except Exception as error:  # an escaping exception would be fmi2Fatal
-            return _InvalidState(f"the bytes are not a TireModal state "
-                                 f"({type(error).__name__}: {error})")
-
-
-def _decode_state(data: bytes) -> _Snapshot | _InvalidState:
-    """Check serialized state bytes in full: format, checksum, then every field."""
-    magic = _STATE_MAGIC + b" "
-    if not data.startswith(magic):
-        return _InvalidState(f"they do not start with {_STATE_MAGIC.decode()!r} (they start "
-                             f"with {data[:len(magic)]!r}): not a TireModal state of this "
-                             "version")
-    if len(data) > _MAX_STATE_BYTES:
-        return _InvalidState(f"{len(data)} bytes: a TireModal state is far smaller")
-    digest, newline, body = data[len(magic):].partition(b"\n")
-    if not newline or hashlib.sha256(body).hexdigest().encode() != digest:
-        return _InvalidState("the checksum does not match: the bytes were changed, cut or "
-                             "extended after fmi2SerializeFMUstate")
-    head, _, payload = body.partition(b"\n")
-    header = json.loads(head.decode())
-    if not isinstance(header, dict):
-        return _InvalidState("the header is not a JSON object")
-    if "invalid" in header:
-        return _InvalidState(str(header["invalid"]))
-    problems = _header_problems(header)
-    if not problems and header["simulator_bytes"] != len(payload):
-        problems.append(f"the header announces {header['simulator_bytes']} bytes of simulator "
-                        f"state and {len(payload)} follow")
-    simulator = None
-    if not problems and payload:
-        simulator, problem = _simulator_state(payload)
-        if problem:
-            problems.append(problem)
-    if not problems and simulator is None and header["phase"] in (Phase.RUNNING,
-                                                                   Phase.TERMINATED):
-        problems.append(f"phase {header['phase']!r} needs a simulator state and there is none")
-    if not problems:
-        problems += _snapshot_problems(header, simulator)
-    if problems:
-        return _InvalidState("; ".join(problems))
-    values = tuple(float(x) if v.type == "Real" else x
-                   for v, x in zip(_TABLE, header["values"]))
-    phase = next(p for p in Phase.ALL if p == header["phase"])  # the constant itself
-    return _Snapshot(values, phase, header["why_not_running"],
-                     float(header["start_time"]), simulator, header["contact_warning_armed"],
-                     header["stale"])
-
-
-def _header_problems(header: dict) -> list[str]:
-    problems = []
-    expected = {"values": list, "phase": str, "why_not_running": str, "start_time": float,
-                "contact_warning_armed": bool, "stale": bool, "simulator_bytes": int}
-    for key, kind in expected.items():
-        value = header.get(key)
-        ok = (isinstance(value, (int, float)) and not isinstance(value, bool)
-              and math.isfinite(value)) if kind is float else (
-            isinstance(value, kind) and not (kind is int and isinstance(value, bool)))
-        if not ok:
-            problems.append(f"{key} = {value!r}: must be {kind.__name__}"
-                            + (" and finite" if kind is float else ""))
-    unknown = sorted(set(header) - set(expected))
-    if unknown:
-        problems.append(f"unknown header fields {unknown}")
-    if problems:
-        return problems
-    if header["phase"] not in Phase.ALL:
-        problems.append(f"phase = {header['phase']!r}: must be one of {list(Phase.ALL)}")
-    values = header["values"]
-    if len(values) != len(_TABLE):
-        return problems + [f"{len(values)} values: TireModal has {len(_TABLE)} variables"]
-    for v, value in zip(_TABLE, values):
-        problem = _state_value_problem(v, value)
-        if problem:
-            problems.append(problem)
-    return problems
-
-
-def _snapshot_problems(header: dict, simulator: ContactState | None) -> list[str]:
-    """What the FMU's part of a state says against itself and its simulator's part, and
-    what the FMU would never hold (the simulator's part alone is checked when it is set:
-    ContactSimulator.state_problems)."""
-    problems = []
-    phase = header["phase"]
-    if phase == Phase.ERROR and not header["why_not_running"].strip():
-        problems.append("its phase is 'error' without the reason (why_not_running is empty): "
-                        "it would refuse every call without saying why")
-    if not clock.resolves(header["start_time"], MAX_STEP_S):
-        problems.append("its " + MESSAGES["START_UNRESOLVED"] % (
-            repr(float(header["start_time"])), clock.resolved_until(MAX_STEP_S) - MAX_STEP_S,
-            MAX_STEP_S))
-    if simulator is None:
-        return problems
-    if header["start_time"] != simulator.start_time:
-        problems.append(f"its start time is {header['start_time']!r} s, but its simulator "
-                        f"started at {simulator.start_time!r} s")
-    if simulator.history_t.size > MAX_HISTORY_SAMPLES:
-        problems.append(f"its road history holds {simulator.history_t.size} samples; the FMU "
-                        f"keeps at most {MAX_HISTORY_SAMPLES} (one a step, over at most "
-                        f"{MAX_DELAY_STEPS} steps)")
-    if simulator.last_step_s > MAX_STEP_S:
-        problems.append(f"its last step is {simulator.last_step_s!r} s; the FMU takes at most "
-                        f"{MAX_STEP_S:g} s")
-    if phase in (Phase.RUNNING, Phase.TERMINATED):
-        values = header["values"]
-        outputs = [float(x) for x in simulator.outputs]
-        if values[OUTPUTS] != outputs or values[IN_CONTACT] is not (outputs[2] > 0.0):
-            problems.append(f"the outputs it shows, {values[OUTPUTS]} and in_contact = "
-                            f"{values[IN_CONTACT]!r}, are not its simulator's, {outputs}")
-    return problems
-
-
-def _state_value_problem(v: FmuVariable, value) -> str | None:
-    if v.type == "Boolean":
-        return None if isinstance(value, bool) else f"{v.name} = {value!r}: must be a Boolean"
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return f"{v.name} = {value!r}: must be a number"
-    if v.type == "Integer" and not (isinstance(value, int) and -2**31 <= value < 2**31):
-        return f"{v.name} = {value!r}: must be an integer of 32 bits (fmi2Integer)"
-    if v.causality == "output" and not math.isfinite(value):
-        return f"{v.name} = {value!r}: an output must be finite"
-    return None  # inputs and parameters are checked when they are used, as when set
-
-
-def _simulator_state(payload: bytes) -> tuple[ContactState | None, str | None]:
-    """The simulator's part, checked by the core (format, checksum, finite values)."""
-    try:
-        return ContactState.from_bytes(payload), None
-    except StateError as error:
-        return None, str(error)
+            with open(os.path.join(folder, "modelDescription.xml"), encoding="utf-8") as stream:
+                found = re.search(r'\bguid="([^"]*)"', stream.read(4096))
+            guid = found.group(1) if found else ""
+        except OSError:
+            pass
+        _GUIDS[folder] = guid[:STATE_GUID_BYTES - 1]
+    return _GUIDS[folder]
 
 
 def _baked_parameter_values(resources: str | None) -> dict | None:

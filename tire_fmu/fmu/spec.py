@@ -13,12 +13,20 @@ from :mod:`.interface`, which the Python FMU uses directly, so the two runtimes 
 - the parameter ranges (:data:`~tire_fmu.core.parameters.TIRE_FIELDS` and the operating-point
   limits) and the problem messages: printf templates that, filled in with Python's ``%``, give
   exactly the core's messages in the FMU's names (``tests/test_native_fmu.py`` checks each
-  against the core), and that the C fills in with the same values.
+  against the core), and that the C fills in with the same values;
+- the FMI layer: the co-simulation state machine (:data:`PHASES`, :data:`CALLS`: which call
+  each phase allows), every message either FMU logs about a call, and the one FMU-state byte
+  format (:data:`STATE_LAYOUT`, :func:`state_checksum`), written by the Python FMU's slave and
+  by the native FMU's ``fmi2_layer.c``; ``tests/test_fmi_behaviour.py`` runs one suite
+  against both.
 """
 
 from __future__ import annotations
 
 import math
+import re
+import struct
+import zlib
 
 from ..core import (
     clock,
@@ -187,11 +195,236 @@ MESSAGES: dict[str, str] = {
     "ZONE_EDGE": "t = %.9g s: the footprint reached the end of the contact zone, so road forces "
                  "beyond it are missing; raise contact_zone_length (logged once until the "
                  "footprint is back inside)",
+    # the tread leaving the road and landing (status OK, category logEvents): physics
+    "LIFT_OFF": "t = %.9g s: the tread left the road (in_contact = false)",
+    "TOUCH_DOWN": "t = %.9g s: the tread is back on the road (in_contact = true)",
+    # -- the FMI layer (both FMUs): a refused call, and why
+    "REFUSED": "%s refused: %s; nothing changed",
+    "PHASE": "the FMU is %s",
+    "ERROR_STATE": "the FMU is in the error state; reset it or set an FMU state",
+    # why the FMU is in the error state: what failed, and how
+    "FAILED": "the FMU is in the error state: %s failed (%s); reset it or set an FMU state",
+    "PARAMETERS_REFUSED": "the parameters were refused at fmi2ExitInitializationMode "
+                          "(%d problem(s): %s); reset the FMU and set valid parameters",
+    "EXIT_REFUSED": "fmi2ExitInitializationMode refused: %s",
+    "STEP_FAILED": "the step from t = %s s",
+    "OUTPUTS_FAILED": "computing the outputs",
+    "NOT_FINITE_OUTPUTS": "its outputs are not finite",
+    "OUT_OF_MEMORY": "out of memory",
+    # fmi2SetupExperiment
+    "START_NOT_FINITE": "startTime = %s s: must be finite",
+    "STOP_TIME": "stopTime = %s s: must be finite and >= startTime = %s s",
+    "TOLERANCE": "tolerance = %s: must be finite and > 0",
+    # fmi2DoStep: the call as refusals name it (t, h), then why
+    "STEP_CALL": "fmi2DoStep(t = %s s, h = %s s)",
+    "NOT_LAST_POINT": "t = %s s: must be the last communication point t = %s s (roll back "
+                      "with fmi2SetFMUstate to step from an earlier time)",
+    "STEP_RANGE": "step size h = %s s: must be in (0, %g] s",
+    "STEP_DELAY": "step size h = %s s: must be at least %.3g s at this speed: the road "
+                  "reaches the contact zone's last node %.3g s after its front, and the FMU "
+                  "keeps at most %d steps of its history",
+    "NO_STEP_PENDING": "no step is pending (fmi2DoStep always completes)",
+    # values (a value shown as parameters.value_text shows it, an input as repr and unit)
+    "INPUT_RANGE": "%s = %s %s: must be in [-%g, %g] %s",
+    "REFERENCE_MISSING": "value reference %u: it does not exist (%s has %d variables)",
+    "REFERENCE_TYPE": "value reference %u: %s has FMI type %s: use fmi2Get%s and fmi2Set%s",
+    "OUTPUT_SET": "%s = %s: it is an output",
+    "PARAMETER_FIXED": "%s = %s: parameters are fixed after initialisation (they define the "
+                       "model built there); reset the FMU to change them",
+    "NO_STRINGS": "%s has no String variables",
+    # FMU states (STATE_LAYOUT): the bytes, then what they mean
+    "STATE_NOT_OURS": "it is not a state of this FMU (%s)",
+    "STATE_TOO_SHORT": "too short",
+    "STATE_NO_HEADER": "no state header",
+    "STATE_SIZE": "it says it has %lu bytes, but %lu were given",
+    "STATE_DAMAGED": "it is damaged: its checksum does not match",
+    "STATE_VERSION": "its format version is %u, this FMU reads %d",
+    "STATE_GUID": "it belongs to the FMU with GUID %s, not this one (%s)",
+    "STATE_PHASE": "its phase %u is not one of this FMU's",
+    "STATE_CLOCK": "its time %s s, start time %s s or flags are not valid",
+    "STATE_START": "its %s",
+    "STATE_BEFORE_INIT": "its time is %s s before initialisation, not its start time %s s",
+    "STATE_VALUE": "its value of %s is not a valid %s",
+    "STATE_INPUT": "its %s",
+    "STATE_MODEL_SIZE": "its model part has the wrong size",
+    "STATE_MODEL_PHASE": "its model part does not fit its phase",
+    "STATE_NO_REASON": "its phase is error without the reason: it would refuse every call "
+                       "without saying why",
+    "STATE_REASON_PHASE": "it holds an error reason, but its phase is %s",
+    "STATE_REASON_NUL": "its error reason holds a NUL byte",
+    "STATE_PARAMETERS": "its parameters do not build a model: %s",
+    "STATE_MODEL_SHORT": "its model part is %lu bytes, shorter than its header",
+    "STATE_MODEL_FLAG": "flag %d of its model part is %d, not 0 or 1",
+    "STATE_MODEL_CLOCK": "its time is %s s from a start at %s s, but its model is at %s s from "
+                         "a start at %s s",
+    "STATE_MODEL_OUTPUTS": "the outputs it shows are not its model's",
 }
 
-#: Serialized FMU states of the native FMU start with these bytes, then this version.
+# -- the FMI 2.0 co-simulation state machine ------------------------------------------------
+#: The phases both FMUs can be in, in the order of their numbers (a state's phase field, the
+#: bit of a call mask), with what each is as a refusal says it ("the FMU is ..."). FMI 2.0's
+#: stepComplete is "running": a step always completes (no stepInProgress, stepFailed or
+#: stepCanceled). "error" is FMI's error state: the parameters were refused at
+#: fmi2ExitInitializationMode (no model to step), or a failure left none (out of memory,
+#: outputs that are not finite); reset, or set an FMU state, to leave it. A call refused for
+#: its arguments or its phase changes nothing, the phase included, so a host may correct it
+#: and call again (more than FMI 2.0 promises after fmi2Error, never less).
+PHASES: dict[str, str] = {
+    "instantiated": "instantiated (call fmi2SetupExperiment and fmi2EnterInitializationMode "
+                    "first)",
+    "initialisation": "in initialisation mode (call fmi2ExitInitializationMode first)",
+    "running": "running (initialisation ended; fmi2Reset starts over)",
+    "terminated": "terminated (fmi2Reset starts over)",
+    "error": "in the error state",
+}
+
+
+class Phase:
+    """The phases by number (plain ints: the slave compares them on its hot path)."""
+
+    INSTANTIATED, INITIALISATION, RUNNING, TERMINATED, ERROR = range(5)
+    NAMES = tuple(PHASES)
+
+
+_ALL = tuple(PHASES)
+_GETTERS = ("initialisation", "running", "terminated", "error")
+_SETTERS = ("instantiated", "initialisation", "running")
+#: Per FMI call, the phases that allow it: FMI 2.0.4, section 4.2.4 (the table of the
+#: co-simulation state machine), as the Reference-FMUs' masks have it. A call its phase does
+#: not allow is refused (fmi2Error) with :data:`MESSAGES` REFUSED and the phase's text.
+CALLS: dict[str, tuple[str, ...]] = {
+    "fmi2SetDebugLogging": _ALL,
+    "fmi2SetupExperiment": ("instantiated",),
+    "fmi2EnterInitializationMode": ("instantiated",),
+    "fmi2ExitInitializationMode": ("initialisation",),
+    "fmi2Terminate": ("running",),
+    "fmi2Reset": _ALL,
+    **{f"fmi2Get{kind}": _GETTERS for kind in ("Real", "Integer", "Boolean", "String")},
+    **{f"fmi2Set{kind}": _SETTERS for kind in ("Real", "Integer", "Boolean", "String")},
+    **{call: _ALL for call in ("fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate",
+                               "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate",
+                               "fmi2DeSerializeFMUstate")},
+    "fmi2GetDirectionalDerivative": _GETTERS,
+    "fmi2SetRealInputDerivatives": _SETTERS,
+    "fmi2GetRealOutputDerivatives": ("running", "terminated", "error"),
+    "fmi2DoStep": ("running",),
+    # FMI allows it in stepInProgress only, which never occurs; while running it is refused
+    # for that reason (no step is pending) rather than for the phase
+    "fmi2CancelStep": ("running",),
+    **{f"fmi2Get{kind}Status": ("running", "terminated")
+       for kind in ("", "Real", "Integer", "Boolean", "String")},
+}
+#: The calls pythonfmu's wrapper (and the Python FMU's Linux guard in front of it) answers
+#: without asking the slave: there the Python FMU follows pythonfmu, not this table (the FMU
+#: state calls among them are allowed in every phase anyway).
+PYTHONFMU_ANSWERS = ("fmi2SetDebugLogging", "fmi2Reset", "fmi2FreeFMUstate",
+                     "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate",
+                     "fmi2DeSerializeFMUstate", "fmi2GetDirectionalDerivative",
+                     "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives",
+                     "fmi2CancelStep", "fmi2GetStatus", "fmi2GetRealStatus",
+                     "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus")
+
+
+def call_mask(call: str) -> int:
+    """The phases that allow ``call``, one bit per phase (bit i: phase number i)."""
+    return sum(1 << Phase.NAMES.index(phase) for phase in CALLS[call])
+
+
+#: Each call's mask, as the slave checks it: ``CALL_MASKS[call] >> phase & 1``.
+CALL_MASKS: dict[str, int] = {call: call_mask(call) for call in CALLS}
+
+
+def phase_refusal(phase: int, reason: str = "") -> str:
+    """Why a call the phase does not allow is refused: the phase, or in the error state
+    the reason the FMU is there."""
+    if phase == Phase.ERROR:
+        return reason or MESSAGES["ERROR_STATE"]
+    return MESSAGES["PHASE"] % PHASES[Phase.NAMES[phase]]
+
+
+# -- the FMU state: one byte format for both FMUs ----------------------------------------------
+#: Serialized FMU states start with these bytes, then this version.
 STATE_MAGIC = "TIREFMUS"
-STATE_VERSION = 2
+STATE_VERSION = 3
+#: The longest GUID a state holds (its field is NUL padded to STATE_GUID_BYTES).
+STATE_GUID_BYTES = 48
+#: The fields of a state in order: (name, struct format or a size rule, meaning). Little-
+#: endian, no padding. An FMU state *is* these bytes (fmi2GetFMUstate makes them, serialize
+#: copies them), in both FMUs; each puts its own GUID, and refuses a state of another.
+STATE_LAYOUT = (
+    ("magic", "8s", "STATE_MAGIC"),
+    ("version", "<I", "STATE_VERSION"),
+    ("phase", "<I", "the phase's number (PHASES)"),
+    ("guid", f"{STATE_GUID_BYTES}s", "the GUID of the FMU that made it, NUL padded"),
+    ("size", "<Q", "the state's size in bytes, this header and the checksum included"),
+    ("time", "<d", "the last communication point (s; the start time before initialisation)"),
+    ("start_time", "<d", "the start time (s)"),
+    ("stale", "<I", "1 if inputs were set since the outputs were computed, else 0"),
+    ("reason_size", "<I", "bytes of the error reason (0 unless the phase is error)"),
+    ("values", "<V d", "every variable's value by value reference (Integer and Boolean exact)"),
+    ("model_size", "<Q", "bytes of the model part (0 unless running or terminated)"),
+    ("model", "model_size", "the model part: int32 zone warning armed, int32 in contact (the "
+                            "last in_contact an event was logged for), then the step kernel's "
+                            "state (kernel.c's kernel_state_write)"),
+    ("reason", "reason_size", "the error reason, UTF-8 without NUL"),
+    ("checksum", "<I", "CRC-32 (zlib's, IEEE 802.3) of every byte before it"),
+)
+#: Bytes before the values, and the model part's two int32 flags.
+STATE_HEAD = 8 + 4 + 4 + STATE_GUID_BYTES + 8 + 8 + 8 + 4 + 4
+STATE_MODEL_FLAGS = 2
+
+
+def state_fixed_size(n_values: int) -> int:
+    """A state's size without its model part and reason."""
+    return STATE_HEAD + 8 * n_values + 8 + 4
+
+
+def state_checksum(data: bytes) -> int:
+    """The checksum of a state: CRC-32 of ``data`` (every byte before the checksum field).
+    It finds any change of up to 32 consecutive bits for sure, any other with probability
+    1 - 2^-32; anyone can recompute it, so a state is also checked for what it means."""
+    return zlib.crc32(data) & 0xFFFFFFFF
+
+
+def state_pack(phase: int, guid: str, time: float, start_time: float, stale: bool,
+               values, model: bytes = b"", reason: str = "") -> bytes:
+    """The state bytes of these fields (both FMUs write exactly these)."""
+    guid_bytes = guid.encode()
+    reason_bytes = reason.encode()
+    if len(guid_bytes) >= STATE_GUID_BYTES:
+        raise ValueError(f"GUID {guid!r}: at most {STATE_GUID_BYTES - 1} bytes")
+    size = state_fixed_size(len(values)) + len(model) + len(reason_bytes)
+    body = b"".join([
+        struct.pack(f"<8sII{STATE_GUID_BYTES}sQddII", STATE_MAGIC.encode(), STATE_VERSION,
+                    phase, guid_bytes, size, time, start_time, int(stale), len(reason_bytes)),
+        struct.pack(f"<{len(values)}d", *(float(v) for v in values)),
+        struct.pack("<Q", len(model)), model, reason_bytes])
+    return body + struct.pack("<I", state_checksum(body))
+
+
+def state_unpack(data: bytes, n_values: int) -> dict:
+    """The fields of state bytes whose sizes are sound (see :data:`STATE_LAYOUT`; the checks
+    of what they hold are the FMUs')."""
+    (magic, version, phase, guid, size, time, start, stale,
+     reason_size) = struct.unpack_from(f"<8sII{STATE_GUID_BYTES}sQddII", data, 0)
+    values = struct.unpack_from(f"<{n_values}d", data, STATE_HEAD)
+    at = STATE_HEAD + 8 * n_values
+    (model_size,) = struct.unpack_from("<Q", data, at)
+    model = data[at + 8:at + 8 + model_size]
+    reason = data[at + 8 + model_size:len(data) - 4]
+    (checksum,) = struct.unpack_from("<I", data, len(data) - 4)
+    return {"magic": magic, "version": version, "phase": phase,
+            "guid": guid.rstrip(b"\0").decode(errors="replace"), "size": size, "time": time,
+            "start_time": start, "stale": stale, "reason_size": reason_size, "values": values,
+            "model_size": model_size, "model": model, "model_at": at + 8, "reason": reason,
+            "checksum": checksum}
+
+
+def state_reseal(data: bytes) -> bytes:
+    """State bytes with their checksum recomputed (a tool to forge states in tests: setting
+    one checks what it means)."""
+    return data[:-4] + struct.pack("<I", state_checksum(data[:-4]))
+
 #: Log categories of the native FMU (model description and C), and what each carries.
 LOG_CATEGORIES = {
     "logEvents": "the tread leaving the road and coming back (status OK, information)",
@@ -209,8 +442,6 @@ VALUE_REFERENCES = {"INPUTS_FIRST": INPUTS.start, "N_INPUTS": INPUTS.stop - INPU
 
 def fmu_message(text: str) -> str:
     """A core message in the FMU's names for the parameters and for "no limit"."""
-    import re
-
     for core, fmu in FMU_WORDING:
         text = re.sub(rf"\b{core}\b", fmu, text)
     return re.sub(r"^((?:f_max|n_modes) = .*) or None\b", rf"\1 or {FMU_UNSET}", text)
@@ -227,6 +458,21 @@ def _c_number(value: float | int) -> str:
     if not math.isfinite(value):
         raise ValueError(f"{value!r}: the spec holds finite numbers only")
     return repr(value)  # reads back to the same double
+
+
+def _crc32_table() -> list[int]:
+    table = []
+    for n in range(256):
+        c = n
+        for _ in range(8):
+            c = 0xEDB88320 ^ (c >> 1) if c & 1 else c >> 1
+        table.append(c)
+    return table
+
+
+def _c_call(call: str) -> str:
+    """fmi2GetFMUstate -> SPEC_CALL_GET_FMUSTATE."""
+    return "SPEC_CALL_" + re.sub(r"(?<=[a-z])(?=[A-Z])", "_", call[4:]).upper()
 
 
 def _c_string(text: str) -> str:
@@ -300,6 +546,30 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     lines += ["};", ""]
     lines.append(f"#define SPEC_STATE_MAGIC {_c_string(STATE_MAGIC)}")
     lines.append(f"#define SPEC_STATE_VERSION {STATE_VERSION}")
+    lines.append(f"#define SPEC_STATE_GUID_BYTES {STATE_GUID_BYTES}")
+    lines.append(f"#define SPEC_STATE_HEAD {STATE_HEAD}")
+    lines.append(f"#define SPEC_STATE_MODEL_FLAGS {STATE_MODEL_FLAGS}")
+    lines += ["", "/* the FMI state machine: phases by number, and per call the phases that allow "
+              "it (bit i: phase i) */", f"#define SPEC_N_PHASES {len(PHASES)}"]
+    for number, name in enumerate(PHASES):
+        lines.append(f"#define SPEC_PHASE_{name.upper()} {number}")
+    lines.append("static const char* const SPEC_PHASE_TEXT[SPEC_N_PHASES] = {")
+    lines += [f"    {_c_string(text)}," for text in PHASES.values()]
+    lines += ["};", "static const char* const SPEC_PHASE_NAME[SPEC_N_PHASES] = {"]
+    lines += [f"    {_c_string(name)}," for name in PHASES]
+    lines += ["};", "typedef enum {"]
+    lines += [f"    {_c_call(call)}," for call in CALLS]
+    lines += ["    SPEC_N_CALLS", "} SpecCall;",
+              "static const struct {", "    const char* name;", "    unsigned phases;",
+              "} SPEC_CALLS[SPEC_N_CALLS] = {"]
+    lines += [f"    {{{_c_string(call)}, {CALL_MASKS[call]}u}}," for call in CALLS]
+    lines += ["};", "", "/* CRC-32 (zlib's) of a state, byte by byte: crc = table[(crc ^ b) & "
+              "0xff] ^ (crc >> 8), from 0xffffffff, then inverted */",
+              "static const unsigned long SPEC_CRC32_TABLE[256] = {"]
+    table = _crc32_table()
+    lines += ["    " + " ".join(f"{x:#010x}ul," for x in table[i:i + 6])
+              for i in range(0, 256, 6)]
+    lines += ["};"]
     lines.append(f"#define SPEC_N_LOG_CATEGORIES {len(LOG_CATEGORIES)}")
     lines.append("static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {")
     lines += [f"    {_c_string(name)}," for name in LOG_CATEGORIES]

@@ -41,7 +41,7 @@ N_INPUTS, N_OUTPUTS = 4, 6
 #: a step's report (kernel.h): the outputs, the time, whether the footprint is at a zone end
 REPORT, REPORT_TIME, REPORT_ZONE_EDGE = N_OUTPUTS + 2, N_OUTPUTS, N_OUTPUTS + 1
 REFUSED = -3
-_WHY_SIZE = 512
+_WHY_SIZE = 2048  # as fmi2_layer.c's messages: the two FMUs quote a state's problems alike
 
 
 class KernelUnavailable(RuntimeError):

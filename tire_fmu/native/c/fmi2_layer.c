@@ -1,19 +1,21 @@
 /* fmi2_layer.c: the generic FMI 2.0 co-simulation layer (no tire in it; see model.h).
  *
- * Which call is allowed in which phase is one table (CALLS) checked by one macro (ENTER) at
- * the top of every function, as the Reference-FMUs keep it. A refused call logs why (status
- * error, category logStatusError) and changes nothing. Every message is formatted here and
- * handed to the host as the argument of a constant "%s" format: a host's logger treats its
- * format as printf's, so no text, host-given or computed, is ever read as one.
+ * Which call is allowed in which phase is one table, SPEC_CALLS in spec.h (generated from
+ * tire_fmu/fmu/spec.py's CALLS, which the Python FMU's slave reads too), checked by one macro
+ * (ENTER) at the top of every function, as the Reference-FMUs keep it. A refused call logs why
+ * (status error, category logStatusError) with the spec's texts and changes nothing. Every
+ * message is formatted here and handed to the host as the argument of a constant "%s"
+ * format: a host's logger treats its format as printf's, so no text, host-given or computed,
+ * is ever read as one.
  *
  * Statuses (docs/native.md): fmi2Error for every refused call (a call the phase does not
  * allow, an unknown value reference or wrong type, setting an output or a fixed parameter after
- * initialisation, a non-finite input, a doStep at another time than the last communication
- * point or with NaN, h <= 0, a step or start time the clock cannot resolve, bad parameters at
- * fmi2ExitInitializationMode, an FMU state that is damaged, of another FMU, holds non-finite
- * values or does not mean a state of this tire); fmi2Warning from the doStep whose
- * footprint first reaches the end of the contact zone; fmi2OK otherwise (losing contact
- * included: it is the physics of a unilateral contact). */
+ * initialisation, an input that is not finite or beyond its limit, a doStep at another time
+ * than the last communication point or with NaN, h <= 0, a step or start time the clock cannot
+ * resolve, bad parameters at fmi2ExitInitializationMode (then the error state), an FMU state
+ * that is damaged, of another FMU, or does not mean a state of this tire); fmi2OK otherwise
+ * (losing contact and the footprint at the end of the zone included: the one is physics, the
+ * other a warning logged once). */
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,44 +32,6 @@ typedef char export_matches_spec[sizeof EXPORT_START_VALUES / sizeof EXPORT_STAR
 
 #define MESSAGE_SIZE 2048
 
-typedef enum {
-    PHASE_INSTANTIATED = 1,
-    PHASE_INITIALISATION = 2,
-    PHASE_RUNNING = 4,
-    PHASE_TERMINATED = 8
-} Phase;
-
-#define ANY_PHASE (PHASE_INSTANTIATED | PHASE_INITIALISATION | PHASE_RUNNING | PHASE_TERMINATED)
-
-typedef enum {
-    CALL_SET_DEBUG_LOGGING, CALL_SETUP_EXPERIMENT, CALL_ENTER_INITIALIZATION,
-    CALL_EXIT_INITIALIZATION, CALL_TERMINATE, CALL_RESET, CALL_GET, CALL_SET,
-    CALL_FMU_STATE, CALL_DIRECTIONAL_DERIVATIVE, CALL_INPUT_DERIVATIVES,
-    CALL_OUTPUT_DERIVATIVES, CALL_DO_STEP, CALL_CANCEL_STEP, CALL_STATUS
-} Call;
-
-/* FMI 2.0, section 4.2.4 (the co-simulation state machine) */
-static const struct {
-    const char* name;
-    unsigned phases;
-} CALLS[] = {
-    {"fmi2SetDebugLogging", ANY_PHASE},
-    {"fmi2SetupExperiment", PHASE_INSTANTIATED},
-    {"fmi2EnterInitializationMode", PHASE_INSTANTIATED},
-    {"fmi2ExitInitializationMode", PHASE_INITIALISATION},
-    {"fmi2Terminate", PHASE_RUNNING},
-    {"fmi2Reset", ANY_PHASE},
-    {"fmi2Get*", PHASE_INITIALISATION | PHASE_RUNNING | PHASE_TERMINATED},
-    {"fmi2Set*", PHASE_INSTANTIATED | PHASE_INITIALISATION | PHASE_RUNNING},
-    {"the FMU state functions", ANY_PHASE},
-    {"fmi2GetDirectionalDerivative", PHASE_INITIALISATION | PHASE_RUNNING | PHASE_TERMINATED},
-    {"fmi2SetRealInputDerivatives", PHASE_INSTANTIATED | PHASE_INITIALISATION | PHASE_RUNNING},
-    {"fmi2GetRealOutputDerivatives", PHASE_RUNNING | PHASE_TERMINATED},
-    {"fmi2DoStep", PHASE_RUNNING},
-    {"fmi2CancelStep", PHASE_RUNNING},
-    {"fmi2Get*Status", PHASE_RUNNING | PHASE_TERMINATED},
-};
-
 typedef struct {
     fmi2CallbackLogger logger;
     fmi2ComponentEnvironment environment;
@@ -75,24 +39,18 @@ typedef struct {
     Memory mem;
     int logging_on;
     unsigned categories;  /* bit i: SPEC_LOG_CATEGORIES[i] */
-    Phase phase;
-    const char* broken;   /* an internal failure, what it was (NULL: none): only a reset helps */
+    int phase;            /* SPEC_PHASE_... */
+    char* reason;         /* in the error phase: why (NULL: none given) */
     double time, start_time;
     int stale;            /* inputs set since the outputs were computed */
     double values[SPEC_N_VARIABLES];
     Model* model;
+    /* while the model builds: whether its parameter problems are collected, them ("; "
+     * between them), how many, and whether its messages reach the host */
+    int collecting;
+    char* problems;
+    int n_problems, quiet;
 } Instance;
-
-static const char* phase_text(Phase phase)
-{
-    switch (phase) {
-    case PHASE_INSTANTIATED: return "instantiated (fmi2EnterInitializationMode comes next)";
-    case PHASE_INITIALISATION: return "in initialization mode (fmi2ExitInitializationMode "
-                                      "comes next)";
-    case PHASE_RUNNING: return "running (initialised; fmi2Reset starts over)";
-    default: return "terminated (fmi2Reset starts over)";
-    }
-}
 
 static int category_index(const char* category)
 {
@@ -117,34 +75,139 @@ static void deliver(const Instance* inst, fmi2Status status, const char* categor
     inst->logger(inst->environment, inst->name, status, category, "%s", message);
 }
 
-static void log_message(const Instance* inst, fmi2Status status, const char* format, ...)
+/* a formatted text of any length: in `fixed` when it fits, else in memory of the host's
+ * (released with release_text) */
+static char* format_text(const Instance* inst, char* fixed, size_t size, const char* format,
+                         va_list args)
 {
-    char message[MESSAGE_SIZE];
+    va_list again;
+    int needed;
+    char* text;
+    va_copy(again, args);
+    needed = vsnprintf(fixed, size, format, args);
+    if (needed < 0 || (size_t)needed < size) {
+        va_end(again);
+        return fixed;
+    }
+    text = (char*)inst->mem.allocate((size_t)needed + 1, 1);
+    if (text == NULL) {  /* the start of it, then */
+        va_end(again);
+        return fixed;
+    }
+    vsnprintf(text, (size_t)needed + 1, format, again);
+    va_end(again);
+    return text;
+}
+
+static void release_text(const Instance* inst, char* text, const char* fixed)
+{
+    if (text != fixed) inst->mem.release(text);
+}
+
+static char* new_text(const Instance* inst, const char* format, ...)
+{
+    char fixed[MESSAGE_SIZE], *text, *copy;
     va_list args;
     va_start(args, format);
-    vsnprintf(message, sizeof message, format, args);
+    text = format_text(inst, fixed, sizeof fixed, format, args);
+    va_end(args);
+    if (text != fixed) return text;
+    copy = (char*)inst->mem.allocate(strlen(fixed) + 1, 1);
+    if (copy != NULL) memcpy(copy, fixed, strlen(fixed) + 1);
+    return copy;
+}
+
+static void log_message(const Instance* inst, fmi2Status status, const char* format, ...)
+{
+    char fixed[MESSAGE_SIZE], *message;
+    va_list args;
+    va_start(args, format);
+    message = format_text(inst, fixed, sizeof fixed, format, args);
     va_end(args);
     deliver(inst, status, status == fmi2OK ? "logAll"
                       : status == fmi2Warning ? "logStatusWarning" : "logStatusError",
             message);
+    release_text(inst, message, fixed);
 }
 
+/* a refused call: SPEC_MSG_REFUSED (the call, why; nothing changed) */
+static fmi2Status refuse(const Instance* inst, const char* call, const char* why)
+{
+    log_message(inst, fmi2Error, SPEC_MSG_REFUSED, call, why);
+    return fmi2Error;
+}
+
+static void append_problem(Instance* inst, const char* text)
+{
+    size_t used = inst->problems ? strlen(inst->problems) : 0, size = used + strlen(text) + 3;
+    char* grown = (char*)inst->mem.allocate(size, 1);
+    if (grown == NULL) return;
+    if (inst->problems) {
+        memcpy(grown, inst->problems, used);
+        memcpy(grown + used, "; ", 2);
+        used += 2;
+        inst->mem.release(inst->problems);
+    }
+    memcpy(grown + used, text, strlen(text) + 1);
+    inst->problems = grown;
+    inst->n_problems++;
+}
+
+/* the model's messages; while it builds, its parameter problems (SPEC_MSG_PROBLEM_LINE) are
+ * also collected for the reason of a refusal */
 static void model_log(void* layer, int status, const char* category, const char* message)
 {
-    deliver((const Instance*)layer, (fmi2Status)status, category, message);
+    Instance* inst = (Instance*)layer;
+    int number, count, offset = -1;
+    if (inst->collecting && status >= fmi2Error &&
+        sscanf(message, "parameter problem %d/%d: %n", &number, &count, &offset) == 2 &&
+        offset > 0) {
+        append_problem(inst, message + offset);
+    }
+    if (!inst->quiet) deliver(inst, (fmi2Status)status, category, message);
 }
 
-static int allowed(Instance* inst, Call call)
+static void start_collecting(Instance* inst, int quiet)
 {
-    if (inst->broken && call != CALL_RESET && call != CALL_FMU_STATE &&
-        call != CALL_SET_DEBUG_LOGGING) {
-        log_message(inst, fmi2Error, "%s refused: the FMU failed earlier (%s); reset it or "
-                    "set an FMU state", CALLS[call].name, inst->broken);
-        return 0;
+    inst->collecting = 1;
+    inst->problems = NULL;
+    inst->n_problems = 0;
+    inst->quiet = quiet;
+}
+
+static void stop_collecting(Instance* inst)
+{
+    if (inst->problems) inst->mem.release(inst->problems);
+    inst->problems = NULL;
+    inst->n_problems = 0;
+    inst->collecting = inst->quiet = 0;
+}
+
+static void set_reason(Instance* inst, char* reason)
+{
+    if (inst->reason) inst->mem.release(inst->reason);
+    inst->reason = reason;
+}
+
+/* an internal failure: the error state, with why, logged (SPEC_MSG_FAILED) */
+static fmi2Status fail(Instance* inst, const char* what, const char* cause)
+{
+    inst->phase = SPEC_PHASE_ERROR;
+    set_reason(inst, new_text(inst, SPEC_MSG_FAILED, what, cause));
+    log_message(inst, fmi2Error, "%s", inst->reason ? inst->reason : SPEC_MSG_ERROR_STATE);
+    return fmi2Error;
+}
+
+static int allowed(Instance* inst, SpecCall call)
+{
+    if (SPEC_CALLS[call].phases & (1u << inst->phase)) return 1;
+    if (inst->phase == SPEC_PHASE_ERROR) {
+        refuse(inst, SPEC_CALLS[call].name, inst->reason ? inst->reason : SPEC_MSG_ERROR_STATE);
+    } else {
+        char why[512];
+        snprintf(why, sizeof why, SPEC_MSG_PHASE, SPEC_PHASE_TEXT[inst->phase]);
+        refuse(inst, SPEC_CALLS[call].name, why);
     }
-    if (CALLS[call].phases & (unsigned)inst->phase) return 1;
-    log_message(inst, fmi2Error, "%s refused: the FMU is %s; nothing changed",
-                CALLS[call].name, phase_text(inst->phase));
     return 0;
 }
 
@@ -163,10 +226,10 @@ static void start_values(Instance* inst)
 {
     memcpy(inst->values, EXPORT_START_VALUES, sizeof inst->values);
     model_preview(inst->values, inst->values);
-    inst->phase = PHASE_INSTANTIATED;
+    inst->phase = SPEC_PHASE_INSTANTIATED;
     inst->time = inst->start_time = 0.0;
     inst->stale = 0;
-    inst->broken = 0;
+    set_reason(inst, NULL);
 }
 
 static ModelHost host_of(Instance* inst)
@@ -192,6 +255,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     probe.logger = functions != NULL ? functions->logger : NULL;
     probe.environment = functions != NULL ? functions->componentEnvironment : NULL;
     probe.name = (char*)name;
+    probe.mem.allocate = functions != NULL && functions->allocateMemory != NULL
+                             ? functions->allocateMemory : default_allocate;
+    probe.mem.release = functions != NULL && functions->freeMemory != NULL
+                            ? functions->freeMemory : free;
     if (fmuType != fmi2CoSimulation) {
         log_message(&probe, fmi2Error, "fmi2Instantiate refused: %s is a co-simulation FMU "
                     "(it has no model-exchange interface)", EXPORT_MODEL_IDENTIFIER);
@@ -203,10 +270,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                     fmuGUID != NULL ? fmuGUID : "(null)", EXPORT_GUID);
         return NULL;
     }
-    probe.mem.allocate = functions != NULL && functions->allocateMemory != NULL
-                             ? functions->allocateMemory : default_allocate;
-    probe.mem.release = functions != NULL && functions->freeMemory != NULL
-                            ? functions->freeMemory : free;
     inst = (Instance*)probe.mem.allocate(1, sizeof(Instance));
     if (inst == NULL) {
         log_message(&probe, fmi2Error, "fmi2Instantiate: out of memory");
@@ -241,6 +304,8 @@ void fmi2FreeInstance(fmi2Component c)
     if (inst == NULL) return;
     release = inst->mem.release;
     model_destroy(inst->model);
+    set_reason(inst, NULL);
+    stop_collecting(inst);
     release(inst->name);
     release(inst);
 }
@@ -254,7 +319,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 {
     unsigned mask = 0;
     size_t i;
-    ENTER(CALL_SET_DEBUG_LOGGING);
+    ENTER(SPEC_CALL_SET_DEBUG_LOGGING);
     if (nCategories > 0 && categories == NULL) {
         log_message(inst, fmi2Error, "fmi2SetDebugLogging refused: %lu categories but no "
                     "array; logging unchanged", (unsigned long)nCategories);
@@ -282,31 +347,29 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
                                fmi2Real tolerance, fmi2Real startTime,
                                fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
-    char a[40], b[40];
-    ENTER(CALL_SETUP_EXPERIMENT);
-    (void)tolerance;
+    char a[40], b[40], why[512];
+    const char* call = "fmi2SetupExperiment";
+    ENTER(SPEC_CALL_SETUP_EXPERIMENT);
+    number(a, startTime);
     if (!isfinite(startTime)) {
-        number(a, startTime);
-        log_message(inst, fmi2Error, "fmi2SetupExperiment refused: startTime = %s s: must be "
-                    "finite; nothing changed", a);
-        return fmi2Error;
+        snprintf(why, sizeof why, SPEC_MSG_START_NOT_FINITE, a);
+        return refuse(inst, call, why);
     }
     if (!clock_resolves(startTime, SPEC_MAX_STEP_S)) {
-        char text[512];
-        number(a, startTime);
-        snprintf(text, sizeof text, SPEC_MSG_START_UNRESOLVED, a,
+        snprintf(why, sizeof why, SPEC_MSG_START_UNRESOLVED, a,
                  clock_resolved_until(SPEC_MAX_STEP_S) - SPEC_MAX_STEP_S, SPEC_MAX_STEP_S);
-        log_message(inst, fmi2Error, "fmi2SetupExperiment refused: %s; nothing changed", text);
-        return fmi2Error;
+        return refuse(inst, call, why);
     }
-    if (stopTimeDefined && !(stopTime >= startTime)) {
-        number(a, stopTime);
-        number(b, startTime);
-        log_message(inst, fmi2Error, "fmi2SetupExperiment refused: stopTime = %s s: must be "
-                    ">= startTime = %s s; nothing changed", a, b);
-        return fmi2Error;
+    if (stopTimeDefined && !(isfinite(stopTime) && stopTime >= startTime)) {
+        number(b, stopTime);
+        snprintf(why, sizeof why, SPEC_MSG_STOP_TIME, b, a);
+        return refuse(inst, call, why);
     }
-    (void)toleranceDefined;
+    if (toleranceDefined && !(isfinite(tolerance) && tolerance > 0.0)) {
+        number(b, tolerance);
+        snprintf(why, sizeof why, SPEC_MSG_TOLERANCE, b);
+        return refuse(inst, call, why);
+    }
     inst->start_time = startTime;
     inst->time = startTime;
     return fmi2OK;
@@ -314,8 +377,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined,
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
-    ENTER(CALL_ENTER_INITIALIZATION);
-    inst->phase = PHASE_INITIALISATION;
+    ENTER(SPEC_CALL_ENTER_INITIALIZATION_MODE);
+    inst->phase = SPEC_PHASE_INITIALISATION;
     return fmi2OK;
 }
 
@@ -330,15 +393,23 @@ static int any_input_set(const double* values)
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
-    ENTER(CALL_EXIT_INITIALIZATION);
-    if (model_initialise(inst->model, inst->values, inst->start_time, inst->values) != MODEL_OK) {
-        log_message(inst, fmi2Error, "fmi2ExitInitializationMode refused: the parameters "
-                    "listed above cannot build the model; the FMU stays in initialization "
-                    "mode (set valid parameters and call fmi2ExitInitializationMode again, or "
-                    "reset it)");
+    int status;
+    ENTER(SPEC_CALL_EXIT_INITIALIZATION_MODE);
+    start_collecting(inst, 0);
+    status = model_initialise(inst->model, inst->values, inst->start_time, inst->values);
+    if (status != MODEL_OK) {
+        /* no model to step: FMI's error state, every later refusal saying why */
+        inst->phase = SPEC_PHASE_ERROR;
+        set_reason(inst, new_text(inst, SPEC_MSG_PARAMETERS_REFUSED,
+                                  inst->n_problems,
+                                  inst->problems ? inst->problems : ""));
+        stop_collecting(inst);
+        log_message(inst, fmi2Error, SPEC_MSG_EXIT_REFUSED,
+                    inst->reason ? inst->reason : SPEC_MSG_ERROR_STATE);
         return fmi2Error;
     }
-    inst->phase = PHASE_RUNNING;
+    stop_collecting(inst);
+    inst->phase = SPEC_PHASE_RUNNING;
     inst->time = inst->start_time;
     inst->stale = any_input_set(inst->values);  /* inputs set before feed through */
     return fmi2OK;
@@ -346,8 +417,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 
 fmi2Status fmi2Terminate(fmi2Component c)
 {
-    ENTER(CALL_TERMINATE);
-    inst->phase = PHASE_TERMINATED;
+    ENTER(SPEC_CALL_TERMINATE);
+    inst->phase = SPEC_PHASE_TERMINATED;
     return fmi2OK;
 }
 
@@ -355,7 +426,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 {
     ModelHost host;
     Model* fresh;
-    ENTER(CALL_RESET);
+    ENTER(SPEC_CALL_RESET);
     host = host_of(inst);
     fresh = model_create(&host);
     if (fresh == NULL) {
@@ -375,7 +446,6 @@ static const char* type_name(SpecType type)
     return type == SPEC_REAL ? "Real" : type == SPEC_INTEGER ? "Integer" : "Boolean";
 }
 
-/* why vr cannot be used as type (NULL when it can) */
 /* The largest magnitude an input may have: a position (m) or a rate (m/s). NaN fails the
  * comparison with it, so one test refuses both. */
 static double input_limit(const SpecVariable* v)
@@ -384,19 +454,30 @@ static double input_limit(const SpecVariable* v)
                                                    : SPEC_MAX_DISPLACEMENT_M;
 }
 
-static const char* reference_problem(const Instance* inst, fmi2ValueReference vr, SpecType type,
-                                     char* why, size_t size)
+/* why input v cannot take x (SPEC_MSG_INPUT_RANGE), or NULL */
+static const char* input_problem(const SpecVariable* v, double x, char* why, size_t size)
 {
-    (void)inst;
+    char text[40];
+    double limit = input_limit(v);
+    if (fabs(x) <= limit) return NULL;
+    number(text, x);  /* as the core's StepError shows it: repr, then the unit */
+    snprintf(why, size, SPEC_MSG_INPUT_RANGE, v->name, text, v->unit, limit, limit, v->unit);
+    return why;
+}
+
+/* why vr cannot be used as type (NULL when it can) */
+static const char* reference_problem(fmi2ValueReference vr, SpecType type, char* why,
+                                     size_t size)
+{
     if (vr >= SPEC_N_VARIABLES) {
-        snprintf(why, size, "value reference %u does not exist (%s has %d variables)",
-                 (unsigned)vr, EXPORT_MODEL_IDENTIFIER, SPEC_N_VARIABLES);
+        snprintf(why, size, SPEC_MSG_REFERENCE_MISSING, (unsigned)vr, EXPORT_MODEL_IDENTIFIER,
+                 SPEC_N_VARIABLES);
         return why;
     }
     if (SPEC_VARIABLES[vr].type != type) {
-        snprintf(why, size, "%s has FMI type %s: use fmi2Get%s and fmi2Set%s",
-                 SPEC_VARIABLES[vr].name, type_name(SPEC_VARIABLES[vr].type),
-                 type_name(SPEC_VARIABLES[vr].type), type_name(SPEC_VARIABLES[vr].type));
+        const char* name = type_name(SPEC_VARIABLES[vr].type);
+        snprintf(why, size, SPEC_MSG_REFERENCE_TYPE, (unsigned)vr, SPEC_VARIABLES[vr].name,
+                 name, name, name);
         return why;
     }
     return NULL;
@@ -404,10 +485,9 @@ static const char* reference_problem(const Instance* inst, fmi2ValueReference vr
 
 static fmi2Status refresh(Instance* inst)
 {
-    if (inst->stale && inst->phase == PHASE_RUNNING) {
+    if (inst->stale && inst->phase == SPEC_PHASE_RUNNING) {
         if (model_refresh(inst->model, inst->values) != MODEL_OK) {
-            inst->broken = "out of memory";
-            return fmi2Error;
+            return fail(inst, SPEC_MSG_OUTPUTS_FAILED, SPEC_MSG_OUT_OF_MEMORY);
         }
         inst->stale = 0;
     }
@@ -419,15 +499,14 @@ static fmi2Status get_values(Instance* inst, const char* call, const fmi2ValueRe
 {
     char why[256];
     size_t i;
-    if (nvr > 0 && vr == NULL) {
-        log_message(inst, fmi2Error, "%s refused: %lu values but no value references", call,
+    if (nvr > 0 && (vr == NULL || out == NULL)) {
+        log_message(inst, fmi2Error, "%s refused: %lu values but no arrays", call,
                     (unsigned long)nvr);
         return fmi2Error;
     }
     for (i = 0; i < nvr; i++) {
-        if (reference_problem(inst, vr[i], type, why, sizeof why) != NULL) {
-            log_message(inst, fmi2Error, "%s refused: %s", call, why);
-            return fmi2Error;
+        if (reference_problem(vr[i], type, why, sizeof why) != NULL) {
+            return refuse(inst, call, why);
         }
     }
     if (refresh(inst) != fmi2OK) return fmi2Error;
@@ -438,8 +517,7 @@ static fmi2Status get_values(Instance* inst, const char* call, const fmi2ValueRe
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
-    ENTER(CALL_GET);
-    if (nvr > 0 && value == NULL) return fmi2Error;
+    ENTER(SPEC_CALL_GET_REAL);
     return get_values(inst, "fmi2GetReal", vr, nvr, SPEC_REAL, value);
 }
 
@@ -448,8 +526,9 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 {
     double out[SPEC_N_VARIABLES];
     size_t i, done;
-    ENTER(CALL_GET);
-    if (nvr > 0 && value == NULL) return fmi2Error;
+    ENTER(SPEC_CALL_GET_INTEGER);
+    if (nvr > 0 && value == NULL) return get_values(inst, "fmi2GetInteger", vr, nvr,
+                                                    SPEC_INTEGER, NULL);
     for (done = 0; done < nvr; done += SPEC_N_VARIABLES) {
         size_t count = nvr - done < SPEC_N_VARIABLES ? nvr - done : SPEC_N_VARIABLES;
         if (get_values(inst, "fmi2GetInteger", vr + done, count, SPEC_INTEGER, out) != fmi2OK) {
@@ -465,8 +544,9 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 {
     double out[SPEC_N_VARIABLES];
     size_t i, done;
-    ENTER(CALL_GET);
-    if (nvr > 0 && value == NULL) return fmi2Error;
+    ENTER(SPEC_CALL_GET_BOOLEAN);
+    if (nvr > 0 && value == NULL) return get_values(inst, "fmi2GetBoolean", vr, nvr,
+                                                    SPEC_BOOLEAN, NULL);
     for (done = 0; done < nvr; done += SPEC_N_VARIABLES) {
         size_t count = nvr - done < SPEC_N_VARIABLES ? nvr - done : SPEC_N_VARIABLES;
         if (get_values(inst, "fmi2GetBoolean", vr + done, count, SPEC_BOOLEAN, out) != fmi2OK) {
@@ -480,20 +560,20 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          fmi2String value[])
 {
-    ENTER(CALL_GET);
+    char why[256];
+    ENTER(SPEC_CALL_GET_STRING);
     (void)vr;
     (void)value;
     if (nvr == 0) return fmi2OK;
-    log_message(inst, fmi2Error, "fmi2GetString refused: %s has no String variables",
-                EXPORT_MODEL_IDENTIFIER);
-    return fmi2Error;
+    snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
+    return refuse(inst, "fmi2GetString", why);
 }
 
 /* set every value or, if one is refused, none */
 static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueReference vr[],
                              size_t nvr, SpecType type, const double* in)
 {
-    char why[256], text[40];
+    char why[512], text[40];
     size_t i;
     int inputs = 0;
     if (nvr > 0 && (vr == NULL || in == NULL)) {
@@ -503,12 +583,14 @@ static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueRe
     }
     for (i = 0; i < nvr; i++) {
         const SpecVariable* v;
-        if (reference_problem(inst, vr[i], type, why, sizeof why) != NULL) {
-            log_message(inst, fmi2Error, "%s refused: %s; nothing changed", call, why);
-            return fmi2Error;
+        if (reference_problem(vr[i], type, why, sizeof why) != NULL) {
+            return refuse(inst, call, why);
         }
         v = &SPEC_VARIABLES[vr[i]];
-        if (v->causality == SPEC_INPUT && fabs(in[i]) <= input_limit(v)) continue;  /* hot */
+        if (v->causality == SPEC_INPUT) {
+            if (input_problem(v, in[i], why, sizeof why) != NULL) return refuse(inst, call, why);
+            continue;
+        }
         /* as the Python FMU shows it (parameters.value_text) */
         if (type == SPEC_BOOLEAN) {
             snprintf(text, sizeof text, "%s", in[i] != 0.0 ? "True" : "False");
@@ -518,40 +600,29 @@ static fmi2Status set_values(Instance* inst, const char* call, const fmi2ValueRe
             value_text(in[i], v->unit, text, sizeof text);
         }
         if (v->causality == SPEC_OUTPUT) {
-            log_message(inst, fmi2Error, "%s refused: %s = %s: it is an output; nothing "
-                        "changed", call, v->name, text);
-            return fmi2Error;
+            snprintf(why, sizeof why, SPEC_MSG_OUTPUT_SET, v->name, text);
+            return refuse(inst, call, why);
         }
-        if (v->causality == SPEC_PARAMETER && inst->phase == PHASE_RUNNING) {
-            log_message(inst, fmi2Error, "%s refused: %s = %s: parameters are fixed after "
-                        "initialisation (they define the model built there); reset the FMU "
-                        "to change them; nothing changed", call, v->name, text);
-            return fmi2Error;
-        }
-        if (v->causality == SPEC_INPUT && !(fabs(in[i]) <= input_limit(v))) {
-            double limit = input_limit(v);
-            number(text, in[i]);  /* as the core's StepError shows it: repr, then the unit */
-            log_message(inst, fmi2Error, "%s refused: %s = %s %s: must be in [-%g, %g] %s; "
-                        "nothing changed", call, v->name, text, v->unit, limit, limit,
-                        v->unit);
-            return fmi2Error;
+        if (v->causality == SPEC_PARAMETER && inst->phase == SPEC_PHASE_RUNNING) {
+            snprintf(why, sizeof why, SPEC_MSG_PARAMETER_FIXED, v->name, text);
+            return refuse(inst, call, why);
         }
     }
     for (i = 0; i < nvr; i++) {
         inst->values[vr[i]] = in[i];
         if (SPEC_VARIABLES[vr[i]].causality == SPEC_INPUT) inputs = 1;
-        else if (vr[i] == SPEC_VR_LOAD && inst->phase != PHASE_RUNNING) {
+        else if (vr[i] == SPEC_VR_LOAD && inst->phase != SPEC_PHASE_RUNNING) {
             model_preview(inst->values, inst->values);
         }
     }
-    if (inputs && inst->phase == PHASE_RUNNING) inst->stale = 1;
+    if (inputs && inst->phase == SPEC_PHASE_RUNNING) inst->stale = 1;
     return fmi2OK;
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        const fmi2Real value[])
 {
-    ENTER(CALL_SET);
+    ENTER(SPEC_CALL_SET_REAL);
     return set_values(inst, "fmi2SetReal", vr, nvr, SPEC_REAL, value);
 }
 
@@ -560,7 +631,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 {
     double in[SPEC_N_VARIABLES];
     size_t i;
-    ENTER(CALL_SET);
+    ENTER(SPEC_CALL_SET_INTEGER);
     if (nvr > SPEC_N_VARIABLES || (nvr > 0 && value == NULL)) {
         log_message(inst, fmi2Error, "fmi2SetInteger refused: %lu values for %d variables",
                     (unsigned long)nvr, SPEC_N_VARIABLES);
@@ -575,7 +646,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 {
     double in[SPEC_N_VARIABLES];
     size_t i;
-    ENTER(CALL_SET);
+    ENTER(SPEC_CALL_SET_BOOLEAN);
     if (nvr > SPEC_N_VARIABLES || (nvr > 0 && value == NULL)) {
         log_message(inst, fmi2Error, "fmi2SetBoolean refused: %lu values for %d variables",
                     (unsigned long)nvr, SPEC_N_VARIABLES);
@@ -588,13 +659,13 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[])
 {
-    ENTER(CALL_SET);
+    char why[256];
+    ENTER(SPEC_CALL_SET_STRING);
     (void)vr;
     (void)value;
     if (nvr == 0) return fmi2OK;
-    log_message(inst, fmi2Error, "fmi2SetString refused: %s has no String variables",
-                EXPORT_MODEL_IDENTIFIER);
-    return fmi2Error;
+    snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
+    return refuse(inst, "fmi2SetString", why);
 }
 
 /* -- stepping ------------------------------------------------------------------------------------- */
@@ -602,70 +673,39 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
-    char t[40], h[40], now[40];
-    int status;
-    double tolerance;
-    ENTER(CALL_DO_STEP);
+    char t[40], h[40], now[40], call[128], why[MESSAGE_SIZE];
+    int status, i;
+    double tolerance, reach, h_value = communicationStepSize;
+    ENTER(SPEC_CALL_DO_STEP);
     (void)noSetFMUStatePriorToCurrentPoint;
     tolerance = fmax(SPEC_TIME_ABS_TOLERANCE_S, SPEC_TIME_REL_TOLERANCE * fabs(inst->time));
-    if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance &&
-          communicationStepSize > 0.0 && communicationStepSize <= SPEC_MAX_STEP_S)) {
+    reach = model_road_horizon(inst->model);
+    /* the checks of the Python FMU, in its order and words (a NaN fails every comparison) */
+    if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance && 0.0 < h_value &&
+          h_value <= SPEC_MAX_STEP_S && reach / h_value <= SPEC_MAX_DELAY_STEPS &&
+          h_value >= model_min_step(inst->model) && clock_resolves(inst->time, h_value))) {
         number(t, currentCommunicationPoint);  /* the texts only for a refusal */
-        number(h, communicationStepSize);
-    }
-    if (!isfinite(currentCommunicationPoint)) {
-        log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: t must be "
-                    "finite; nothing changed", t, h);
-        return fmi2Error;
-    }
-    if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance)) {
-        number(now, inst->time);
-        log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: t must be the "
-                    "last communication point t = %s s (roll back with fmi2SetFMUstate to "
-                    "step from an earlier time); nothing changed", t, h, now);
-        return fmi2Error;
-    }
-    {   /* the Python FMU's checks, in its words */
-        double h_value = communicationStepSize, reach = model_road_horizon(inst->model);
-        if (!(0.0 < h_value && h_value <= SPEC_MAX_STEP_S)) {
-            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: step size h "
-                        "= %s s: must be in (0, %g] s; nothing changed", t, h, h,
-                        SPEC_MAX_STEP_S);
-            return fmi2Error;
-        }
-        if (!(reach / h_value <= SPEC_MAX_DELAY_STEPS)) {
-            number(t, currentCommunicationPoint);
-            number(h, h_value);
-            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: step size h "
-                        "= %s s: must be at least %.3g s at this speed: the road reaches the "
-                        "contact zone's last node %.3g s after its front, and the FMU keeps at "
-                        "most %d steps of its history; nothing changed", t, h, h,
-                        reach / SPEC_MAX_DELAY_STEPS, reach, SPEC_MAX_DELAY_STEPS);
-            return fmi2Error;
-        }
-        if (h_value < model_min_step(inst->model)) {
-            char why[MESSAGE_SIZE];
-            number(t, currentCommunicationPoint);
-            number(h, h_value);
+        number(h, h_value);
+        snprintf(call, sizeof call, SPEC_MSG_STEP_CALL, t, h);
+        if (!(fabs(currentCommunicationPoint - inst->time) <= tolerance)) {
+            number(now, inst->time);
+            snprintf(why, sizeof why, SPEC_MSG_NOT_LAST_POINT, t, now);
+        } else if (!(0.0 < h_value && h_value <= SPEC_MAX_STEP_S)) {
+            snprintf(why, sizeof why, SPEC_MSG_STEP_RANGE, h, SPEC_MAX_STEP_S);
+        } else if (!(reach / h_value <= SPEC_MAX_DELAY_STEPS)) {
+            snprintf(why, sizeof why, SPEC_MSG_STEP_DELAY, h, reach / SPEC_MAX_DELAY_STEPS,
+                     reach, SPEC_MAX_DELAY_STEPS);
+        } else if (h_value < model_min_step(inst->model)) {
             snprintf(why, sizeof why, SPEC_MSG_SHORT_STEP_CORRECTED, h,
                      model_min_step(inst->model));
-            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
-                        "changed", t, h, why);
-            return fmi2Error;
+        } else {
+            double spacing = nextafter(fabs(inst->time) + h_value, INFINITY)
+                             - (fabs(inst->time) + h_value);
+            number(now, inst->time);
+            snprintf(why, sizeof why, SPEC_MSG_CLOCK_RESOLUTION, h, now, spacing, spacing,
+                     clock_resolved_until(h_value));
         }
-    }
-    if (!clock_resolves(inst->time, communicationStepSize)) {
-        char text[512];
-        double spacing = nextafter(fabs(inst->time) + communicationStepSize, INFINITY)
-                         - (fabs(inst->time) + communicationStepSize);
-        number(t, currentCommunicationPoint);
-        number(h, communicationStepSize);
-        number(now, inst->time);
-        snprintf(text, sizeof text, SPEC_MSG_CLOCK_RESOLUTION, h, now, spacing, spacing,
-                 clock_resolved_until(communicationStepSize));
-        log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
-                    "changed", t, h, text);
-        return fmi2Error;
+        return refuse(inst, call, why);
     }
     {   /* more work than a step may take (core/simulator.py: the kernel's rule) */
         int n_sub, work;
@@ -685,38 +725,31 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     /* the model's own clock goes on: the host's t, within rounding of it, would bring its
      * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);
-    if (status == MODEL_ERROR) {
-        inst->broken = "out of memory";
-        return fmi2Error;
+    number(t, currentCommunicationPoint);
+    snprintf(call, sizeof call, SPEC_MSG_STEP_FAILED, t);
+    if (status == MODEL_ERROR) return fail(inst, call, SPEC_MSG_OUT_OF_MEMORY);
+    for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
+        if (!isfinite(inst->values[SPEC_BLOCK_OUTPUTS_FIRST + i])) {
+            return fail(inst, call, SPEC_MSG_NOT_FINITE_OUTPUTS);
+        }
     }
     inst->stale = 0;
     inst->time = model_time(inst->model);
-    {
-        int i;
-        for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
-            if (!isfinite(inst->values[SPEC_BLOCK_OUTPUTS_FIRST + i])) {
-                number(t, currentCommunicationPoint);
-                log_message(inst, fmi2Error, "the step from t = %s s gave non-finite outputs; "
-                            "reset the FMU or set an FMU state", t);
-                inst->broken = "a step gave non-finite outputs";
-                return fmi2Error;
-            }
-        }
-    }
-    return status == MODEL_WARNING ? fmi2Warning : fmi2OK;
+    /* the footprint at the zone's end is logged as a warning, but the step is OK, as in the
+     * Python FMU (whose wrapper cannot return fmi2Warning from a step): a strict host must
+     * not end a ride run because the footprint touched the zone's end for a moment */
+    return fmi2OK;
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
-    ENTER(CALL_CANCEL_STEP);
-    log_message(inst, fmi2Error, "fmi2CancelStep refused: no step is pending (fmi2DoStep "
-                "always completes)");
-    return fmi2Error;
+    ENTER(SPEC_CALL_CANCEL_STEP);
+    return refuse(inst, "fmi2CancelStep", SPEC_MSG_NO_STEP_PENDING);
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
 {
-    ENTER(CALL_STATUS);
+    ENTER(SPEC_CALL_GET_STATUS);
     if (s == fmi2DoStepStatus && value != NULL) {
         *value = fmi2OK;
         return fmi2OK;
@@ -728,7 +761,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* va
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
 {
-    ENTER(CALL_STATUS);
+    ENTER(SPEC_CALL_GET_REAL_STATUS);
     if (s == fmi2LastSuccessfulTime && value != NULL) {
         *value = inst->time;  /* the last communication point reached */
         return fmi2OK;
@@ -740,7 +773,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* 
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value)
 {
-    ENTER(CALL_STATUS);
+    ENTER(SPEC_CALL_GET_INTEGER_STATUS);
     (void)value;
     log_message(inst, fmi2Error, "fmi2GetIntegerStatus refused: status kind %d has no Integer "
                 "value", (int)s);
@@ -749,9 +782,9 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
 {
-    ENTER(CALL_STATUS);
+    ENTER(SPEC_CALL_GET_BOOLEAN_STATUS);
     if (s == fmi2Terminated && value != NULL) {
-        *value = inst->phase == PHASE_TERMINATED ? fmi2True : fmi2False;
+        *value = inst->phase == SPEC_PHASE_TERMINATED ? fmi2True : fmi2False;
         return fmi2OK;
     }
     log_message(inst, fmi2Error, "fmi2GetBooleanStatus refused: status kind %d is not "
@@ -761,7 +794,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
 {
-    ENTER(CALL_STATUS);
+    ENTER(SPEC_CALL_GET_STRING_STATUS);
     (void)value;
     log_message(inst, fmi2Error, "fmi2GetStringStatus refused: status kind %d has no String "
                 "value", (int)s);
@@ -772,7 +805,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
                                        size_t nvr, const fmi2Integer order[],
                                        const fmi2Real value[])
 {
-    ENTER(CALL_INPUT_DERIVATIVES);
+    ENTER(SPEC_CALL_SET_REAL_INPUT_DERIVATIVES);
     (void)vr;
     (void)nvr;
     (void)order;
@@ -786,7 +819,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
                                         size_t nvr, const fmi2Integer order[],
                                         fmi2Real value[])
 {
-    ENTER(CALL_OUTPUT_DERIVATIVES);
+    ENTER(SPEC_CALL_GET_REAL_OUTPUT_DERIVATIVES);
     (void)vr;
     (void)nvr;
     (void)order;
@@ -801,7 +834,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
                                         size_t nKnown, const fmi2Real dvKnown[],
                                         fmi2Real dvUnknown[])
 {
-    ENTER(CALL_DIRECTIONAL_DERIVATIVE);
+    ENTER(SPEC_CALL_GET_DIRECTIONAL_DERIVATIVE);
     (void)vUnknown_ref;
     (void)nUnknown;
     (void)vKnown_ref;
@@ -814,15 +847,24 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 }
 
 /* -- FMU states ------------------------------------------------------------------------------------
- * One byte string, the same as an FMUstate and serialized: magic (8), version (u32), phase
- * (u32), GUID (48, NUL padded), total size (u64), time, start time (f64), stale (u32),
- * reserved (u32), the variable values (f64 each), the model's part size (u64) and bytes, then a
- * 64-bit FNV-1a checksum of everything before it. Every byte is covered by the checksum. */
+ * One byte string, the same as an FMUstate and serialized, in the layout of spec.py's
+ * STATE_LAYOUT (docs/fmu.md): magic (8), version (u32), phase (u32), GUID (48, NUL padded),
+ * total size (u64), time, start time (f64), stale (u32), the error reason's size (u32), the
+ * variable values (f64 each), the model's part size (u64) and bytes, the reason, then a
+ * CRC-32 of everything before it. The Python FMU writes and reads the same bytes. */
 
-#define STATE_GUID_BYTES 48
-#define STATE_HEAD (8 + 4 + 4 + STATE_GUID_BYTES + 8 + 8 + 8 + 4 + 4)
 #define STATE_VALUES (8 * SPEC_N_VARIABLES)
-#define STATE_FIXED (STATE_HEAD + STATE_VALUES + 8 + 8)
+#define STATE_FIXED (SPEC_STATE_HEAD + STATE_VALUES + 8 + 4)
+#define AT_SIZE (16 + SPEC_STATE_GUID_BYTES)
+#define AT_TIME (AT_SIZE + 8)
+
+static uint32_t state_crc(const unsigned char* bytes, size_t size)
+{
+    unsigned long crc = 0xfffffffful;
+    size_t i;
+    for (i = 0; i < size; i++) crc = SPEC_CRC32_TABLE[(crc ^ bytes[i]) & 0xff] ^ (crc >> 8);
+    return (uint32_t)(crc ^ 0xfffffffful);
+}
 
 static void put(unsigned char** p, const void* data, size_t size)
 {
@@ -830,22 +872,27 @@ static void put(unsigned char** p, const void* data, size_t size)
     *p += size;
 }
 
+static int has_model_part(int phase)
+{
+    return phase == SPEC_PHASE_RUNNING || phase == SPEC_PHASE_TERMINATED;
+}
+
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 {
-    size_t model_size, total;
+    size_t model_size, reason_size, total;
     unsigned char *bytes, *p;
     uint32_t u;
-    uint64_t size64, hash;
-    char guid[STATE_GUID_BYTES];
-    ENTER(CALL_FMU_STATE);
+    uint64_t size64;
+    char guid[SPEC_STATE_GUID_BYTES];
+    ENTER(SPEC_CALL_GET_FMUSTATE);
     if (FMUstate == NULL) {
         log_message(inst, fmi2Error, "fmi2GetFMUstate refused: no place for the state");
         return fmi2Error;
     }
     if (refresh(inst) != fmi2OK) return fmi2Error;
-    model_size = inst->phase == PHASE_RUNNING || inst->phase == PHASE_TERMINATED
-                     ? model_state_size(inst->model) : 0;
-    total = STATE_FIXED + model_size;
+    model_size = has_model_part(inst->phase) ? model_state_size(inst->model) : 0;
+    reason_size = inst->phase == SPEC_PHASE_ERROR && inst->reason ? strlen(inst->reason) : 0;
+    total = STATE_FIXED + model_size + reason_size;
     bytes = (unsigned char*)inst->mem.allocate(total, 1);
     if (bytes == NULL) {
         log_message(inst, fmi2Error, "fmi2GetFMUstate: out of memory (%lu bytes)",
@@ -867,161 +914,192 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
     put(&p, &inst->start_time, 8);
     u = (uint32_t)inst->stale;
     put(&p, &u, 4);
-    u = 0;
+    u = (uint32_t)reason_size;
     put(&p, &u, 4);
     put(&p, inst->values, STATE_VALUES);
     size64 = (uint64_t)model_size;
     put(&p, &size64, 8);
     if (model_size > 0) model_state_write(inst->model, p);
     p += model_size;
-    hash = fnv1a(FNV_OFFSET, bytes, (size_t)(p - bytes));
-    put(&p, &hash, 8);
+    if (reason_size > 0) put(&p, inst->reason, reason_size);
+    u = state_crc(bytes, (size_t)(p - bytes));
+    put(&p, &u, 4);
     if (*FMUstate != NULL) inst->mem.release(*FMUstate);  /* the host hands back its own */
     *FMUstate = bytes;
     return fmi2OK;
 }
 
-/* checks everything but the model part; the total size when the bytes are a state */
-static size_t state_problem(const Instance* inst, const unsigned char* bytes, size_t size,
-                            char* why, size_t why_size)
+/* checks everything but the model part (in spec.py's order and words, as the Python FMU);
+ * the total size when the bytes are a state */
+static size_t state_problem(const unsigned char* bytes, size_t size, char* why,
+                            size_t why_size)
 {
-    uint32_t version, phase, stale;
-    uint64_t total, model_size, hash;
-    char guid[STATE_GUID_BYTES + 1];
+    uint32_t version, phase, stale, reason_size, crc;
+    uint64_t total, model_size;
+    char guid[SPEC_STATE_GUID_BYTES + 1], a[40], b[40];
     double time, start;
     int vr;
-    if (bytes == NULL) {
-        snprintf(why, why_size, "no state given");
-        return 0;
-    }
-    if (size < STATE_FIXED || memcmp(bytes, SPEC_STATE_MAGIC, 8) != 0) {
-        snprintf(why, why_size, "it is not a state of this FMU (%s)",
-                 size < STATE_FIXED ? "too short" : "no state header");
+    if (bytes == NULL || size < STATE_FIXED || memcmp(bytes, SPEC_STATE_MAGIC, 8) != 0) {
+        snprintf(why, why_size, SPEC_MSG_STATE_NOT_OURS,
+                 bytes == NULL || size < STATE_FIXED ? SPEC_MSG_STATE_TOO_SHORT
+                                                     : SPEC_MSG_STATE_NO_HEADER);
         return 0;
     }
     memcpy(&version, bytes + 8, 4);
     memcpy(&phase, bytes + 12, 4);
-    memcpy(guid, bytes + 16, STATE_GUID_BYTES);
-    guid[STATE_GUID_BYTES] = '\0';
-    memcpy(&total, bytes + 16 + STATE_GUID_BYTES, 8);
+    memcpy(guid, bytes + 16, SPEC_STATE_GUID_BYTES);
+    guid[SPEC_STATE_GUID_BYTES] = '\0';
+    memcpy(&total, bytes + AT_SIZE, 8);
     if (total != size) {
-        snprintf(why, why_size, "it says it has %lu bytes, but %lu were given",
-                 (unsigned long)total, (unsigned long)size);
+        snprintf(why, why_size, SPEC_MSG_STATE_SIZE, (unsigned long)total, (unsigned long)size);
         return 0;
     }
-    memcpy(&hash, bytes + size - 8, 8);
-    if (hash != fnv1a(FNV_OFFSET, bytes, size - 8)) {
-        snprintf(why, why_size, "it is damaged: its checksum does not match");
+    memcpy(&crc, bytes + size - 4, 4);
+    if (crc != state_crc(bytes, size - 4)) {
+        snprintf(why, why_size, "%s", SPEC_MSG_STATE_DAMAGED);
         return 0;
     }
     if (version != SPEC_STATE_VERSION) {
-        snprintf(why, why_size, "its format version is %u, this FMU reads %d", (unsigned)version,
-                 SPEC_STATE_VERSION);
+        snprintf(why, why_size, SPEC_MSG_STATE_VERSION, (unsigned)version, SPEC_STATE_VERSION);
         return 0;
     }
     if (strcmp(guid, EXPORT_GUID) != 0) {
-        snprintf(why, why_size, "it belongs to the FMU with GUID %s, not this one (%s)", guid,
-                 EXPORT_GUID);
+        snprintf(why, why_size, SPEC_MSG_STATE_GUID, guid, EXPORT_GUID);
         return 0;
     }
-    if (phase != PHASE_INSTANTIATED && phase != PHASE_INITIALISATION &&
-        phase != PHASE_RUNNING && phase != PHASE_TERMINATED) {
-        snprintf(why, why_size, "its phase %u is not one of this FMU's", (unsigned)phase);
+    if (phase >= SPEC_N_PHASES) {
+        snprintf(why, why_size, SPEC_MSG_STATE_PHASE, (unsigned)phase);
         return 0;
     }
-    memcpy(&time, bytes + 16 + STATE_GUID_BYTES + 8, 8);
-    memcpy(&start, bytes + 16 + STATE_GUID_BYTES + 16, 8);
-    memcpy(&stale, bytes + 16 + STATE_GUID_BYTES + 24, 4);
+    memcpy(&time, bytes + AT_TIME, 8);
+    memcpy(&start, bytes + AT_TIME + 8, 8);
+    memcpy(&stale, bytes + AT_TIME + 16, 4);
+    memcpy(&reason_size, bytes + AT_TIME + 20, 4);
     if (!isfinite(time) || !isfinite(start) || stale > 1) {
-        snprintf(why, why_size, "its time %g s, start time %g s or flags are not valid", time,
-                 start);
+        number(a, time);
+        number(b, start);
+        snprintf(why, why_size, SPEC_MSG_STATE_CLOCK, a, b);
         return 0;
     }
     if (!clock_resolves(start, SPEC_MAX_STEP_S)) {
-        char a[40], text[512];
+        char text[512];
         number(a, start);
         snprintf(text, sizeof text, SPEC_MSG_START_UNRESOLVED, a,
                  clock_resolved_until(SPEC_MAX_STEP_S) - SPEC_MAX_STEP_S, SPEC_MAX_STEP_S);
-        snprintf(why, why_size, "its %s", text);
+        snprintf(why, why_size, SPEC_MSG_STATE_START, text);
         return 0;
     }
-    if ((phase == PHASE_INSTANTIATED || phase == PHASE_INITIALISATION) && time != start) {
-        char a[40], b[40];
+    if ((phase == SPEC_PHASE_INSTANTIATED || phase == SPEC_PHASE_INITIALISATION) &&
+        time != start) {
         number(a, time);
         number(b, start);
-        snprintf(why, why_size, "its time is %s s before initialisation, not its start time %s "
-                 "s", a, b);
+        snprintf(why, why_size, SPEC_MSG_STATE_BEFORE_INIT, a, b);
         return 0;
     }
     for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
-        double v;
-        memcpy(&v, bytes + STATE_HEAD + 8 * (size_t)vr, 8);
-        if (!isfinite(v) || (SPEC_VARIABLES[vr].type == SPEC_INTEGER &&
-                             (v != floor(v) || fabs(v) > 2147483647.0)) ||
-            (SPEC_VARIABLES[vr].type == SPEC_BOOLEAN && v != 0.0 && v != 1.0)) {
-            snprintf(why, why_size, "its value of %s is not a valid %s", SPEC_VARIABLES[vr].name,
-                     type_name(SPEC_VARIABLES[vr].type));
+        const SpecVariable* v = &SPEC_VARIABLES[vr];
+        double x;
+        memcpy(&x, bytes + SPEC_STATE_HEAD + 8 * (size_t)vr, 8);
+        if (v->causality == SPEC_INPUT) {
+            char text[512];
+            if (input_problem(v, x, text, sizeof text) != NULL) {
+                snprintf(why, why_size, SPEC_MSG_STATE_INPUT, text);
+                return 0;
+            }
+        } else if ((v->type == SPEC_INTEGER &&
+                    !(x == floor(x) && fabs(x) <= 2147483647.0)) ||
+                   (v->type == SPEC_BOOLEAN && x != 0.0 && x != 1.0) ||
+                   (v->causality == SPEC_OUTPUT && !isfinite(x))) {
+            /* a Real parameter holds whatever a set gave it: checked when it is used */
+            snprintf(why, why_size, SPEC_MSG_STATE_VALUE, v->name, type_name(v->type));
             return 0;
         }
     }
-    memcpy(&model_size, bytes + STATE_HEAD + STATE_VALUES, 8);
-    if (model_size != size - STATE_FIXED) {
-        snprintf(why, why_size, "its model part has the wrong size");
+    memcpy(&model_size, bytes + SPEC_STATE_HEAD + STATE_VALUES, 8);
+    /* (the sizes of the model part and the reason fill what the header leaves, exactly; no
+     * sum that could wrap around) */
+    if (reason_size > size - STATE_FIXED || model_size != size - STATE_FIXED - reason_size) {
+        snprintf(why, why_size, "%s", SPEC_MSG_STATE_MODEL_SIZE);
         return 0;
     }
-    if ((phase == PHASE_RUNNING || phase == PHASE_TERMINATED) != (model_size > 0)) {
-        snprintf(why, why_size, "its model part does not fit its phase");
+    if (has_model_part((int)phase) != (model_size > 0)) {
+        snprintf(why, why_size, "%s", SPEC_MSG_STATE_MODEL_PHASE);
         return 0;
     }
-    (void)inst;
+    if ((phase == SPEC_PHASE_ERROR) != (reason_size > 0)) {
+        if (phase == SPEC_PHASE_ERROR) snprintf(why, why_size, "%s", SPEC_MSG_STATE_NO_REASON);
+        else snprintf(why, why_size, SPEC_MSG_STATE_REASON_PHASE,
+                      SPEC_PHASE_NAME[phase]);
+        return 0;
+    }
+    if (memchr(bytes + size - 4 - reason_size, '\0', reason_size) != NULL) {
+        snprintf(why, why_size, "%s", SPEC_MSG_STATE_REASON_NUL);
+        return 0;
+    }
     return size;
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     const unsigned char* bytes = (const unsigned char*)FMUstate;
-    char why[1536];
+    char why[MESSAGE_SIZE];
     uint64_t total = 0;
-    uint32_t phase, stale;
+    uint32_t phase, stale, reason_size;
     double values[SPEC_N_VARIABLES], time, start;
     const unsigned char* model_part;
     size_t model_size;
+    char* reason = NULL;
     Model* model;
-    ENTER(CALL_FMU_STATE);
+    ENTER(SPEC_CALL_SET_FMUSTATE);
     if (bytes != NULL && memcmp(bytes, SPEC_STATE_MAGIC, 8) == 0) {
-        memcpy(&total, bytes + 16 + STATE_GUID_BYTES, 8);
+        memcpy(&total, bytes + AT_SIZE, 8);
     }
-    if (state_problem(inst, bytes, (size_t)total, why, sizeof why) == 0) {
-        log_message(inst, fmi2Error, "fmi2SetFMUstate refused: %s; nothing changed", why);
-        return fmi2Error;
+    if (state_problem(bytes, (size_t)total, why, sizeof why) == 0) {
+        return refuse(inst, "fmi2SetFMUstate", why);
     }
     memcpy(&phase, bytes + 12, 4);
-    memcpy(&time, bytes + 16 + STATE_GUID_BYTES + 8, 8);
-    memcpy(&start, bytes + 16 + STATE_GUID_BYTES + 16, 8);
-    memcpy(&stale, bytes + 16 + STATE_GUID_BYTES + 24, 4);
-    memcpy(values, bytes + STATE_HEAD, STATE_VALUES);
-    model_part = bytes + STATE_HEAD + STATE_VALUES + 8;
-    model_size = (size_t)total - STATE_FIXED;
+    memcpy(&time, bytes + AT_TIME, 8);
+    memcpy(&start, bytes + AT_TIME + 8, 8);
+    memcpy(&stale, bytes + AT_TIME + 16, 4);
+    memcpy(&reason_size, bytes + AT_TIME + 20, 4);
+    memcpy(values, bytes + SPEC_STATE_HEAD, STATE_VALUES);
+    model_part = bytes + SPEC_STATE_HEAD + STATE_VALUES + 8;
+    model_size = (size_t)total - STATE_FIXED - reason_size;
     model = inst->model;
     if (model_size > 0 && !model_built_for(inst->model, values)) {
-        /* a state of other parameters, or set into a fresh instance: build its model */
+        /* a state of other parameters, or set into a fresh instance: build its model (its
+         * messages unlogged, its problems the reason of the refusal) */
         ModelHost host = host_of(inst);
         double scratch[SPEC_N_VARIABLES];
+        int built;
         model = model_create(&host);
         memcpy(scratch, values, sizeof scratch);
-        if (model == NULL || model_initialise(model, values, start, scratch) != MODEL_OK) {
+        start_collecting(inst, 1);
+        built = model != NULL && model_initialise(model, values, start, scratch) == MODEL_OK;
+        if (!built) {
+            char* text = new_text(inst, SPEC_MSG_STATE_PARAMETERS,
+                                  inst->problems ? inst->problems : SPEC_MSG_OUT_OF_MEMORY);
+            stop_collecting(inst);
             model_destroy(model);
-            log_message(inst, fmi2Error, "fmi2SetFMUstate refused: its parameters do not build "
-                        "a model (logged above); nothing changed");
+            refuse(inst, "fmi2SetFMUstate", text ? text : SPEC_MSG_OUT_OF_MEMORY);
+            if (text) inst->mem.release(text);
             return fmi2Error;
         }
+        stop_collecting(inst);
     }
     if (model_size > 0 &&
         model_state_check(model, model_part, model_size, values, time, start, why,
                           sizeof why) != MODEL_OK) {
         if (model != inst->model) model_destroy(model);
-        log_message(inst, fmi2Error, "fmi2SetFMUstate refused: %s; nothing changed", why);
-        return fmi2Error;
+        return refuse(inst, "fmi2SetFMUstate", why);
+    }
+    if (reason_size > 0) {
+        reason = (char*)inst->mem.allocate((size_t)reason_size + 1, 1);
+        if (reason == NULL) {
+            if (model != inst->model) model_destroy(model);
+            return refuse(inst, "fmi2SetFMUstate", SPEC_MSG_OUT_OF_MEMORY);
+        }
+        memcpy(reason, model_part + model_size, reason_size);
     }
     if (model != inst->model) {
         model_destroy(inst->model);
@@ -1029,17 +1107,17 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     }
     if (model_size > 0) model_state_apply(inst->model, model_part);
     memcpy(inst->values, values, sizeof values);
-    inst->phase = (Phase)phase;
+    inst->phase = (int)phase;
     inst->time = time;
     inst->start_time = start;
     inst->stale = (int)stale;
-    inst->broken = 0;
+    set_reason(inst, reason);
     return fmi2OK;
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 {
-    ENTER(CALL_FMU_STATE);
+    ENTER(SPEC_CALL_FREE_FMUSTATE);
     if (FMUstate != NULL && *FMUstate != NULL) {
         inst->mem.release(*FMUstate);
         *FMUstate = NULL;
@@ -1050,14 +1128,14 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size)
 {
     uint64_t total;
-    ENTER(CALL_FMU_STATE);
+    ENTER(SPEC_CALL_SERIALIZED_FMUSTATE_SIZE);
     if (FMUstate == NULL || size == NULL ||
         memcmp(FMUstate, SPEC_STATE_MAGIC, 8) != 0) {
         log_message(inst, fmi2Error, "fmi2SerializedFMUstateSize refused: not a state of this "
                     "FMU");
         return fmi2Error;
     }
-    memcpy(&total, (const unsigned char*)FMUstate + 16 + STATE_GUID_BYTES, 8);
+    memcpy(&total, (const unsigned char*)FMUstate + AT_SIZE, 8);
     *size = (size_t)total;
     return fmi2OK;
 }
@@ -1066,13 +1144,13 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
                                  size_t size)
 {
     uint64_t total;
-    ENTER(CALL_FMU_STATE);
+    ENTER(SPEC_CALL_SERIALIZE_FMUSTATE);
     if (FMUstate == NULL || serializedState == NULL ||
         memcmp(FMUstate, SPEC_STATE_MAGIC, 8) != 0) {
         log_message(inst, fmi2Error, "fmi2SerializeFMUstate refused: not a state of this FMU");
         return fmi2Error;
     }
-    memcpy(&total, (const unsigned char*)FMUstate + 16 + STATE_GUID_BYTES, 8);
+    memcpy(&total, (const unsigned char*)FMUstate + AT_SIZE, 8);
     if (size < total) {
         log_message(inst, fmi2Error, "fmi2SerializeFMUstate refused: %lu bytes given, the state "
                     "needs %lu", (unsigned long)size, (unsigned long)total);
@@ -1085,14 +1163,14 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byt
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[],
                                    size_t size, fmi2FMUstate* FMUstate)
 {
-    char why[512];
+    char why[MESSAGE_SIZE];
     unsigned char* copy;
-    ENTER(CALL_FMU_STATE);
-    if (FMUstate == NULL ||
-        state_problem(inst, (const unsigned char*)serializedState, size, why, sizeof why) == 0) {
-        log_message(inst, fmi2Error, "fmi2DeSerializeFMUstate refused: %s",
-                    FMUstate == NULL ? "no place for the state" : why);
-        return fmi2Error;
+    ENTER(SPEC_CALL_DE_SERIALIZE_FMUSTATE);
+    if (FMUstate == NULL) {
+        return refuse(inst, "fmi2DeSerializeFMUstate", "no place for the state");
+    }
+    if (state_problem((const unsigned char*)serializedState, size, why, sizeof why) == 0) {
+        return refuse(inst, "fmi2DeSerializeFMUstate", why);
     }
     copy = (unsigned char*)inst->mem.allocate(size, 1);
     if (copy == NULL) {

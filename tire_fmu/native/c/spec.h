@@ -168,7 +168,147 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
-#define SPEC_STATE_VERSION 2
+#define SPEC_STATE_VERSION 3
+#define SPEC_STATE_GUID_BYTES 48
+#define SPEC_STATE_HEAD 96
+#define SPEC_STATE_MODEL_FLAGS 2
+
+/* the FMI state machine: phases by number, and per call the phases that allow it (bit i: phase i) */
+#define SPEC_N_PHASES 5
+#define SPEC_PHASE_INSTANTIATED 0
+#define SPEC_PHASE_INITIALISATION 1
+#define SPEC_PHASE_RUNNING 2
+#define SPEC_PHASE_TERMINATED 3
+#define SPEC_PHASE_ERROR 4
+static const char* const SPEC_PHASE_TEXT[SPEC_N_PHASES] = {
+    "instantiated (call fmi2SetupExperiment and fmi2EnterInitializationMode first)",
+    "in initialisation mode (call fmi2ExitInitializationMode first)",
+    "running (initialisation ended; fmi2Reset starts over)",
+    "terminated (fmi2Reset starts over)",
+    "in the error state",
+};
+static const char* const SPEC_PHASE_NAME[SPEC_N_PHASES] = {
+    "instantiated",
+    "initialisation",
+    "running",
+    "terminated",
+    "error",
+};
+typedef enum {
+    SPEC_CALL_SET_DEBUG_LOGGING,
+    SPEC_CALL_SETUP_EXPERIMENT,
+    SPEC_CALL_ENTER_INITIALIZATION_MODE,
+    SPEC_CALL_EXIT_INITIALIZATION_MODE,
+    SPEC_CALL_TERMINATE,
+    SPEC_CALL_RESET,
+    SPEC_CALL_GET_REAL,
+    SPEC_CALL_GET_INTEGER,
+    SPEC_CALL_GET_BOOLEAN,
+    SPEC_CALL_GET_STRING,
+    SPEC_CALL_SET_REAL,
+    SPEC_CALL_SET_INTEGER,
+    SPEC_CALL_SET_BOOLEAN,
+    SPEC_CALL_SET_STRING,
+    SPEC_CALL_GET_FMUSTATE,
+    SPEC_CALL_SET_FMUSTATE,
+    SPEC_CALL_FREE_FMUSTATE,
+    SPEC_CALL_SERIALIZED_FMUSTATE_SIZE,
+    SPEC_CALL_SERIALIZE_FMUSTATE,
+    SPEC_CALL_DE_SERIALIZE_FMUSTATE,
+    SPEC_CALL_GET_DIRECTIONAL_DERIVATIVE,
+    SPEC_CALL_SET_REAL_INPUT_DERIVATIVES,
+    SPEC_CALL_GET_REAL_OUTPUT_DERIVATIVES,
+    SPEC_CALL_DO_STEP,
+    SPEC_CALL_CANCEL_STEP,
+    SPEC_CALL_GET_STATUS,
+    SPEC_CALL_GET_REAL_STATUS,
+    SPEC_CALL_GET_INTEGER_STATUS,
+    SPEC_CALL_GET_BOOLEAN_STATUS,
+    SPEC_CALL_GET_STRING_STATUS,
+    SPEC_N_CALLS
+} SpecCall;
+static const struct {
+    const char* name;
+    unsigned phases;
+} SPEC_CALLS[SPEC_N_CALLS] = {
+    {"fmi2SetDebugLogging", 31u},
+    {"fmi2SetupExperiment", 1u},
+    {"fmi2EnterInitializationMode", 1u},
+    {"fmi2ExitInitializationMode", 2u},
+    {"fmi2Terminate", 4u},
+    {"fmi2Reset", 31u},
+    {"fmi2GetReal", 30u},
+    {"fmi2GetInteger", 30u},
+    {"fmi2GetBoolean", 30u},
+    {"fmi2GetString", 30u},
+    {"fmi2SetReal", 7u},
+    {"fmi2SetInteger", 7u},
+    {"fmi2SetBoolean", 7u},
+    {"fmi2SetString", 7u},
+    {"fmi2GetFMUstate", 31u},
+    {"fmi2SetFMUstate", 31u},
+    {"fmi2FreeFMUstate", 31u},
+    {"fmi2SerializedFMUstateSize", 31u},
+    {"fmi2SerializeFMUstate", 31u},
+    {"fmi2DeSerializeFMUstate", 31u},
+    {"fmi2GetDirectionalDerivative", 30u},
+    {"fmi2SetRealInputDerivatives", 7u},
+    {"fmi2GetRealOutputDerivatives", 28u},
+    {"fmi2DoStep", 4u},
+    {"fmi2CancelStep", 4u},
+    {"fmi2GetStatus", 12u},
+    {"fmi2GetRealStatus", 12u},
+    {"fmi2GetIntegerStatus", 12u},
+    {"fmi2GetBooleanStatus", 12u},
+    {"fmi2GetStringStatus", 12u},
+};
+
+/* CRC-32 (zlib's) of a state, byte by byte: crc = table[(crc ^ b) & 0xff] ^ (crc >> 8), from 0xffffffff, then inverted */
+static const unsigned long SPEC_CRC32_TABLE[256] = {
+    0x00000000ul, 0x77073096ul, 0xee0e612cul, 0x990951baul, 0x076dc419ul, 0x706af48ful,
+    0xe963a535ul, 0x9e6495a3ul, 0x0edb8832ul, 0x79dcb8a4ul, 0xe0d5e91eul, 0x97d2d988ul,
+    0x09b64c2bul, 0x7eb17cbdul, 0xe7b82d07ul, 0x90bf1d91ul, 0x1db71064ul, 0x6ab020f2ul,
+    0xf3b97148ul, 0x84be41deul, 0x1adad47dul, 0x6ddde4ebul, 0xf4d4b551ul, 0x83d385c7ul,
+    0x136c9856ul, 0x646ba8c0ul, 0xfd62f97aul, 0x8a65c9ecul, 0x14015c4ful, 0x63066cd9ul,
+    0xfa0f3d63ul, 0x8d080df5ul, 0x3b6e20c8ul, 0x4c69105eul, 0xd56041e4ul, 0xa2677172ul,
+    0x3c03e4d1ul, 0x4b04d447ul, 0xd20d85fdul, 0xa50ab56bul, 0x35b5a8faul, 0x42b2986cul,
+    0xdbbbc9d6ul, 0xacbcf940ul, 0x32d86ce3ul, 0x45df5c75ul, 0xdcd60dcful, 0xabd13d59ul,
+    0x26d930acul, 0x51de003aul, 0xc8d75180ul, 0xbfd06116ul, 0x21b4f4b5ul, 0x56b3c423ul,
+    0xcfba9599ul, 0xb8bda50ful, 0x2802b89eul, 0x5f058808ul, 0xc60cd9b2ul, 0xb10be924ul,
+    0x2f6f7c87ul, 0x58684c11ul, 0xc1611dabul, 0xb6662d3dul, 0x76dc4190ul, 0x01db7106ul,
+    0x98d220bcul, 0xefd5102aul, 0x71b18589ul, 0x06b6b51ful, 0x9fbfe4a5ul, 0xe8b8d433ul,
+    0x7807c9a2ul, 0x0f00f934ul, 0x9609a88eul, 0xe10e9818ul, 0x7f6a0dbbul, 0x086d3d2dul,
+    0x91646c97ul, 0xe6635c01ul, 0x6b6b51f4ul, 0x1c6c6162ul, 0x856530d8ul, 0xf262004eul,
+    0x6c0695edul, 0x1b01a57bul, 0x8208f4c1ul, 0xf50fc457ul, 0x65b0d9c6ul, 0x12b7e950ul,
+    0x8bbeb8eaul, 0xfcb9887cul, 0x62dd1ddful, 0x15da2d49ul, 0x8cd37cf3ul, 0xfbd44c65ul,
+    0x4db26158ul, 0x3ab551ceul, 0xa3bc0074ul, 0xd4bb30e2ul, 0x4adfa541ul, 0x3dd895d7ul,
+    0xa4d1c46dul, 0xd3d6f4fbul, 0x4369e96aul, 0x346ed9fcul, 0xad678846ul, 0xda60b8d0ul,
+    0x44042d73ul, 0x33031de5ul, 0xaa0a4c5ful, 0xdd0d7cc9ul, 0x5005713cul, 0x270241aaul,
+    0xbe0b1010ul, 0xc90c2086ul, 0x5768b525ul, 0x206f85b3ul, 0xb966d409ul, 0xce61e49ful,
+    0x5edef90eul, 0x29d9c998ul, 0xb0d09822ul, 0xc7d7a8b4ul, 0x59b33d17ul, 0x2eb40d81ul,
+    0xb7bd5c3bul, 0xc0ba6cadul, 0xedb88320ul, 0x9abfb3b6ul, 0x03b6e20cul, 0x74b1d29aul,
+    0xead54739ul, 0x9dd277aful, 0x04db2615ul, 0x73dc1683ul, 0xe3630b12ul, 0x94643b84ul,
+    0x0d6d6a3eul, 0x7a6a5aa8ul, 0xe40ecf0bul, 0x9309ff9dul, 0x0a00ae27ul, 0x7d079eb1ul,
+    0xf00f9344ul, 0x8708a3d2ul, 0x1e01f268ul, 0x6906c2feul, 0xf762575dul, 0x806567cbul,
+    0x196c3671ul, 0x6e6b06e7ul, 0xfed41b76ul, 0x89d32be0ul, 0x10da7a5aul, 0x67dd4accul,
+    0xf9b9df6ful, 0x8ebeeff9ul, 0x17b7be43ul, 0x60b08ed5ul, 0xd6d6a3e8ul, 0xa1d1937eul,
+    0x38d8c2c4ul, 0x4fdff252ul, 0xd1bb67f1ul, 0xa6bc5767ul, 0x3fb506ddul, 0x48b2364bul,
+    0xd80d2bdaul, 0xaf0a1b4cul, 0x36034af6ul, 0x41047a60ul, 0xdf60efc3ul, 0xa867df55ul,
+    0x316e8eeful, 0x4669be79ul, 0xcb61b38cul, 0xbc66831aul, 0x256fd2a0ul, 0x5268e236ul,
+    0xcc0c7795ul, 0xbb0b4703ul, 0x220216b9ul, 0x5505262ful, 0xc5ba3bbeul, 0xb2bd0b28ul,
+    0x2bb45a92ul, 0x5cb36a04ul, 0xc2d7ffa7ul, 0xb5d0cf31ul, 0x2cd99e8bul, 0x5bdeae1dul,
+    0x9b64c2b0ul, 0xec63f226ul, 0x756aa39cul, 0x026d930aul, 0x9c0906a9ul, 0xeb0e363ful,
+    0x72076785ul, 0x05005713ul, 0x95bf4a82ul, 0xe2b87a14ul, 0x7bb12baeul, 0x0cb61b38ul,
+    0x92d28e9bul, 0xe5d5be0dul, 0x7cdcefb7ul, 0x0bdbdf21ul, 0x86d3d2d4ul, 0xf1d4e242ul,
+    0x68ddb3f8ul, 0x1fda836eul, 0x81be16cdul, 0xf6b9265bul, 0x6fb077e1ul, 0x18b74777ul,
+    0x88085ae6ul, 0xff0f6a70ul, 0x66063bcaul, 0x11010b5cul, 0x8f659efful, 0xf862ae69ul,
+    0x616bffd3ul, 0x166ccf45ul, 0xa00ae278ul, 0xd70dd2eeul, 0x4e048354ul, 0x3903b3c2ul,
+    0xa7672661ul, 0xd06016f7ul, 0x4969474dul, 0x3e6e77dbul, 0xaed16a4aul, 0xd9d65adcul,
+    0x40df0b66ul, 0x37d83bf0ul, 0xa9bcae53ul, 0xdebb9ec5ul, 0x47b2cf7ful, 0x30b5ffe9ul,
+    0xbdbdf21cul, 0xcabac28aul, 0x53b39330ul, 0x24b4a3a6ul, 0xbad03605ul, 0xcdd70693ul,
+    0x54de5729ul, 0x23d967bful, 0xb3667a2eul, 0xc4614ab8ul, 0x5d681b02ul, 0x2a6f2b94ul,
+    0xb40bbe37ul, 0xc30c8ea1ul, 0x5a05df1bul, 0x2d02ef8dul,
+};
 #define SPEC_N_LOG_CATEGORIES 4
 static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
     "logEvents",
@@ -223,5 +363,54 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_SUBSTEP_ALLOWED "at most %.3g N/m^2 with rhoA = %g kg/m"
 #define SPEC_MSG_SUBSTEP_REASON "the contact is sub-stepped at 1/sqrt(k_cw/rhoA), which would be below %g s: more than 10^4 sub-steps per millisecond"
 #define SPEC_MSG_ZONE_EDGE "t = %.9g s: the footprint reached the end of the contact zone, so road forces beyond it are missing; raise contact_zone_length (logged once until the footprint is back inside)"
+#define SPEC_MSG_LIFT_OFF "t = %.9g s: the tread left the road (in_contact = false)"
+#define SPEC_MSG_TOUCH_DOWN "t = %.9g s: the tread is back on the road (in_contact = true)"
+#define SPEC_MSG_REFUSED "%s refused: %s; nothing changed"
+#define SPEC_MSG_PHASE "the FMU is %s"
+#define SPEC_MSG_ERROR_STATE "the FMU is in the error state; reset it or set an FMU state"
+#define SPEC_MSG_FAILED "the FMU is in the error state: %s failed (%s); reset it or set an FMU state"
+#define SPEC_MSG_PARAMETERS_REFUSED "the parameters were refused at fmi2ExitInitializationMode (%d problem(s): %s); reset the FMU and set valid parameters"
+#define SPEC_MSG_EXIT_REFUSED "fmi2ExitInitializationMode refused: %s"
+#define SPEC_MSG_STEP_FAILED "the step from t = %s s"
+#define SPEC_MSG_OUTPUTS_FAILED "computing the outputs"
+#define SPEC_MSG_NOT_FINITE_OUTPUTS "its outputs are not finite"
+#define SPEC_MSG_OUT_OF_MEMORY "out of memory"
+#define SPEC_MSG_START_NOT_FINITE "startTime = %s s: must be finite"
+#define SPEC_MSG_STOP_TIME "stopTime = %s s: must be finite and >= startTime = %s s"
+#define SPEC_MSG_TOLERANCE "tolerance = %s: must be finite and > 0"
+#define SPEC_MSG_STEP_CALL "fmi2DoStep(t = %s s, h = %s s)"
+#define SPEC_MSG_NOT_LAST_POINT "t = %s s: must be the last communication point t = %s s (roll back with fmi2SetFMUstate to step from an earlier time)"
+#define SPEC_MSG_STEP_RANGE "step size h = %s s: must be in (0, %g] s"
+#define SPEC_MSG_STEP_DELAY "step size h = %s s: must be at least %.3g s at this speed: the road reaches the contact zone's last node %.3g s after its front, and the FMU keeps at most %d steps of its history"
+#define SPEC_MSG_NO_STEP_PENDING "no step is pending (fmi2DoStep always completes)"
+#define SPEC_MSG_INPUT_RANGE "%s = %s %s: must be in [-%g, %g] %s"
+#define SPEC_MSG_REFERENCE_MISSING "value reference %u: it does not exist (%s has %d variables)"
+#define SPEC_MSG_REFERENCE_TYPE "value reference %u: %s has FMI type %s: use fmi2Get%s and fmi2Set%s"
+#define SPEC_MSG_OUTPUT_SET "%s = %s: it is an output"
+#define SPEC_MSG_PARAMETER_FIXED "%s = %s: parameters are fixed after initialisation (they define the model built there); reset the FMU to change them"
+#define SPEC_MSG_NO_STRINGS "%s has no String variables"
+#define SPEC_MSG_STATE_NOT_OURS "it is not a state of this FMU (%s)"
+#define SPEC_MSG_STATE_TOO_SHORT "too short"
+#define SPEC_MSG_STATE_NO_HEADER "no state header"
+#define SPEC_MSG_STATE_SIZE "it says it has %lu bytes, but %lu were given"
+#define SPEC_MSG_STATE_DAMAGED "it is damaged: its checksum does not match"
+#define SPEC_MSG_STATE_VERSION "its format version is %u, this FMU reads %d"
+#define SPEC_MSG_STATE_GUID "it belongs to the FMU with GUID %s, not this one (%s)"
+#define SPEC_MSG_STATE_PHASE "its phase %u is not one of this FMU's"
+#define SPEC_MSG_STATE_CLOCK "its time %s s, start time %s s or flags are not valid"
+#define SPEC_MSG_STATE_START "its %s"
+#define SPEC_MSG_STATE_BEFORE_INIT "its time is %s s before initialisation, not its start time %s s"
+#define SPEC_MSG_STATE_VALUE "its value of %s is not a valid %s"
+#define SPEC_MSG_STATE_INPUT "its %s"
+#define SPEC_MSG_STATE_MODEL_SIZE "its model part has the wrong size"
+#define SPEC_MSG_STATE_MODEL_PHASE "its model part does not fit its phase"
+#define SPEC_MSG_STATE_NO_REASON "its phase is error without the reason: it would refuse every call without saying why"
+#define SPEC_MSG_STATE_REASON_PHASE "it holds an error reason, but its phase is %s"
+#define SPEC_MSG_STATE_REASON_NUL "its error reason holds a NUL byte"
+#define SPEC_MSG_STATE_PARAMETERS "its parameters do not build a model: %s"
+#define SPEC_MSG_STATE_MODEL_SHORT "its model part is %lu bytes, shorter than its header"
+#define SPEC_MSG_STATE_MODEL_FLAG "flag %d of its model part is %d, not 0 or 1"
+#define SPEC_MSG_STATE_MODEL_CLOCK "its time is %s s from a start at %s s, but its model is at %s s from a start at %s s"
+#define SPEC_MSG_STATE_MODEL_OUTPUTS "the outputs it shows are not its model's"
 
 #endif

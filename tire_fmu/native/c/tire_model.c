@@ -603,9 +603,7 @@ static int after_step(Model* model, double* values)
     in_contact = kernel_in_contact(model->kernel);
     if (in_contact != model->in_contact) {
         /* losing contact is physics (a unilateral contact): information, not a warning */
-        snprintf(line, sizeof line,
-                 in_contact ? "t = %.9g s: the tread is back on the road (in_contact = true)"
-                            : "t = %.9g s: the tread left the road (in_contact = false)",
+        snprintf(line, sizeof line, in_contact ? SPEC_MSG_TOUCH_DOWN : SPEC_MSG_LIFT_OFF,
                  kernel_time(model->kernel));
         say(model, MODEL_OK, "logEvents", line);
         model->in_contact = in_contact;
@@ -676,7 +674,7 @@ int model_step_work(const Model* model, double h, int* n_sub, double* substep, i
  * int32: zone warning armed, in contact; then the step kernel's state (kernel.c: its layout,
  * and what it must mean to be set). */
 
-#define FLAGS 2
+#define FLAGS SPEC_STATE_MODEL_FLAGS
 
 size_t model_state_size(const Model* model) { return FLAGS * 4 + kernel_state_size(model->kernel); }
 
@@ -717,14 +715,12 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
     int i;
     why[0] = '\0';
     if (size < FLAGS * 4) {
-        snprintf(why, why_size, "its model part is %lu bytes, shorter than its header",
-                 (unsigned long)size);
+        snprintf(why, why_size, SPEC_MSG_STATE_MODEL_SHORT, (unsigned long)size);
         return MODEL_ERROR;
     }
     for (i = 0; i < FLAGS; i++) {
         if (get_int(in, i) != 0 && get_int(in, i) != 1) {
-            snprintf(why, why_size, "flag %d of its model part is %d, not 0 or 1", i,
-                     get_int(in, i));
+            snprintf(why, why_size, SPEC_MSG_STATE_MODEL_FLAG, i, get_int(in, i));
             return MODEL_ERROR;
         }
     }
@@ -742,8 +738,7 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
             py_repr(start_time, b, sizeof b);
             py_repr(kernel_state_time(kernel_part), c, sizeof c);
             py_repr(kernel_state_start(kernel_part), d, sizeof d);
-            snprintf(text, sizeof text, "its time is %s s from a start at %s s, but its model "
-                     "is at %s s from a start at %s s", a, b, c, d);
+            snprintf(text, sizeof text, SPEC_MSG_STATE_MODEL_CLOCK, a, b, c, d);
             add_why(why, why_size, text);
         }
         kernel_state_outputs(kernel_part, outputs);
@@ -753,7 +748,7 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
         /* (the model's own in-contact flag is the last one it logged an event for, which
          * outputs read after new inputs, before a step, may have left behind) */
         if (values[SPEC_BLOCK_IN_CONTACT] != (outputs[2] > 0.0 ? 1.0 : 0.0)) wrong = 1;
-        if (wrong) add_why(why, why_size, "the outputs it shows are not its model's");
+        if (wrong) add_why(why, why_size, SPEC_MSG_STATE_MODEL_OUTPUTS);
     }
     return why[0] == '\0' ? MODEL_OK : MODEL_ERROR;
 }
