@@ -1041,11 +1041,16 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               "MAX_STATE_DISPLACEMENT_M": "test_bad_states_are_refused_alike (modal state)",
               "MAX_STATE_VELOCITY_M_S": "test_bad_states_are_refused_alike (modal state)",
               "CRITICAL_SPEED_WARNING_FRACTION": "test_the_critical_speed_warning_fraction",
-              "MAX_SCANNED_SPEED_M_S": "test_a_speed_at_the_critical_speed_is_refused_alike"}
+              "MAX_SCANNED_SPEED_M_S": "test_a_speed_at_the_critical_speed_is_refused_alike",
+              # in test_native_fmu.py, against both FMUs
+              "MAX_STEP_WORK": "test_a_step_of_more_work_than_a_step_may_take_is_refused_alike",
+              "WORK_INTERVAL_S": "test_a_contact_the_step_cannot_afford_is_refused_alike",
+              "MIN_SUBSTEP_S": "test_a_contact_the_step_cannot_afford_is_refused_alike"}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",
              "PGS_TOLERANCE", "DEFAULT_ZONE_LENGTH_M", "ZONE_ANGLE_SLACK", "EVENT_TOLERANCE",
              "EVENTS_TOGETHER", "TOUCH_ATOL", "SEGMENTS_PER_NODE", "MAX_DEFLECTION_FRACTION",
-             "LENGTH_BISECTIONS", "MODE_TIE_TOLERANCE", "SCAN_POINTS", "ROOT_TOLERANCE"}
+             "LENGTH_BISECTIONS", "MODE_TIE_TOLERANCE", "SCAN_POINTS", "ROOT_TOLERANCE",
+             "SUBSTEP_WORK_BASE"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)

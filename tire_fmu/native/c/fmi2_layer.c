@@ -712,14 +712,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
         double substep, longest;
         if (model_step_work(inst->model, communicationStepSize, &n_sub, &substep, &work,
                             &longest)) {
-            char why[MESSAGE_SIZE];
             number(t, currentCommunicationPoint);
             number(h, communicationStepSize);
+            snprintf(call, sizeof call, SPEC_MSG_STEP_CALL, t, h);
             snprintf(why, sizeof why, SPEC_MSG_LONG_STEP, h, n_sub, substep, work,
                      SPEC_MAX_STEP_WORK, longest);
-            log_message(inst, fmi2Error, "fmi2DoStep(t = %s s, h = %s s) refused: %s; nothing "
-                        "changed", t, h, why);
-            return fmi2Error;
+            return refuse(inst, call, why);
         }
     }
     /* the model's own clock goes on: the host's t, within rounding of it, would bring its
