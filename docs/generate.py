@@ -135,18 +135,24 @@ def fmu_variables_table() -> str:
 def contact_footprint_table() -> str:
     from tire_fmu.core import OperatingPoint, TireParameters, build_model
 
-    lines = ["| N | load | deflection | footprint | pushing nodes | secant K_v | tangent K_v |",
-             "|---|---|---|---|---|---|---|"]
-    for n in (100, 200, 400):
+    lines = ["| N | load | deflection | footprint | pushing points (per node) | secant K_v | "
+             "tangent K_v | footprint, one point per node |",
+             "|---|---|---|---|---|---|---|---|"]
+    for n in (100, 200, 400, 800):
         for load in (10e3, 27.7e3, 60e3):
             fp = build_model(TireParameters(), OperatingPoint(n_elements=n,
                                                               load_n=load)).patch.footprint
+            nodes = build_model(TireParameters(), OperatingPoint(
+                n_elements=n, load_n=load, contact_point_spacing_m=1.0)).patch.footprint
             lines.append(f"| {n} | {load / 1e3:.3g} kN | {fp.deflection_m * 1e3:.2f} mm | "
-                         f"{fp.length_m * 100:.2f} cm | {fp.n_active} | "
+                         f"{fp.length_m * 100:.2f} cm | {fp.n_active} "
+                         f"({fp.zone.points_per_node}) | "
                          f"{fp.secant_stiffness_n_per_m / 1e6:.3f} MN/m | "
-                         f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m |")
+                         f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m | "
+                         f"{nodes.length_m * 100:.2f} cm |")
     lines += ["", "Computed by `docs/generate.py` from `build_model(...).patch.footprint` "
-              "(the same numbers as `tire-fmu patch --load L --elements N`)."]
+              "(the same numbers as `tire-fmu patch --load L --elements N`; the last column "
+              "with `--point-spacing 1`, one contact point per node)."]
     return "\n".join(lines)
 
 
