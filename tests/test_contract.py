@@ -153,7 +153,8 @@ def c_values(case: dict) -> dict:
     return {**case["tire"], "n_elements": case["n_elements"], "load": case["load"],
             "speed": case["speed"], "f_max": case["f_max"], "n_modes": case["n_modes"],
             "static_correction": float(case["static_correction"]),
-            "linear_contact": float(case["linear_contact"])}
+            "linear_contact": float(case["linear_contact"]),
+            "contact_point_spacing": case.get("spacing", 1.0)}
 
 
 def differences(python: StepContract, native: StepContract) -> list[str]:

@@ -77,6 +77,19 @@ SEGMENTS_PER_NODE = 8
 MAX_DEFLECTION_FRACTION = 0.5
 #: Bisections for the deflection at which the footprint reaches its longest credible length.
 LENGTH_BISECTIONS = 60
+#: Relative slack on the contact point spacing, so a node arc of exactly m spacings makes m
+#: points per node.
+POINT_SPACING_SLACK = 1e-9
+#: The most contact points a zone may have: the step's contact solve is dense in the points.
+MAX_CONTACT_POINTS = 4000
+#: How a spacing that makes too many points is refused (printf, so that the native FMU says
+#: the same): the smallest spacing allowed; then the points per node, the carrying nodes, the
+#: points and the limit.
+#: points_per_node counts at most this many (an int in C): far beyond any spacing in range
+_MOST_PER_NODE = 100_000_000
+POINTS_ALLOWED = "at least %.4g m with this mesh and contact zone"
+POINTS_REASON = ("%d points on each of its %d carrying nodes make %d contact points, more than "
+                 "the %d the contact solve takes")
 
 
 # -- the zone ---------------------------------------------------------------------------------
@@ -152,6 +165,45 @@ def zone_problems(grid: Grid, zone_length_m) -> list[Problem]:
                         f"it holds only the centre node of a mesh of {grid.n_elements} "
                         "elements")]
     return []
+
+
+def points_per_node(node_arc_m: float, spacing_m: float) -> int:
+    """The smallest odd m with node_arc / m <= spacing (1 + POINT_SPACING_SLACK); odd, so
+    that a point sits on every node, the contact centre's among them (the native FMU's
+    contact.c counts alike)."""
+    limit = spacing_m * (1 + POINT_SPACING_SLACK)
+    guess = math.ceil(node_arc_m / limit)
+    if not guess <= _MOST_PER_NODE:
+        return _MOST_PER_NODE + 1  # (no spacing in range comes near) refused as too many
+    m = max(1, int(guess))
+    if m % 2 == 0:
+        m += 1
+    while m > 1 and node_arc_m / (m - 2) <= limit:
+        m -= 2
+    while node_arc_m / m > limit:
+        m += 2
+    return m
+
+
+def _round_up(value: float, digits: int = 4) -> float:
+    """``value`` rounded up to ``digits`` significant digits (a bound that, as printed, holds)."""
+    step = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    return math.ceil(value / step) * step
+
+
+def point_spacing_problems(grid: Grid, zone_length_m: float, spacing_m: float) -> list[Problem]:
+    """Why a contact point spacing (in range: parameters.point_spacing_range_problems) makes
+    more points than MAX_CONTACT_POINTS on this mesh and zone (empty when it does not)."""
+    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
+    carrying = int(np.count_nonzero(np.abs(grid.theta) <= half_angle * (1 + ZONE_ANGLE_SLACK)))
+    m = points_per_node(grid.node_arc_m, spacing_m)
+    if carrying * m <= MAX_CONTACT_POINTS:
+        return []
+    most = max(1, MAX_CONTACT_POINTS // carrying)
+    most -= 1 - most % 2  # odd
+    smallest = _round_up(grid.node_arc_m / max(most, 1))
+    return [Problem("contact_point_spacing_m", float(spacing_m), "m", POINTS_ALLOWED % smallest,
+                    POINTS_REASON % (m, carrying, carrying * m, MAX_CONTACT_POINTS))]
 
 
 # -- the law ----------------------------------------------------------------------------------

@@ -206,7 +206,7 @@ def build_contract(contact) -> StepContract:
         n_modes=modes.n_modes, n_zone=n_zone, n_points=n_zone, n_support=1,
         n_ring_rows=3 + 2 * n_zone, n_ring_cols=1 + n_zone,
         linear=int(contact.settings.law == "linear"), centre_point=int(zone.centre),
-        substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_zone),
+        substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_zone, 1),
         substep_s=float(contact.substep_s), speed_m_s=float(model.speed_m_s),
         static_deflection_m=float(patch.deflection_m),
         min_step_s=float(MIN_CORRECTED_STEP_S if truncated else 0.0), **arrays)
