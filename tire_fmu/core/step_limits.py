@@ -44,8 +44,9 @@ SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring tru
 #: solve's set-up, the outputs), one per mode kept (its decay and ramp), two per order and zone
 #: node pair (the forces' DFT and the readout's inverse at the zone nodes), three per pair
 #: of contact points (the interface the contact solve reads) and two per point and support
-#: node (reading the tread at the points, spreading their forces back to the nodes). benchmarks/bench_step_work.py
-#: measures a unit at 0.5-1.5 ns on the machines this was written on.
+#: node (reading the tread at the points, spreading their forces back to the nodes).
+#: benchmarks/bench_step_work.py measures a unit at 0.5-1.5 ns on the machines this was
+#: written on.
 SUBSTEP_WORK_BASE = 1000
 #: The most work one communication step may take (units): about a second of CPU. A tire whose
 #: millisecond would take more (a stiff contact on a light tread, sub-stepped at
