@@ -562,10 +562,12 @@ class CleatConvergence:
     """The rim load over an obstacle against the mesh, the rim held at its static height.
 
     Arrays are indexed [mesh] or [mesh, time]; ``time_s`` is common to every mesh and counts
-    from the moment the obstacle's first edge passes the contact centre. "Under the tire" is
-    while the obstacle overlaps the static footprint of that mesh (``under_tire_s``); the
-    spectrum lines are read over the obstacle's passage through the contact zone
-    (``zone_passage_s``), from contact_Fz sampled at ``step_s``.
+    from the moment the obstacle's first edge passes the contact centre. The obstacle is
+    "under the tire" (``under_tire_s``, per mesh) while it overlaps the stretch of road
+    |x| <= ``reach_m`` where the undeformed tread, the rim at its static height, would reach
+    down to the obstacle's top (to the road, for a pothole): from the first touch to the last.
+    The minimum of contact_Fz and the spectrum lines (of contact_Fz, sampled at ``step_s``)
+    are read over that time.
     """
 
     obstacle: object  # obstacles.Obstacle
@@ -581,7 +583,8 @@ class CleatConvergence:
     contact_fz_n: np.ndarray  # [mesh, time]
     static_rim_fz_n: np.ndarray
     under_tire_s: np.ndarray  # [mesh, (start, end)]
-    zone_passage_s: np.ndarray  # [mesh, (start, end)]
+    reach_m: np.ndarray  # [mesh]
+    contact_zone_length_m: np.ndarray  # [mesh]
     node_line_n: np.ndarray  # contact_Fz line at the node-passing frequency
     point_line_n: np.ndarray  # and at the point-passing frequency
     run_s: np.ndarray  # wall time of each mesh's run (s)
@@ -662,7 +665,8 @@ class CleatConvergence:
             "observed_order": order,
             "meshes": self.table_rows(),
             "under_tire_s": self.under_tire_s.tolist(),
-            "zone_passage_s": self.zone_passage_s.tolist(),
+            "reach_m": self.reach_m.tolist(),
+            "contact_zone_length_m": self.contact_zone_length_m.tolist(),
             "run_s": self.run_s.tolist(),
         }
         if histories:
@@ -670,6 +674,24 @@ class CleatConvergence:
             data["rim_fz_n"] = self.rim_fz_n.tolist()
             data["contact_fz_n"] = self.contact_fz_n.tolist()
         return data
+
+
+def obstacle_reach_m(radius_m: float, deflection_m: float, obstacle) -> float:
+    """Half-length of the road |x| <= reach over which the undeformed tread, its rim lowered
+    by ``deflection_m``, is below the obstacle's top (for a pothole: below the road)."""
+    top = max(obstacle.height_m, 0.0)
+    return math.sqrt(max(radius_m**2 - (radius_m - deflection_m - top) ** 2, 0.0))
+
+
+def zone_length_for_reach(radius_m: float, reach_m: float) -> float:
+    """The contact zone whose rays reach the road beyond the undeformed tread's first touch
+    at ``reach_m``, with :data:`CLEAT_ZONE_MARGIN_M` to spare."""
+    return 2 * radius_m * math.tan(math.asin(min(reach_m / radius_m, 1.0))) \
+        + CLEAT_ZONE_MARGIN_M
+
+
+#: Road the contact zone reaches beyond the obstacle's first touch of the undeformed tread.
+CLEAT_ZONE_MARGIN_M = 0.05
 
 
 def cleat_convergence(
@@ -681,7 +703,7 @@ def cleat_convergence(
     load_n: float | None = None,
     step_s: float = CLEAT_STEP_S,
     settle_s: float = CLEAT_SETTLE_S,
-    contact_zone_length_m: float = 0.6,
+    contact_zone_length_m: float | None = None,
     backend: str = "auto",
     progress: Progress | None = None,
 ) -> CleatConvergence:
@@ -692,10 +714,13 @@ def cleat_convergence(
     The road input is the obstacle's profile at the front of each mesh's contact zone
     (road_z, and road_vz = V dz/ds), sampled at ``step_s``; the obstacle lies on the ground,
     so every mesh meets it at the same time. ``point_spacing_m`` sets the contact points
-    (above the node arc, every node is its own point).
+    (above the node arc, every node is its own point). The contact zone is by default the
+    FMU's, widened where the obstacle would meet the tread before the zone
+    (:func:`zone_length_for_reach`); a zone given that is too short is refused.
     """
     import time
 
+    from .contact import DEFAULT_ZONE_LENGTH_M
     from .contact_dynamics import build_contact_model
     from .obstacles import Obstacle
     from .parameters import DEFAULT_LOAD_N
@@ -717,17 +742,32 @@ def cleat_convergence(
         problems.append(Problem("step_s", step_s, "s", "in (0, 1e-3] s"))
     if not (math.isfinite(settle_s) and 0 <= settle_s <= 1.0):
         problems.append(Problem("settle_s", settle_s, "s", "in [0, 1] s"))
-    if np.unique(counts).size != counts.size or np.any(np.diff(counts) <= 0):
+    if np.any(np.diff(counts) <= 0):
         problems.append(Problem("n_elements", counts.tolist(), "", "ascending and distinct"))
     if problems:
         raise ParameterError(problems)
+
+    def build(n: int, zone_length: float):
+        op = _cleat_operating_point(n, speed_m_s, load, point_spacing_m, zone_length)
+        return build_contact_model(tire, op)
+
     contacts, found = [], []
-    for n in counts:
+    for n in counts:  # every mesh's problems at once
         try:
-            op = _cleat_operating_point(n, speed_m_s, load, point_spacing_m,
-                                        contact_zone_length_m)
-            contacts.append(build_contact_model(tire, op))
-        except ParameterError as error:  # every mesh's problems at once
+            zone = DEFAULT_ZONE_LENGTH_M if contact_zone_length_m is None \
+                else contact_zone_length_m
+            contact = build(n, zone)
+            reach = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
+            needed = zone_length_for_reach(tire.R, reach)
+            if zone < needed:
+                if contact_zone_length_m is not None:
+                    raise ParameterError([Problem(
+                        "contact_zone_length_m", zone, "m", f"at least {needed:.4g} m",
+                        f"the {obstacle.label} meets the undeformed tread {reach:.4g} m ahead "
+                        "of the contact centre")])
+                contact = build(n, needed)
+            contacts.append(contact)
+        except ParameterError as error:
             found += error.details
     if found:
         raise ParameterError(found)
@@ -741,16 +781,11 @@ def cleat_convergence(
     absolute = step_s * np.arange(steps + 1)
     time_s = absolute - lead / speed_m_s
 
-    def edges(front: float, rear: float) -> list[float]:
-        # the obstacle [X, X + L], X = -V t, overlaps [rear, front] for these t
-        return [(-front) / speed_m_s, (obstacle.length_m - rear) / speed_m_s]
-
     size = counts.size
     rim, contact_fz = np.empty((size, steps + 1)), np.empty((size, steps + 1))
     statics, per_node, n_points = np.empty(size), np.empty(size, int), np.empty(size, int)
-    under, passage = np.empty((size, 2)), np.empty((size, 2))
+    under, reaches, zones = np.empty((size, 2)), np.empty(size), np.empty(size)
     node_line, point_line, run_s = np.empty(size), np.empty(size), np.empty(size)
-    radius = tire.R
     for i, contact in enumerate(contacts):
         started = time.perf_counter()
         simulator = ContactSimulator(contact, backend=backend)
@@ -769,20 +804,20 @@ def cleat_convergence(
         statics[i] = contact.static_outputs["rim_Fz"]
         per_node[i] = points_per_node(simulator.contract)
         n_points[i] = simulator.contract.n_points
-        footprint = contact.patch.footprint
-        under[i] = edges(footprint.front_edge_m, footprint.rear_edge_m)
-        passage[i] = edges(front, rears[i])
-        arc = 2 * np.pi * radius / counts[i]
-        inside = (time_s >= passage[i, 0]) & (time_s <= passage[i, 1])
+        zones[i] = contact.patch.zone.length_m
+        reaches[i] = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
+        # the obstacle [X, X + L], X = -V t, overlaps [-reach, reach] for these t
+        under[i] = -reaches[i] / speed_m_s, (obstacle.length_m + reaches[i]) / speed_m_s
+        arc = 2 * np.pi * tire.R / counts[i]
+        inside = (time_s >= under[i, 0]) & (time_s <= under[i, 1])
         node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], speed_m_s / arc)
         point_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside],
                                        speed_m_s * per_node[i] / arc)
         _report(progress, i + 1, size)
-    result = CleatConvergence(
+    return CleatConvergence(
         obstacle=obstacle, speed_m_s=float(speed_m_s), load_n=float(load), step_s=float(step_s),
         point_spacing_m=float(point_spacing_m), element_counts=counts,
         points_per_node=per_node, n_points=n_points, time_s=time_s, rim_fz_n=rim,
         contact_fz_n=contact_fz, static_rim_fz_n=statics, under_tire_s=under,
-        zone_passage_s=passage, node_line_n=node_line, point_line_n=point_line, run_s=run_s,
-        radius_m=float(radius))
-    return result
+        reach_m=reaches, contact_zone_length_m=zones, node_line_n=node_line,
+        point_line_n=point_line, run_s=run_s, radius_m=float(tire.R))
