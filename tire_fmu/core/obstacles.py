@@ -77,6 +77,37 @@ class Obstacle:
                          0.0)
         return height, slope
 
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first edge to ``s`` (m²; 0 before it, constant after)."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length_m)
+        if self.shape == "rectangular":
+            return self.height_m * s
+        wave = 2 * np.pi * s / self.length_m
+        return 0.5 * self.height_m * (s - self.length_m / (2 * np.pi) * np.sin(wave))
+
+    def mean_height(self, s_lo, s_hi) -> np.ndarray:
+        """Mean height over the road [s_lo, s_hi] (the height itself where s_lo = s_hi)."""
+        s_lo, s_hi = np.asarray(s_lo, dtype=float), np.asarray(s_hi, dtype=float)
+        width = s_hi - s_lo
+        point = width <= 0
+        mean = (self.integral(s_hi) - self.integral(s_lo)) / np.where(point, 1.0, width)
+        return np.where(point, self.profile(s_lo)[0], mean)
+
+    def road_samples(self, s, spacing_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope) of a road signal sampled every ``spacing_m`` of road at ``s``.
+
+        A rectangular obstacle is sampled by its mean over each sample's stretch of road
+        [s - spacing/2, s + spacing/2], slope 0: the trapezoid sum of such samples, which is
+        what a cubic Hermite interpolant with zero slopes integrates to, is then the exact
+        integral of the steps at every sample, whatever the phase of the edges between
+        samples (a point sample would shift each edge by up to half a sample). A rounded one
+        is smooth: its height and slope at the sample."""
+        if self.shape == "rectangular":
+            s = np.asarray(s, dtype=float)
+            half = 0.5 * spacing_m
+            return self.mean_height(s - half, s + half), np.zeros_like(s)
+        return self.profile(s)
+
     def to_dict(self) -> dict:
         return {"kind": self.kind, "height_m": self.height_m, "length_m": self.length_m,
                 "shape": self.shape, "label": self.label}

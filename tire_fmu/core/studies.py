@@ -712,7 +712,8 @@ def cleat_convergence(
     mesh, with :class:`~.simulator.ContactSimulator`.
 
     The road input is the obstacle's profile at the front of each mesh's contact zone
-    (road_z, and road_vz = V dz/ds), sampled at ``step_s``; the obstacle lies on the ground,
+    (road_z, and road_vz = V dz/ds), sampled at ``step_s`` as
+    :meth:`~.obstacles.Obstacle.road_samples` says; the obstacle lies on the ground,
     so every mesh meets it at the same time. ``point_spacing_m`` sets the contact points
     (above the node arc, every node is its own point). The contact zone is by default the
     FMU's, widened where the obstacle would meet the tread before the zone
@@ -790,7 +791,8 @@ def cleat_convergence(
         started = time.perf_counter()
         simulator = ContactSimulator(contact, backend=backend)
         front = contact.windows.front_m
-        height, slope = obstacle.profile(front - lead + speed_m_s * absolute)
+        height, slope = obstacle.road_samples(front - lead + speed_m_s * absolute,
+                                              speed_m_s * step_s)
         road_v = slope * speed_m_s
         out = np.empty((steps + 1, 2))
         first = simulator.outputs
