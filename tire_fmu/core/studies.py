@@ -776,11 +776,13 @@ def cleat_convergence(
     # ends once its last edge has left the farthest zone rear, then settles
     fronts = np.array([c.windows.front_m for c in contacts])
     rears = np.array([c.windows.front_m - speed_m_s * c.windows.horizon_s for c in contacts])
-    lead = float(fronts.max()) + 2 * speed_m_s * step_s
+    # ... a whole number of steps ahead, so the samples fall on t = k·h from its passing the
+    # contact centre, whatever the meshes
+    lead = (math.ceil(float(fronts.max()) / (speed_m_s * step_s)) + 2) * speed_m_s * step_s
     steps = int(math.ceil(((lead + obstacle.length_m - rears.min()) / speed_m_s + settle_s)
                           / step_s))
     absolute = step_s * np.arange(steps + 1)
-    time_s = absolute - lead / speed_m_s
+    time_s = step_s * (np.arange(steps + 1) - round(lead / (speed_m_s * step_s)))
 
     size = counts.size
     rim, contact_fz = np.empty((size, steps + 1)), np.empty((size, steps + 1))
