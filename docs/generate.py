@@ -696,7 +696,7 @@ def _contact_feedthrough() -> str:
 
 @value("patch-filter")
 def _patch_filter() -> str:
-    """First null of the road filter of the footprint's nodes (weighted by their springs) at
+    """First null of the road filter of the footprint's points (weighted by their springs) at
     1 m/s; it scales with V, so L = V / f_null."""
     import numpy as np
 
@@ -705,7 +705,7 @@ def _patch_filter() -> str:
     model = _demo_model()
     patch = model.patch
     windows = road_windows(patch.zone, patch.deflection_m, 1.0)
-    weights = patch.node_stiffness_n_per_m  # contact force per unit road under each node
+    weights = patch.point_stiffness_n_per_m  # contact force per unit road under each point
     freqs = np.linspace(0.01, 50.0, 50001)
     gain = np.abs(weights @ windows.frequency_response(2 * np.pi * freqs)) / weights.sum()
     first = np.flatnonzero((gain[1:-1] < gain[:-2]) & (gain[1:-1] <= gain[2:]))[0] + 1

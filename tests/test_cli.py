@@ -96,6 +96,28 @@ def test_patch_json_equals_the_models_footprint(capsys, tire):
     assert paper["contact"] == "prescribed patch" and paper["patch_length_m"] == 0.204
 
 
+def test_patch_shows_the_contact_points_the_point_spacing_sets(capsys, tire):
+    from tire_fmu.core.contact import DEFAULT_CONTACT_POINT_SPACING_M
+
+    default = run_json(capsys, "patch", "--load", "27700")["footprint"]
+    arc = 2 * np.pi * tire.R / 100
+    # the default spacing: the fewest (odd) points per node arc that are no farther apart
+    m = default["points_per_node"]
+    assert m % 2 == 1 and arc / m <= DEFAULT_CONTACT_POINT_SPACING_M < arc / (m - 2)
+    assert len(default["theta_rad"]) == default["zone_points"] > default["contact_points"]
+    nodes = run_json(capsys, "patch", "--load", "27700", "--point-spacing", "1")["footprint"]
+    assert nodes["points_per_node"] == 1 and nodes["zone_points"] == nodes["zone_nodes"]
+    fine = run_json(capsys, "patch", "--load", "27700", "--point-spacing", "5e-4")["footprint"]
+    assert fine["contact_point_spacing_m"] <= 5e-4 < fine["contact_point_spacing_m"] * (
+        fine["points_per_node"] / (fine["points_per_node"] - 2))
+    # the help states the core's default (the CLI parses without numpy, so it is typed)
+    with pytest.raises(SystemExit):
+        main(["patch", "--help"])
+    stated = re.search(r"--point-spacing M.*?\(default ([0-9.e-]+);", " ".join(
+        capsys.readouterr().out.split()))
+    assert float(stated.group(1)) == DEFAULT_CONTACT_POINT_SPACING_M
+
+
 def test_convergence_json_equals_the_study(capsys, tire):
     data = run_json(capsys, "convergence", "--elements-list", "40,20,80", "--nmax", "5")
     same(data, convergence_study(tire, (20, 40, 80), range(6)))
@@ -255,6 +277,10 @@ BAD_INPUTS = [
                                                             "[10000, 1e+13] N/m^2"]),
     (["reduce", "--tire", "k_cw=5e-324", "--allow-supercritical", "--speed", "5"],
      ["k_cw = 4.94066e-324 N/m^2", "[10000, 1e+13] N/m^2"]),
+    (["patch", "--load", "2e4", "--point-spacing", "1e-5", "--elements", "3"],
+     ["--point-spacing = 1e-05 m: must be in [0.0001, 1] m", "--elements = 3"]),
+    (["frf", "--elements", "1600", "--point-spacing", "1e-4"],
+     ["--point-spacing = 0.0001 m: must be at least"]),
     (["modes", "--tire", "sidewall_pressure_exponent=1", "--inflation-pressure", "1e-300"],
      ["--inflation-pressure = 1e-300 Pa: must be at least 10000 Pa"]),
 ]

@@ -59,9 +59,15 @@ def test_the_footprint_panels_draw_the_same_nodes_at_the_same_x(monkeypatch):
     (fig,) = figures
     top, bottom = fig.axes
     pressure = [line for line in top.get_lines() if line.get_marker() == "o"]
-    nodes = [line for line in bottom.get_lines() if line.get_label() == "tread nodes (static)"]
-    assert len(pressure) == len(nodes) == 1
-    assert np.array_equal(pressure[0].get_xdata(), nodes[0].get_xdata())
+    tread = [line for line in bottom.get_lines()
+             if line.get_label().startswith("tread at the contact points")]
+    nodes = [line for line in bottom.get_lines() if line.get_label() == "ring nodes (static)"]
+    assert len(pressure) == len(tread) == len(nodes) == 1
+    assert np.array_equal(pressure[0].get_xdata(), tread[0].get_xdata())
+    # every ring node is drawn on the tread, at one of the points' x
+    assert set(nodes[0].get_xdata()) <= set(tread[0].get_xdata())
+    assert len(nodes[0].get_xdata()) == np.count_nonzero(model.patch.zone.point_weight.max(
+        axis=1) == 1.0)
     assert top.get_xlim() == bottom.get_xlim()
 
 
@@ -112,7 +118,8 @@ def test_the_linear_contacts_footprint_is_never_negative(depth_m):
     lengths = {}
     for law in ("linear", "unilateral"):
         sim = ContactSimulator(build_contact_model(tire, op, settings=ContactSettings(law=law)))
-        profile = pothole(depth_m, 0.3, 10.0, 0.2, 1e-4, "rectangular", 0.5)
+        # 0.6 m: longer than the tread can bridge (a 0.3 m pothole carries it on its edges)
+        profile = pothole(depth_m, 0.6, 10.0, 0.2, 1e-4, "rectangular", 0.5)
         lengths[law] = np.array([sim.step(1e-4, 0.0, 0.0, z, v)[4] for z, v in
                                  zip(profile.height_m[1:], profile.velocity_m_s[1:])])
     assert lengths["linear"].min() >= 0.0

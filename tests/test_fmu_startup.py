@@ -110,12 +110,15 @@ def test_the_assembled_matrices_follow_from_the_model_on_first_use():
     expected = structural_matrices(model.tire, model.grid, 10.0 / model.tire.R)
     assert abs(model.structure.stiffness - expected.stiffness).max() == 0
     assert abs(model.structure.damping - expected.damping).max() == 0
-    springs = model.contact_stiffness.diagonal()
-    patch = model.patch
-    np.testing.assert_array_equal(springs[patch.node_indices],
-                                  patch.node_stiffness_n_per_m[patch.contact_positions])
-    assert np.count_nonzero(springs) == patch.contact_positions.size > 0
-    assert not undeformed(model).contact_stiffness.diagonal().any()
+    springs = model.contact_stiffness.toarray()
+    patch, zone = model.patch, model.patch.zone
+    interp = zone.interpolation
+    block = interp.T @ np.diag(patch.point_stiffness_n_per_m) @ interp  # Iᵀ diag(k) I
+    np.testing.assert_allclose(springs[np.ix_(zone.nodes, zone.nodes)], block, rtol=1e-14,
+                               atol=0)
+    springs[np.ix_(zone.nodes, zone.nodes)] = 0.0
+    assert not springs.any() and patch.contact_points.size > 0
+    assert undeformed(model).contact_stiffness.nnz == 0
 
 
 @pytest.mark.fmu

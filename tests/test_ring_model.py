@@ -11,7 +11,7 @@ from tire_fmu.core import (
     real_modes,
     undeformed,
 )
-from tire_fmu.core.contact import patch_weights
+from tire_fmu.core.contact import contact_zone, patch_weights
 from tire_fmu.core.discretisation import Grid
 from tire_fmu.core.io_model import build_io_model
 
@@ -103,14 +103,18 @@ def test_patch_splits_pairs_symmetric_member_rises_most(tire):
     assert rises_sym[2] < rises_sym[1]  # the stiffened member's rise falls off for higher n
 
 
-def test_patch_weights_are_fractional_and_sum_to_the_patch(tire):
+@pytest.mark.parametrize("spacing_m", [1.0, 2.5e-3])
+def test_patch_weights_are_fractional_and_sum_to_the_patch(tire, spacing_m):
     grid = Grid(100, tire.R)
+    zone = contact_zone(grid, tire.k_cw, tire.beta, 0.6, spacing_m)
     for length in (0.0, 0.01, 0.05, 0.204, 0.333):
-        weights = patch_weights(grid, length)
+        weights = patch_weights(zone, length)
         assert np.all((weights >= 0) & (weights <= 1))
-        assert weights.sum() * grid.node_arc_m == pytest.approx(length, abs=1e-12)
-        np.testing.assert_array_equal(weights, weights[grid.mirror_index])
-    assert np.count_nonzero(patch_weights(grid, 0.204) > 0.99) == 5  # the paper's 5 nodes
+        assert weights.sum() * zone.point_arc_m == pytest.approx(length, abs=1e-12)
+        np.testing.assert_array_equal(weights, weights[::-1])  # mirror-symmetric
+    # the paper's 5 nodes: 5 node arcs (0.204 m is 1e-4 short of them: the end points partly)
+    full = np.count_nonzero(patch_weights(zone, 0.204) > 0.99)
+    assert 5 * zone.points_per_node - 2 <= full <= 5 * zone.points_per_node
 
 
 def test_frequencies_vary_continuously_with_patch_length(tire):

@@ -406,24 +406,23 @@ def plot_fit(result, path: Path) -> Path:
 
 
 def plot_footprint(model, patch, path: Path) -> Path:
-    """The static contact: line pressure per zone node, and the tread near the contact (rim
-    frame, radial scale in mm) on the flat road, both against the x of the static tread
-    nodes, so a node's pressure stands above the node (a pushing node lies on the road, where
-    its ray meets it; the others sit above the road, nearer the centre than their rays' road
-    points)."""
+    """The static contact: line pressure at each contact point, and the tread near the
+    contact (rim frame, radial scale in mm) on the flat road, both against the x of the static
+    tread, so a point's pressure stands above it (a pushing point lies on the road, where its
+    ray meets it; the others sit above the road). The ring's nodes are marked on the tread."""
     plt = _pyplot()
     zone = patch.zone
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 6.5), sharex=True,
                                       gridspec_kw={"height_ratios": [1, 1.3]})
     radius, height = zone.grid.radius_m, zone.grid.radius_m - patch.deflection_m
     w = (patch.footprint.tread_displacement_m if patch.footprint is not None
-         else np.zeros(zone.size))
+         else np.zeros(zone.n_points))
     r = radius + w
-    x = -r * np.sin(zone.theta) * 1e3
-    pressure = patch.forces_n / zone.grid.node_arc_m / 1e3
+    x = -r * np.sin(zone.point_theta) * 1e3
+    pressure = patch.forces_n / zone.point_arc_m / 1e3
     pushing = pressure > 0
     top.vlines(x[pushing], 0, pressure[pushing], color="tab:blue", lw=3)
-    top.plot(x, pressure, "o", color="tab:blue", ms=4)
+    top.plot(x, pressure, "o", color="tab:blue", ms=4 if zone.points_per_node == 1 else 2)
     if patch.footprint is not None:
         for edge in (patch.footprint.front_edge_m, patch.footprint.rear_edge_m):
             top.axvline(edge * 1e3, color="0.5", ls=":", lw=1)
@@ -436,8 +435,13 @@ def plot_footprint(model, patch, path: Path) -> Path:
     theta = np.linspace(zone.theta[0], zone.theta[-1], 200)
     bottom.plot(-radius * np.sin(theta) * 1e3, (height - radius * np.cos(theta)) * 1e3,
                 "--", color="0.6", label="undeformed tread")
-    bottom.plot(x, (height - r * np.cos(zone.theta)) * 1e3,
-                "o-", color="tab:blue", ms=4, label="tread nodes (static)")
+    bottom.plot(x, (height - r * np.cos(zone.point_theta)) * 1e3, "-", color="tab:blue",
+                lw=1, label=f"tread at the contact points ({zone.points_per_node} per node)")
+    # the points that sit on a node (every m-th: m is odd, so one at each node's centre)
+    on_node = np.isclose(np.mod(zone.point_theta / zone.grid.dtheta + 0.5, 1.0), 0.5,
+                         atol=1e-9)
+    bottom.plot(x[on_node], (height - r[on_node] * np.cos(zone.point_theta[on_node])) * 1e3,
+                "o", color="tab:blue", ms=4, label="ring nodes (static)")
     bottom.axhline(0.0, color="k", lw=1.5, label="road")
     bottom.set_xlabel("x along the road [mm] (forward)")
     bottom.set_ylabel("height above road [mm]")

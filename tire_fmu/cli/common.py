@@ -34,7 +34,7 @@ CLI_NAMES = {
     "n_modes": "--n-modes", "n_states": "--n-states", "contribution_threshold": "--threshold",
     "target_error": "--target-error", "error_band_hz": "--band", "method": "--method",
     "nmax": "--nmax", "input": "--input", "output": "--output",
-    "contact_zone_length_m": "--zone-length",
+    "contact_zone_length_m": "--zone-length", "contact_point_spacing_m": "--point-spacing",
 }
 #: how "no limit" reads on the command line
 CLI_UNSET = "left out"
@@ -111,6 +111,12 @@ def add_tire_options(parser: argparse.ArgumentParser) -> None:
 def add_mesh_option(parser: argparse.ArgumentParser, default: int = 100) -> None:
     parser.add_argument("--elements", metavar="N", type=int, default=default,
                         help=f"number of elements around the ring (default {default})")
+    parser.add_argument("--point-spacing", metavar="M", type=float, default=None,
+                        help="largest distance in m between the contact points on the tread "
+                        # core.contact.DEFAULT_CONTACT_POINT_SPACING_M (no numpy before parsing;
+                        # tests/test_cli.py holds the two equal)
+                        "(default 0.0025; at least the node "
+                        "arc 2*pi*R/N gives one point per node)")
 
 
 #: What --load 0 means, wherever --load is taken.
@@ -189,6 +195,8 @@ def operating_point_values(args: argparse.Namespace, undeformed_default: bool) -
         values["allow_supercritical"] = True
     if getattr(args, "zone_length", None) is not None:
         values["contact_zone_length_m"] = args.zone_length
+    if getattr(args, "point_spacing", None) is not None:
+        values["contact_point_spacing_m"] = args.point_spacing
     return values
 
 

@@ -188,13 +188,17 @@ def run_patch(args: argparse.Namespace) -> Output:
         fp = patch.footprint
         data["footprint"] = fp.to_dict()
         lines += [f"footprint length    {fp.length_m * 100:.4g} cm on the road "
-                  f"({fp.n_active} of {fp.zone.size} zone nodes push, N = {model.n_elements})",
+                  f"({fp.n_active} of {fp.zone.n_points} contact points push, N = "
+                  f"{model.n_elements})",
+                  f"contact points      {fp.zone.points_per_node} per node, "
+                  f"{fp.zone.point_arc_m * 1e3:.3g} mm apart (--point-spacing "
+                  f"{fp.zone.point_spacing_m * 1e3:g} mm)",
                   f"stiffness           secant {fp.secant_stiffness_n_per_m / 1e6:.4g} MN/m, "
                   f"tangent {fp.tangent_stiffness_n_per_m / 1e6:.4g} MN/m",
                   f"longitudinal force  {fp.longitudinal_force_n:.4g} N (road on tire, x "
                   "forward)"]
         rows = [[np.degrees(t), 1e3 * x, q / 1e3, 1e3 * pen] for t, x, q, pen in zip(
-            fp.zone.theta, fp.zone.road_positions_m(fp.deflection_m),
+            fp.zone.point_theta, fp.zone.road_positions_m(fp.deflection_m),
             fp.line_pressure_n_per_m, fp.penetration_m) if q > 0]
         lines += ["", table(rows, ["theta [deg]", "x [mm]", "line pressure [kN/m]",
                                    "penetration [mm]"])]

@@ -1,55 +1,64 @@
-"""Tread-road contact: the contact zone, the unilateral law, the static footprint, the road
-under each node, and the paper's prescribed patch. The one home of everything contact.
+"""Tread-road contact: the contact zone and its contact points, the unilateral law, the
+static footprint, the road under each point, and the paper's prescribed patch. The one home
+of everything contact.
 
-**Zone.** A fixed set of tread nodes around the contact centre (node 0, θ = 0) carries road
-springs: the nodes whose unloaded ray meets the road within ``zone_length_m / 2`` of the
-centre. The zone is fixed in the ground frame (so it does not move with spin) and is wider
-than any footprint the model is asked to carry, so that a cleat is met before it reaches the
-footprint.
+**Zone and contact points.** The carrying nodes are the tread nodes around the contact
+centre (node 0, θ = 0) whose unloaded ray meets the road within ``zone_length_m / 2``. The
+zone is fixed in the ground frame (so it does not move with spin) and is wider than any
+footprint the model is asked to carry, so that a cleat is met before it reaches the
+footprint. The road meets the tread not at the nodes but at contact points, m per node arc
+(m the smallest odd number that puts them at most ``point_spacing_m`` apart), at the centres
+of the arc's m equal sub-arcs. A point reads the tread's radial displacement by cubic
+Lagrange interpolation of the four nearest nodes, w_p = (I w)_p, and gives its force back to
+those nodes as Iᵀ f: the virtual work of the interpolation, so that the springs on the ring
+are Iᵀ diag(k) I, symmetric, and a rigid motion of the tread loads it as before. The zone
+nodes are the carrying nodes and, for m > 1, the two beyond each end the stencils reach. With
+m = 1 each point is its node (I = identity): the node model.
 
-**Law.** Node j meets the road through a radial penalty spring k_j = k_cw·R·δθ and a damper
-c_j = β·k_j that can only push: with its penetration p_j (along its ray, positive into the
-road) and rate ṗ_j, the road pushes the tread inwards with
+**Law.** Point p meets the road through a radial spring k_p = k_cw·R·δθ/m (the tread rubber's
+radial stiffness k_cw per metre of circumference, over the point's arc) and a damper
+c_p = β·k_p that can only push: with its penetration p_p (along its ray, positive into the
+road) and rate ṗ_p, the road pushes the tread inwards with
 
-    f_j = max(0, k_j p_j + c_j ṗ_j)  while p_j > 0,   f_j = 0 otherwise.
-
-k_cw is the paper's "contact-patch stiffness", here a penalty: it is stiff enough (a node on
-it alone rings near 870 Hz) that its value barely moves the footprint (see docs/theory.md).
+    f_p = max(0, k_p p_p + c_p ṗ_p)  while p_p > 0,   f_p = 0 otherwise.
 
 **Gap.** The rim centre is at height H = R - δ + z_rim above the road datum (δ the static
-rim deflection), node j sits on its ray at distance R + w_j from the rim centre (w the
-rim-relative radial displacement), and the road under it is at height h_j. Along the ray the
-road is (H - h_j)/cos θ_j away, so
+rim deflection), the tread at point p sits on the point's ray at distance R + w_p from the
+rim centre (w the rim-relative radial displacement), and the road under it is at height h_p.
+Along the ray the road is (H - h_p)/cos θ_p away, so
 
-    p_j = R + w_j - (H - h_j)/cos θ_j ,
+    p_p = R + w_p - (H - h_p)/cos θ_p ,
 
 which for a flat road is the brief's u_j <= (R - δ)/cos θ_j - R. Rim and road moving
-together (z_rim = h_j) leave p_j, and with it every force, unchanged.
+together (z_rim = h_p) leave p_p, and with it every force, unchanged. The vertical force of
+the points on the ring is Σ (I cos θ)_p f_p (``force_cos``): the vertical parts of the radial
+node forces Iᵀ f.
 
 **Static footprint.** For a given rim deflection the static contact forces solve the linear
-complementarity problem f >= 0, f/k - p >= 0, f·(f/k - p) = 0 with p = -g(δ) - G f (G the
-ring's static compliance at the zone nodes). Its solution is piecewise linear in δ, so it is
-traced exactly by active-set continuation from δ = 0: along each segment the active set is
-fixed, and the next node to enter (its penetration reaches 0) or to leave (its force reaches
-0) ends the segment. The load for a deflection and the deflection for a load are both read
-off that path, with the tangent stiffness of the segment.
+complementarity problem f >= 0, f/k - p >= 0, f·(f/k - p) = 0 with p = -g(δ) - G_p f
+(G_p = I G Iᵀ, G the ring's static compliance at the zone nodes). Its solution is piecewise
+linear in δ, so it is traced exactly by active-set continuation from δ = 0: along each
+segment the active set is fixed, and the next point to enter (its penetration reaches 0) or
+to leave (its force reaches 0) ends the segment. The load for a deflection and the
+deflection for a load are both read off that path, with the tangent stiffness of the segment.
 
-**Footprint length** on the discrete mesh: the road length between the two points where the
-penetration, linearly interpolated between the outermost active node and its inactive
-neighbour, crosses zero. It is continuous in the load (a node entering adds length smoothly).
+**Footprint length**: the road length between the two places where the penetration, linearly
+interpolated between the outermost active point and its inactive neighbour, crosses zero. It
+is continuous in the load (a point entering adds length smoothly).
 
-**Road under each node.** Each zone node stands for an arc of tread, whose ray projections
+**Road under each point.** Each point stands for a sub-arc of tread whose ray projections
 cover a window [x_lo, x_hi] of road; its road height is the average of the profile over that
-window (the exact linear part of a Winkler foundation over the arc), so a cleat narrower than
-the node spacing is not missed between nodes. ``road_z`` is the height at the front of the
-zone; at speed V node j sees the window [x_lo, x_hi] of road that passed the front
-(x_front - x)/V earlier. At V = 0 every node sees ``road_z`` at once (a shaker plate).
+window (the exact linear part of a Winkler foundation over the arc). ``road_z`` is the height
+at the front of the zone; at speed V point p sees the window [x_lo, x_hi] of road that passed
+the front (x_front - x)/V earlier. At V = 0 every point sees ``road_z`` at once (a shaker
+plate). Why the points converge where the nodes did not: docs/theory.md §4.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -59,6 +68,16 @@ from .parameters import Problem, render
 #: Default length of road under the contact zone (m): wide enough for the largest credible
 #: footprint and for a 40 mm cleat to be met before it reaches the footprint.
 DEFAULT_ZONE_LENGTH_M = 0.6
+#: Default largest distance between contact points along the tread (m): four points on a
+#: 10 mm road feature, and a rim load over a 20 mm cleat converged to about 1 % on any mesh
+#: (docs/theory.md, "Contact points: convergence over cleats").
+DEFAULT_CONTACT_POINT_SPACING_M = 2.5e-3
+MIN_CONTACT_POINT_SPACING_M = 1e-4
+MAX_CONTACT_POINT_SPACING_M = 1.0
+#: A contact solve takes at most this many points (its interface is dense in them).
+MAX_CONTACT_POINTS = 4000
+#: Relative slack on the spacing, so that a node arc exactly m times it has m points.
+POINT_SPACING_SLACK = 1e-9
 #: The zone may reach at most this far around the ring (|θ| < 60°): beyond, the flat-road
 #: ray geometry and the small-deflection ring stop being credible.
 MAX_ZONE_HALF_ANGLE = math.pi / 3
@@ -83,74 +102,208 @@ LENGTH_BISECTIONS = 60
 
 @dataclass(frozen=True, eq=False)
 class ContactZone:
-    """The tread nodes that may meet the road, front (θ < 0) to rear, and their road springs."""
+    """The tread that may meet the road: its contact points and the ring nodes they read.
+
+    ``nodes``/``theta`` are the zone nodes (front, θ < 0, to rear); the points, front to rear,
+    read the ring at ``point_support`` (zone positions) with ``point_weight`` and load those
+    nodes with the same weights (module doc). One point per node (``points_per_node = 1``) is
+    the node model: point p is zone node p.
+    """
 
     grid: Grid
-    nodes: np.ndarray  # tread node indices
-    theta: np.ndarray  # node angles from the contact centre (rad), ascending
-    stiffness_n_per_m: np.ndarray  # k_j = k_cw·R·δθ
-    damping_n_s_per_m: np.ndarray  # c_j = β·k_j
+    nodes: np.ndarray  # tread node indices of the zone nodes
+    theta: np.ndarray  # their angles from the contact centre (rad), ascending
+    points_per_node: int  # m, odd
+    point_theta: np.ndarray  # ray angle of each contact point (rad), ascending
+    point_support: np.ndarray  # (P, S) zone positions each point reads
+    point_weight: np.ndarray  # (P, S) cubic Lagrange weights (1 for the node model)
+    stiffness_n_per_m: np.ndarray  # k_p = k_cw·R·δθ/m per point
+    damping_n_s_per_m: np.ndarray  # c_p = β·k_p
     length_m: float  # road length the zone covers when unloaded
+    point_spacing_m: float  # the spacing asked for (the points are at most this far apart)
 
     @property
-    def size(self) -> int:
+    def n_nodes(self) -> int:
         return self.nodes.size
 
     @property
-    def cos(self) -> np.ndarray:
-        return np.cos(self.theta)
+    def n_points(self) -> int:
+        return self.point_theta.size
+
+    @property
+    def point_arc_m(self) -> float:
+        """Tread arc each contact point stands for (m)."""
+        return self.grid.node_arc_m / self.points_per_node
+
+    @cached_property
+    def interpolation(self) -> np.ndarray:
+        """I (P x Z): point p's radial displacement is (I w)_p; node forces are Iᵀ f."""
+        out = np.zeros((self.n_points, self.n_nodes))
+        rows = np.repeat(np.arange(self.n_points), self.point_support.shape[1])
+        np.add.at(out, (rows, self.point_support.ravel()), self.point_weight.ravel())
+        return out
+
+    @property
+    def point_cos(self) -> np.ndarray:
+        """cos of each point's ray: its gap to the road is measured along that ray."""
+        return np.cos(self.point_theta)
+
+    @property
+    def point_sec(self) -> np.ndarray:
+        return 1.0 / np.cos(self.point_theta)
+
+    @cached_property
+    def force_cos(self) -> np.ndarray:
+        """Vertical force on the ring per unit push of each point: its push reaches the nodes
+        as radial forces Iᵀ f, whose vertical parts sum to (I cos θ)_p per newton."""
+        return self.interpolation @ np.cos(self.theta)
+
+    @cached_property
+    def force_sin(self) -> np.ndarray:
+        """The same for the horizontal (x) part: (I sin θ)_p."""
+        return self.interpolation @ np.sin(self.theta)
 
     @property
     def centre(self) -> int:
-        """Position of node 0 (the contact centre) in the zone."""
+        """Position of node 0 (the contact centre) among the zone nodes."""
         return int(np.flatnonzero(self.nodes == 0)[0])
 
+    @property
+    def centre_point(self) -> int:
+        """The contact point at the contact centre (θ = 0; m is odd, so there is one)."""
+        return int(np.argmin(np.abs(self.point_theta)))
+
     def unloaded_gap_m(self, deflection_m: float) -> np.ndarray:
-        """Gap along each ray between the undeformed tread and a flat road, rim lowered by δ."""
+        """Gap along each point's ray between the undeformed tread and a flat road, rim
+        lowered by δ."""
         radius = self.grid.radius_m
-        return (radius - deflection_m) / self.cos - radius
+        return (radius - deflection_m) / self.point_cos - radius
 
     def road_positions_m(self, deflection_m: float) -> np.ndarray:
-        """Where each node's ray meets the road, x forward from the contact centre (m)."""
-        return -(self.grid.radius_m - deflection_m) * np.tan(self.theta)
+        """Where each point's ray meets the road, x forward from the contact centre (m)."""
+        return -(self.grid.radius_m - deflection_m) * np.tan(self.point_theta)
 
     def road_windows_m(self, deflection_m: float) -> tuple[np.ndarray, np.ndarray]:
-        """(x_lo, x_hi): the road each node's arc [θ - δθ/2, θ + δθ/2] covers."""
+        """(x_lo, x_hi): the road each point's arc [θ_p - δθ/2m, θ_p + δθ/2m] covers."""
         height = self.grid.radius_m - deflection_m
-        half = 0.5 * self.grid.dtheta
-        return -height * np.tan(self.theta + half), -height * np.tan(self.theta - half)
+        half = 0.5 * self.grid.dtheta / self.points_per_node
+        return (-height * np.tan(self.point_theta + half),
+                -height * np.tan(self.point_theta - half))
+
+
+def points_per_node(grid: Grid, spacing_m: float) -> int:
+    """m: the smallest odd number of points per node arc no farther apart than ``spacing_m``
+    (odd, so that a point sits on every node and the points are mirror-symmetric)."""
+    ratio = grid.node_arc_m / (float(spacing_m) * (1 + POINT_SPACING_SLACK))
+    m = max(1, math.ceil(ratio))
+    return m if m % 2 else m + 1
+
+
+def lagrange_weights(s: np.ndarray) -> np.ndarray:
+    """Cubic Lagrange weights (.., 4) on nodes -1, 0, 1, 2 for a point at s in [0, 1)."""
+    s = np.asarray(s, dtype=float)[..., None]
+    return np.concatenate([-s * (s - 1) * (s - 2) / 6, (s + 1) * (s - 1) * (s - 2) / 2,
+                           -(s + 1) * s * (s - 2) / 2, (s + 1) * s * (s - 1) / 6], axis=-1)
 
 
 def contact_zone(grid: Grid, k_cw: float, beta: float,
-                 zone_length_m: float = DEFAULT_ZONE_LENGTH_M) -> ContactZone:
-    """The zone of nodes whose unloaded ray meets the road within ``zone_length_m / 2``."""
+                 zone_length_m: float = DEFAULT_ZONE_LENGTH_M,
+                 point_spacing_m: float = DEFAULT_CONTACT_POINT_SPACING_M) -> ContactZone:
+    """The contact points of the nodes whose unloaded ray meets the road within
+    ``zone_length_m / 2``, at most ``point_spacing_m`` apart.
+
+    Each such carrying node's arc holds m points at the centres of its m equal sub-arcs, read
+    on the tread by cubic Lagrange interpolation of the four nearest nodes: the interpolant
+    of the ring's second-order finite differences, so the tread between nodes is resolved to
+    the mesh's own order, and it reproduces a rigid motion of the tread exactly. The zone
+    nodes are the carrying nodes and, for m > 1, the two beyond each end the stencils reach.
+    """
     half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
-    inside = np.abs(grid.theta) <= half_angle * (1 + ZONE_ANGLE_SLACK)
-    nodes = np.flatnonzero(inside)
-    nodes = nodes[np.argsort(grid.theta[nodes], kind="stable")]
-    stiffness = np.full(nodes.size, k_cw * grid.node_arc_m)
-    return ContactZone(grid=grid, nodes=nodes, theta=grid.theta[nodes].copy(),
-                       stiffness_n_per_m=stiffness, damping_n_s_per_m=beta * stiffness,
-                       length_m=float(zone_length_m))
+    half = int(math.floor(half_angle * (1 + ZONE_ANGLE_SLACK) / grid.dtheta))
+    m = points_per_node(grid, point_spacing_m)
+    reach = 0 if m == 1 else 2
+    offsets = np.arange(-half - reach, half + reach + 1)
+    nodes = np.mod(offsets, grid.n_elements)
+    theta = grid.theta[nodes].copy()
+    # point u/m node spacings from the centre, u = j m + i - (m - 1)/2 (integers: exact mirror)
+    u = (np.arange(-half, half + 1)[:, None] * m + np.arange(m)[None, :] - (m - 1) // 2).ravel()
+    if m == 1:
+        support = (u + half)[:, None]
+        weight = np.ones((u.size, 1))
+        point_theta = theta.copy()
+    else:
+        base = np.floor_divide(u, m)
+        support = base[:, None] + np.arange(-1, 3)[None, :] + half + reach
+        weight = lagrange_weights((u - base * m) / m)
+        point_theta = u * (grid.dtheta / m)
+    stiffness = np.full(u.size, k_cw * grid.node_arc_m / m)
+    return ContactZone(grid=grid, nodes=nodes, theta=theta, points_per_node=m,
+                       point_theta=point_theta, point_support=support.astype(np.intp),
+                       point_weight=weight, stiffness_n_per_m=stiffness,
+                       damping_n_s_per_m=beta * stiffness, length_m=float(zone_length_m),
+                       point_spacing_m=float(point_spacing_m))
 
 
-def zone_problems(grid: Grid, zone_length_m) -> list[Problem]:
-    """Why a zone length cannot make a usable zone on this mesh (empty when it can)."""
+def zone_problems(grid: Grid, zone_length_m,
+                  point_spacing_m=DEFAULT_CONTACT_POINT_SPACING_M) -> list[Problem]:
+    """Why a zone length and point spacing cannot make a usable zone on this mesh (empty when
+    they can)."""
     try:
         length = float(zone_length_m)
     except (TypeError, ValueError):
         length = math.nan
     limit = 2 * grid.radius_m * math.tan(MAX_ZONE_HALF_ANGLE)
+    problems = point_spacing_problems(point_spacing_m)
     if not (math.isfinite(length) and 0 < length <= limit):
-        return [Problem("contact_zone_length_m", zone_length_m, "m", f"in (0, {limit:.4g}] m",
-                        "at most 60 degrees of the ring either side of the contact centre")]
+        return problems + [Problem(
+            "contact_zone_length_m", zone_length_m, "m", f"in (0, {limit:.4g}] m",
+            "at most 60 degrees of the ring either side of the contact centre")]
     half_angle = math.atan(0.5 * length / grid.radius_m)
     if half_angle < grid.dtheta:
         need = 2 * grid.radius_m * math.tan(grid.dtheta)
-        return [Problem("contact_zone_length_m", length, "m",
-                        f"at least {need:.4g} m (one node either side), or refine the mesh",
-                        f"it holds only the centre node of a mesh of {grid.n_elements} "
-                        "elements")]
+        return problems + [Problem(
+            "contact_zone_length_m", length, "m",
+            f"at least {need:.4g} m (one node either side), or refine the mesh",
+            f"it holds only the centre node of a mesh of {grid.n_elements} elements")]
+    return problems or point_count_problems(grid, length, point_spacing_m)
+
+
+def point_count_problems(grid: Grid, zone_length_m: float, point_spacing_m) -> list[Problem]:
+    """Whether the zone's contact points stay within MAX_CONTACT_POINTS."""
+    problems = point_spacing_problems(point_spacing_m)
+    if problems:
+        return problems
+    length, spacing = float(zone_length_m), float(point_spacing_m)
+    half_angle = min(math.atan(0.5 * length / grid.radius_m), MAX_ZONE_HALF_ANGLE)
+    carrying = 2 * int(math.floor(half_angle * (1 + ZONE_ANGLE_SLACK) / grid.dtheta)) + 1
+    points = carrying * points_per_node(grid, spacing)
+    if points > MAX_CONTACT_POINTS:
+        # the finest spacing that stays within the limit: the largest odd m that fits
+        m = max(1, MAX_CONTACT_POINTS // carrying)
+        m = m if m % 2 else m - 1
+        smallest = grid.node_arc_m / m
+        return [Problem("contact_point_spacing_m", spacing, "m",
+                        f"at least {smallest:.4g} m on this mesh and zone (n_elements = "
+                        f"{grid.n_elements}, contact_zone_length_m = {length:g})",
+                        f"it makes {points} contact points, more than the "
+                        f"{MAX_CONTACT_POINTS} a contact solve may take")]
+    return []
+
+
+def point_spacing_problems(spacing_m) -> list[Problem]:
+    """Whether a contact point spacing is a number in the allowed range (m)."""
+    try:
+        spacing = float(spacing_m)
+    except (TypeError, ValueError):
+        spacing = math.nan
+    if not (isinstance(spacing_m, (int, float, np.integer, np.floating))
+            and not isinstance(spacing_m, bool) and math.isfinite(spacing)
+            and MIN_CONTACT_POINT_SPACING_M <= spacing <= MAX_CONTACT_POINT_SPACING_M):
+        return [Problem("contact_point_spacing_m", spacing_m, "m",
+                        f"in [{MIN_CONTACT_POINT_SPACING_M:g}, "
+                        f"{MAX_CONTACT_POINT_SPACING_M:g}] m",
+                        "the largest distance between contact points along the tread; "
+                        "resolve the shortest road feature with several")]
     return []
 
 
@@ -169,8 +322,8 @@ def contact_force(penetration_m, rate_m_s, stiffness_n_per_m, damping_n_s_per_m)
 class Footprint:
     """The static contact of the ring on a flat road, computed by the model itself.
 
-    Arrays are per zone node (front to rear). ``forces_n`` push the tread inwards;
-    ``penetration_m`` is positive into the road (and equals f/k where the node pushes).
+    Arrays are per contact point (front to rear). ``forces_n`` push the tread inwards;
+    ``penetration_m`` is positive into the road (and equals f/k where the point pushes).
     """
 
     zone: ContactZone
@@ -178,7 +331,7 @@ class Footprint:
     load_n: float  # vertical force of the road on the tire = of the tire on the rim
     forces_n: np.ndarray
     penetration_m: np.ndarray
-    active: np.ndarray  # bool: nodes that push
+    active: np.ndarray  # bool: points that push
     tangent_stiffness_n_per_m: float  # dW/dδ on the current segment of the path
     length_m: float  # road length between the interpolated edges
     front_edge_m: float  # x of the front edge (forward positive)
@@ -194,13 +347,13 @@ class Footprint:
 
     @property
     def line_pressure_n_per_m(self) -> np.ndarray:
-        """Contact force per metre of tread circumference at each zone node."""
-        return self.forces_n / self.zone.grid.node_arc_m
+        """Contact force per metre of tread circumference at each contact point."""
+        return self.forces_n / self.zone.point_arc_m
 
     @property
     def longitudinal_force_n(self) -> float:
         """x-component of the road's force on the tire (zero at rest, by symmetry)."""
-        return float(np.sum(self.forces_n * np.sin(self.zone.theta)))
+        return float(self.zone.force_sin @ self.forces_n)
 
     @property
     def n_active(self) -> int:
@@ -208,11 +361,12 @@ class Footprint:
 
     @property
     def tread_displacement_m(self) -> np.ndarray:
-        """Rim-relative radial displacement of each zone node (p = w - g, g the gap)."""
+        """Rim-relative radial displacement of the tread at each point (p = w - g, g the
+        gap)."""
         return self.penetration_m + self.zone.unloaded_gap_m(self.deflection_m)
 
     def touches_zone_edge(self) -> bool:
-        """True when a zone end node pushes: the footprint may extend beyond the zone."""
+        """True when a zone end point pushes: the footprint may extend beyond the zone."""
         return bool(self.active[0] or self.active[-1])
 
     def to_dict(self) -> dict:
@@ -224,10 +378,13 @@ class Footprint:
             "rear_edge_m": self.rear_edge_m,
             "secant_stiffness_n_per_m": self.secant_stiffness_n_per_m,
             "tangent_stiffness_n_per_m": self.tangent_stiffness_n_per_m,
-            "contact_nodes": self.n_active,
-            "zone_nodes": self.zone.size,
+            "contact_points": self.n_active,
+            "zone_points": self.zone.n_points,
+            "zone_nodes": self.zone.n_nodes,
+            "points_per_node": self.zone.points_per_node,
+            "contact_point_spacing_m": self.zone.point_arc_m,
             "longitudinal_force_n": self.longitudinal_force_n,
-            "theta_rad": self.zone.theta.tolist(),
+            "theta_rad": self.zone.point_theta.tolist(),
             "line_pressure_n_per_m": self.line_pressure_n_per_m.tolist(),
             "penetration_m": self.penetration_m.tolist(),
         }
@@ -257,8 +414,9 @@ class _Segment:
 class FootprintPath:
     """The static contact forces as a function of the rim deflection, traced exactly.
 
-    ``compliance`` is G (zone x zone, m/N): the rim-relative radial displacement of zone
-    node i per newton pushed outwards at zone node j, at the operating speed.
+    ``compliance`` is G_p = I G Iᵀ (points x points, m/N): the rim-relative radial
+    displacement of the tread at point i per newton pushed outwards at point j, at the
+    operating speed (:func:`point_compliance`).
     """
 
     def __init__(self, zone: ContactZone, compliance: np.ndarray, max_deflection_m: float):
@@ -270,29 +428,30 @@ class FootprintPath:
     def _segment(self, start: float, active: np.ndarray) -> _Segment:
         # p = -g(δ) - G f with g = (R - δ)/cos - R: -g = R - R/cos + δ/cos
         zone, g = self.zone, self.compliance
-        radius, cos = zone.grid.radius_m, zone.cos
-        p0, p1 = radius - radius / cos, 1.0 / cos
-        f0, f1 = np.zeros(zone.size), np.zeros(zone.size)
+        radius, sec = zone.grid.radius_m, zone.point_sec
+        p0, p1 = radius - radius * sec, sec
+        f0, f1 = np.zeros(zone.n_points), np.zeros(zone.n_points)
         if active.any():
             # f_A = k_A p_A  =>  (diag(1/k_A) + G_AA) f_A = p0_A + p1_A δ
             system = np.diag(1.0 / zone.stiffness_n_per_m[active]) + g[np.ix_(active, active)]
             solved = np.linalg.solve(system, np.column_stack([p0[active], p1[active]]))
             f0[active], f1[active] = solved[:, 0], solved[:, 1]
         pen0, pen1 = p0 - g @ f0, p1 - g @ f1
+        cos = zone.force_cos
         return _Segment(start, active.copy(), (f0, f1), (pen0, pen1),
                         (float(cos @ f0), float(cos @ f1)))
 
     def _trace(self) -> list[_Segment]:
         zone = self.zone
         radius = zone.grid.radius_m
-        # at δ = 0 the undeformed ring touches the road only where cos θ = 1 (node 0)
-        active = np.zeros(zone.size, dtype=bool)
+        # at δ = 0 the undeformed ring touches the road only where cos θ = 1 (the centre)
+        active = np.zeros(zone.n_points, dtype=bool)
         start = 0.0
         segments = []
-        for _ in range(SEGMENTS_PER_NODE * (zone.size + 1)):
+        for _ in range(SEGMENTS_PER_NODE * (zone.n_points + 1)):
             if not active.any():
-                # the touching node(s) enter as soon as δ > 0
-                active = np.isclose(zone.cos, 1.0, rtol=0.0, atol=TOUCH_ATOL)
+                # the touching point(s) enter as soon as δ > 0
+                active = np.isclose(zone.point_cos, 1.0, rtol=0.0, atol=TOUCH_ATOL)
             segment = self._segment(start, active)
             segments.append(segment)
             (f0, f1), (p0, p1) = segment.forces_at, segment.penetration_at
@@ -377,11 +536,11 @@ def _edges(x: np.ndarray, penetration: np.ndarray, active: np.ndarray) -> tuple[
     return front, rear
 
 
-# -- the road under each node ------------------------------------------------------------------
+# -- the road under each point -----------------------------------------------------------------
 
 @dataclass(frozen=True)
 class RoadWindows:
-    """For each node, the delays (s) after which the ends of its road window have travelled
+    """For each contact point, the delays (s) after which the ends of its road window have travelled
     from the zone front to under it: it sees the road that passed the front between
     ``late_s`` and ``early_s`` ago, averaged. All zero at V = 0 (a shaker plate)."""
 
@@ -394,7 +553,7 @@ class RoadWindows:
         return float(self.late_s.max()) if self.late_s.size else 0.0
 
     def frequency_response(self, omega) -> np.ndarray:
-        """(nodes, freqs): the road under each node per unit harmonic road height at the front:
+        """(points, freqs): the road under each point per unit harmonic road height at the front:
         the window average of a delayed harmonic, e^{-iωτ_mid}·sin(ωΔ/2)/(ωΔ/2)."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))[None, :]
         mid = 0.5 * (self.early_s + self.late_s)[:, None]
@@ -406,25 +565,25 @@ def road_windows(zone: ContactZone, deflection_m: float, speed_m_s: float) -> Ro
     x_lo, x_hi = zone.road_windows_m(deflection_m)
     front = float(x_hi.max()) if x_hi.size else 0.0
     if speed_m_s <= 0.0:
-        zeros = np.zeros(zone.size)
+        zeros = np.zeros(zone.n_points)
         return RoadWindows(zeros, zeros.copy(), front)
     return RoadWindows((front - x_hi) / speed_m_s, (front - x_lo) / speed_m_s, front)
 
 
 # -- the paper's prescribed patch ---------------------------------------------------------------
 
-def patch_weights(grid: Grid, patch_length_m: float) -> np.ndarray:
-    """Fraction of each node's arc inside a prescribed patch |θ| <= L/(2R) (0..1).
+def patch_weights(zone: ContactZone, patch_length_m: float) -> np.ndarray:
+    """Fraction of each contact point's arc inside a prescribed patch |θ| <= L/(2R) (0..1).
 
-    The paper's patch (Figs. 17-19) is an input, not a contact solution: each tread node
-    carries k_cw·R·δθ times this fraction, so frequencies vary continuously with L.
+    The paper's patch (Figs. 17-19) is an input, not a contact solution: each point carries
+    k_p times this fraction, so frequencies vary continuously with L.
     """
-    half_angle = 0.5 * patch_length_m / grid.radius_m
-    distance = np.abs(grid.theta)  # |θ| makes the weights exactly mirror-symmetric
-    lo = distance - 0.5 * grid.dtheta
-    hi = distance + 0.5 * grid.dtheta
-    overlap = np.minimum(hi, half_angle) - np.maximum(lo, -half_angle)
-    return np.clip(overlap / grid.dtheta, 0.0, 1.0)
+    half_angle = 0.5 * patch_length_m / zone.grid.radius_m
+    arc = zone.grid.dtheta / zone.points_per_node
+    distance = np.abs(zone.point_theta)  # |θ| makes the weights exactly mirror-symmetric
+    overlap = np.minimum(distance + 0.5 * arc, half_angle) - np.maximum(distance - 0.5 * arc,
+                                                                          -half_angle)
+    return np.clip(overlap / arc, 0.0, 1.0)
 
 
 def deflection_from_patch_length(radius_m: float, patch_length_m: float) -> float:
@@ -441,10 +600,10 @@ class ContactPatch:
     """The static contact a tire model is linearised at: the footprint the model computes for
     a load, or the paper's prescribed patch (an explicit mode, for its Figs. 17-19).
 
-    ``weights`` (per zone node) scale each node's road spring in the linearisation: 1 on the
-    footprint's pushing nodes and 0 elsewhere, or the fraction of the node's arc inside a
-    prescribed patch. Every spring acts through the gap of the module docstring, with its
-    rate damped by c_j, and the road reaches each node through ``road``.
+    ``weights`` (per contact point) scale each point's road spring in the linearisation: 1 on
+    the footprint's pushing points and 0 elsewhere, or the fraction of the point's arc inside
+    a prescribed patch. Every spring acts through the gap of the module docstring, with its
+    rate damped by c_p, and the road reaches each point through ``road``.
     """
 
     zone: ContactZone
@@ -454,7 +613,7 @@ class ContactPatch:
     length_m: float
     vertical_stiffness_n_per_m: float  # tangent: rim force per rim travel, road held
     road: RoadWindows
-    forces_n: np.ndarray  # static push of the road on each zone node
+    forces_n: np.ndarray  # static push of the road at each contact point
     centre_compression_m: float  # -w at the contact centre: the static "deflection" output
     footprint: Footprint | None = None  # None for a prescribed patch
 
@@ -467,28 +626,34 @@ class ContactPatch:
         return bool(np.any(self.weights > 0))
 
     @property
-    def contact_positions(self) -> np.ndarray:
-        """Positions in the zone of the nodes with a spring in the linearisation."""
+    def contact_points(self) -> np.ndarray:
+        """Indices of the contact points with a spring in the linearisation."""
         return np.flatnonzero(self.weights > 0)
 
     @property
     def node_indices(self) -> np.ndarray:
-        """Tread node indices with a spring in the linearisation."""
-        return self.zone.nodes[self.contact_positions]
+        """Tread node indices the linearisation's springs load."""
+        reached = np.any(self.zone.interpolation[self.contact_points] != 0.0, axis=0)
+        return self.zone.nodes[reached]
 
     @property
-    def node_stiffness_n_per_m(self) -> np.ndarray:
+    def point_stiffness_n_per_m(self) -> np.ndarray:
         return self.weights * self.zone.stiffness_n_per_m
 
     @property
-    def node_damping_n_s_per_m(self) -> np.ndarray:
+    def point_damping_n_s_per_m(self) -> np.ndarray:
         return self.weights * self.zone.damping_n_s_per_m
+
+    def node_stiffness_matrix(self) -> np.ndarray:
+        """Iᵀ diag(k_p w_p) I (zone nodes x zone nodes, N/m): the springs on the ring."""
+        interp = self.zone.interpolation
+        return interp.T @ (self.point_stiffness_n_per_m[:, None] * interp)
 
     def static_outputs(self) -> dict[str, float]:
         """The FMU outputs at this static state (road on tire = tire on rim in statics)."""
-        vertical = float(self.zone.cos @ self.forces_n)
+        vertical = float(self.zone.force_cos @ self.forces_n)
         return {"rim_Fz": vertical,
-                "rim_Fx": float(np.sin(self.zone.theta) @ self.forces_n),
+                "rim_Fx": float(self.zone.force_sin @ self.forces_n),
                 "contact_Fz": vertical,
                 "deflection": self.centre_compression_m}
 
@@ -499,7 +664,9 @@ class ContactPatch:
             "deflection_m": self.deflection_m,
             "load_n": self.load_n,
             "vertical_stiffness_n_per_m": self.vertical_stiffness_n_per_m,
-            "patch_nodes": int(self.contact_positions.size),
+            "patch_points": int(self.contact_points.size),
+            "points_per_node": self.zone.points_per_node,
+            "contact_point_spacing_m": self.zone.point_spacing_m,
             "contact_zone_length_m": self.zone.length_m,
         }
         if self.footprint is not None:
@@ -507,23 +674,38 @@ class ContactPatch:
         return out
 
 
+def point_compliance(zone: ContactZone, node_compliance: np.ndarray) -> np.ndarray:
+    """G_p = I G Iᵀ (points x points, m/N) from the zone nodes' compliance G."""
+    interp = zone.interpolation
+    if zone.points_per_node == 1:
+        return np.asarray(node_compliance, dtype=float)[np.ix_(zone.point_support[:, 0],
+                                                               zone.point_support[:, 0])]
+    return interp @ node_compliance @ interp.T
+
+
 def linear_vertical_stiffness(zone: ContactZone, compliance: np.ndarray,
-                              node_stiffness: np.ndarray) -> float:
-    """dW/dδ with the springs ``node_stiffness`` held (road fixed, rim pushed down):
-    W = cosᵀ f, (diag(1/k) + G) f = δ/cos on the springs' nodes."""
-    on = node_stiffness > 0
+                              point_stiffness: np.ndarray) -> float:
+    """dW/dδ with the springs ``point_stiffness`` held (road fixed, rim pushed down):
+    W = (I cos θ)ᵀ f, (diag(1/k) + G_p) f = δ sec θ_p on the springs' points."""
+    on = point_stiffness > 0
     if not on.any():
         return 0.0
-    cos = zone.cos[on]
-    system = np.diag(1.0 / node_stiffness[on]) + compliance[np.ix_(on, on)]
-    return float(cos @ np.linalg.solve(system, 1.0 / cos))
+    system = np.diag(1.0 / point_stiffness[on]) + compliance[np.ix_(on, on)]
+    return float(zone.force_cos[on] @ np.linalg.solve(system, zone.point_sec[on]))
+
+
+def centre_compression_m(zone: ContactZone, node_compliance: np.ndarray,
+                         forces_n: np.ndarray) -> float:
+    """-w at the contact centre node under the point forces: (G Iᵀ f) at node 0."""
+    return float(node_compliance[zone.centre] @ (zone.interpolation.T @ forces_n))
 
 
 def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
                    speed_m_s: float, max_length_m: float) -> ContactPatch:
-    """The footprint that carries ``load_n``; FootprintError (with the allowed range) when the
-    footprint would leave the zone or exceed ``max_length_m``."""
-    path = FootprintPath(zone, compliance,
+    """The footprint that carries ``load_n`` (``compliance``: the zone nodes' G);
+    FootprintError (with the allowed range) when the footprint would leave the zone or exceed
+    ``max_length_m``."""
+    path = FootprintPath(zone, point_compliance(zone, compliance),
                          max_deflection_m=MAX_DEFLECTION_FRACTION * zone.grid.radius_m)
     limit = max_credible_load(path, max_length_m)
     if load_n > limit.load_n:
@@ -542,8 +724,8 @@ def computed_patch(zone: ContactZone, compliance: np.ndarray, load_n: float,
 def computed_patch_at_deflection(zone: ContactZone, compliance: np.ndarray,
                                  deflection_m: float, speed_m_s: float) -> ContactPatch:
     """The inverse: the footprint (and its load) for a rim deflection."""
-    path = FootprintPath(zone, compliance, max_deflection_m=max(0.5 * zone.grid.radius_m,
-                                                                2 * deflection_m))
+    path = FootprintPath(zone, point_compliance(zone, compliance),
+                         max_deflection_m=max(0.5 * zone.grid.radius_m, 2 * deflection_m))
     return _footprint_patch(zone, compliance, path.at_deflection(deflection_m), speed_m_s)
 
 
@@ -554,7 +736,7 @@ def _footprint_patch(zone, compliance, footprint: Footprint, speed_m_s) -> Conta
         vertical_stiffness_n_per_m=footprint.tangent_stiffness_n_per_m,
         road=road_windows(zone, footprint.deflection_m, speed_m_s),
         forces_n=footprint.forces_n,
-        centre_compression_m=float(compliance[zone.centre] @ footprint.forces_n),
+        centre_compression_m=centre_compression_m(zone, compliance, footprint.forces_n),
         footprint=footprint)
 
 
@@ -582,22 +764,23 @@ def max_credible_load(path: FootprintPath, max_length_m: float) -> Footprint:
 
 def prescribed_patch(zone: ContactZone, compliance: np.ndarray, patch_length_m: float,
                      speed_m_s: float) -> ContactPatch:
-    """The paper's patch |θ| <= L/(2R): fractional node weights, the flat-road chord as its
+    """The paper's patch |θ| <= L/(2R): fractional point weights, the flat-road chord as its
     deflection and, as the paper's rule, the load K_v·δ: the springs, two-sided and
     unstressed when the undeformed ring touches, carry it with the rim lowered by δ."""
     grid = zone.grid
-    weights = patch_weights(grid, patch_length_m)[zone.nodes]
+    weights = patch_weights(zone, patch_length_m)
     deflection = deflection_from_patch_length(grid.radius_m, patch_length_m)
     springs = weights * zone.stiffness_n_per_m
-    k_v = linear_vertical_stiffness(zone, compliance, springs)
-    # two-sided springs on the patch, rim lowered by δ: f = k (δ/cos - G f)
-    forces = np.zeros(zone.size)
+    g_points = point_compliance(zone, compliance)
+    k_v = linear_vertical_stiffness(zone, g_points, springs)
+    # two-sided springs on the patch, rim lowered by δ: f = k (δ sec - G_p f)
+    forces = np.zeros(zone.n_points)
     on = springs > 0
     if on.any():
-        system = np.diag(1.0 / springs[on]) + compliance[np.ix_(on, on)]
-        forces[on] = np.linalg.solve(system, deflection / zone.cos[on])
+        system = np.diag(1.0 / springs[on]) + g_points[np.ix_(on, on)]
+        forces[on] = np.linalg.solve(system, deflection * zone.point_sec[on])
     return ContactPatch(zone=zone, weights=weights, deflection_m=deflection,
-                        load_n=float(zone.cos @ forces), length_m=float(patch_length_m),
+                        load_n=float(zone.force_cos @ forces), length_m=float(patch_length_m),
                         vertical_stiffness_n_per_m=k_v,
                         road=road_windows(zone, deflection, speed_m_s), forces_n=forces,
-                        centre_compression_m=float(compliance[zone.centre] @ forces))
+                        centre_compression_m=centre_compression_m(zone, compliance, forces))

@@ -149,7 +149,8 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
             SUBSTEP_REASON % MIN_SUBSTEP_S)])
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
     zone = model.patch.zone
-    work = substep_work(modes.n_modes, model.grid.n_elements // 2 + 1, zone.size, zone.size)
+    work = substep_work(modes.n_modes, model.grid.n_elements // 2 + 1, zone.n_nodes,
+                        zone.n_points)
     per_interval = math.ceil(WORK_INTERVAL_S / substep * (1 - 1e-12))
     if per_interval * work > MAX_STEP_WORK:
         from .parameters import TIRE_FIELDS, ParameterError, Problem

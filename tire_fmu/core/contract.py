@@ -85,7 +85,8 @@ class StepContract:
     # contact points, front to rear
     point_support: np.ndarray = _field("int", ("n_points", "n_support"), "zone nodes read")
     point_weight: np.ndarray = _field("float", ("n_points", "n_support"), "their weights")
-    point_cos: np.ndarray = _field("float", ("n_points",), "cos of the point's ray angle")
+    point_cos: np.ndarray = _field("float", ("n_points",),
+                                   "vertical force on the ring per unit push: (I cos)_p")
     point_sec: np.ndarray = _field("float", ("n_points",), "1/cos of it")
     point_x_road: np.ndarray = _field("float", ("n_points",), "x where its ray meets the road")
     point_stiffness: np.ndarray = _field("float", ("n_points",), "k (N/m)")
@@ -171,16 +172,15 @@ CONTRACT_VERSION = int(hashlib.sha256(layout_text().encode()).hexdigest()[:7], 1
 
 def build_contract(contact) -> StepContract:
     """The contract of a :class:`~.contact_dynamics.ContactModel`: its free ring's modes, the
-    static footprint, the road windows. Contact points are the zone nodes themselves."""
+    static footprint on the contact points, the road windows."""
     from .step_limits import MIN_CORRECTED_STEP_S, substep_work
 
     model, patch, modes = contact.model, contact.patch, contact.modes
     zone, grid = patch.zone, model.grid
-    n_zone = zone.size
+    n_zone, n_points = zone.n_nodes, zone.n_points
     # a ring truncated with static correction has a rate term a short step breaks
     truncated = bool(np.any(modes.d[:, 1:]) or np.any(modes.e[:, 1:]))
-    offsets = np.rint(zone.theta / grid.dtheta).astype(np.int32)
-    cos = np.cos(zone.theta)
+    offsets = np.arange(n_zone, dtype=np.int32) - n_zone // 2
     pen_static = (patch.footprint.penetration_m if patch.footprint is not None
                   else patch.forces_n / zone.stiffness_n_per_m)
     statics = patch.static_outputs()
@@ -189,9 +189,8 @@ def build_contract(contact) -> StepContract:
         lam=modes.eigenvalues, beta=modes.beta, gamma=modes.gamma, eta=modes.eta,
         b_rim=modes.b_rim, c_rim=modes.c_rim, d=modes.d, e=modes.e,
         zone_offset=offsets,
-        point_support=np.arange(n_zone, dtype=np.int32)[:, None],
-        point_weight=np.ones((n_zone, 1)),
-        point_cos=cos, point_sec=1.0 / cos,
+        point_support=zone.point_support, point_weight=zone.point_weight,
+        point_cos=zone.force_cos, point_sec=zone.point_sec,
         point_x_road=zone.road_positions_m(patch.deflection_m),
         point_stiffness=zone.stiffness_n_per_m, point_damping=zone.damping_n_s_per_m,
         f_static=patch.forces_n, pen_static=pen_static,
@@ -203,10 +202,11 @@ def build_contract(contact) -> StepContract:
               for name, value in arrays.items()}
     return StepContract(
         n_elements=grid.n_elements, n_orders=grid.n_elements // 2 + 1,
-        n_modes=modes.n_modes, n_zone=n_zone, n_points=n_zone, n_support=1,
+        n_modes=modes.n_modes, n_zone=n_zone, n_points=n_points,
+        n_support=int(zone.point_support.shape[1]),
         n_ring_rows=3 + 2 * n_zone, n_ring_cols=1 + n_zone,
-        linear=int(contact.settings.law == "linear"), centre_point=int(zone.centre),
-        substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_zone),
+        linear=int(contact.settings.law == "linear"), centre_point=zone.centre_point,
+        substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_points),
         substep_s=float(contact.substep_s), speed_m_s=float(model.speed_m_s),
         static_deflection_m=float(patch.deflection_m),
         min_step_s=float(MIN_CORRECTED_STEP_S if truncated else 0.0), **arrays)

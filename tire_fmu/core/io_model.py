@@ -1,8 +1,8 @@
 """The tire at an operating point as a linear input/output system.
 
 Inputs are deviations from static equilibrium: rim vertical displacement and velocity, road
-height and velocity. The road enters per contact node, each node seeing the road under its own
-arc, i.e. the height at the front of the contact zone averaged over the window of time in
+height and velocity. The road enters per contact point, each point seeing the road under its
+own arc, i.e. the height at the front of the contact zone averaged over the window of time in
 which that stretch of road passed the front (all at once at V = 0, a shaker plate; see
 :mod:`.contact`), so the internal input vector is r = [z_rim, z_1, ..., z_p].
 
@@ -131,15 +131,14 @@ def build_io_model(model: TireModel) -> InputOutputModel:
     n = model.n_dof
     t, s = model.translation, model.horizontal
     k_s, d_s = model.structure.stiffness, model.structure.damping
-    patch = model.patch
-    positions = patch.contact_positions  # zone positions of the nodes with a spring
-    nodes = patch.zone.nodes[positions]  # their tread DOFs
-    k_node = patch.node_stiffness_n_per_m[positions]
-    c_node = patch.node_damping_n_s_per_m[positions]
-    cos = patch.zone.cos[positions]
-    sec = 1.0 / cos
-    early, late = patch.road.early_s[positions], patch.road.late_s[positions]
-    # Nodes that see the same stretch of road at the same time share one input (at rest: the
+    patch, zone = model.patch, model.patch.zone
+    points = patch.contact_points  # the contact points with a spring
+    interp = zone.interpolation[points]  # (points, zone nodes)
+    k_pt = patch.point_stiffness_n_per_m[points]
+    c_pt = patch.point_damping_n_s_per_m[points]
+    cos, sec = zone.force_cos[points], zone.point_sec[points]
+    early, late = patch.road.early_s[points], patch.road.late_s[points]
+    # Points that see the same stretch of road at the same time share one input (at rest: the
     # whole footprint, a shaker plate), which keeps the input vector, and a step, small.
     keys = np.round(np.column_stack([early, late]), 15)
     unique, group = np.unique(keys, axis=0, return_inverse=True)
@@ -147,17 +146,22 @@ def build_io_model(model: TireModel) -> InputOutputModel:
     windows = RoadWindows(unique[:, 0].copy(), unique[:, 1].copy(), patch.road.front_m)
     n_road = unique.shape[0]
 
-    def on_nodes(per_node: np.ndarray, per_input: bool) -> np.ndarray:
-        """(n, inputs) with per-node values on the nodes' tread DOFs, summed per group."""
-        out = np.zeros((n, n_road if per_input else 1))
-        np.add.at(out, (nodes, group if per_input else np.zeros_like(group)), per_node)
+    def on_nodes(per_point: np.ndarray, per_input: bool) -> np.ndarray:
+        """(n, inputs): per-point forces on the zone nodes' tread DOFs through Iᵀ (the virtual
+        work of the interpolation), summed per road group."""
+        columns = group if per_input else np.zeros_like(group)
+        per_group = np.zeros((n_road if per_input else 1, zone.n_nodes))
+        np.add.at(per_group, columns, per_point[:, None] * interp)
+        out = np.zeros((n, per_group.shape[0]))
+        out[zone.nodes] = per_group.T
         return out
 
-    # contact force on DOF j: -(k p + c ṗ), p = u_j + (cos - sec) z_rim + sec z_j
-    b_disp = np.column_stack([k_s @ t - on_nodes(k_node * (cos - sec), False)[:, 0],
-                              -on_nodes(k_node * sec, True)])
-    b_vel = np.column_stack([d_s @ t - on_nodes(c_node * (cos - sec), False)[:, 0],
-                             -on_nodes(c_node * sec, True)])
+    # contact force on the nodes: -Iᵀ(k p + c ṗ), p = (I u) + (I cos θ - sec θ_p) z_rim
+    # + sec θ_p z_road,p (the I u part sits in the model's contact stiffness)
+    b_disp = np.column_stack([k_s @ t - on_nodes(k_pt * (cos - sec), False)[:, 0],
+                              -on_nodes(k_pt * sec, True)])
+    b_vel = np.column_stack([d_s @ t - on_nodes(c_pt * (cos - sec), False)[:, 0],
+                             -on_nodes(c_pt * sec, True)])
     n_in = b_disp.shape[1]
 
     # Outputs. Internal force on the rim: T/S·[D_s(u̇ - T ż_rim) + K_s(u - T z_rim)].
@@ -170,13 +174,13 @@ def build_io_model(model: TireModel) -> InputOutputModel:
         out_vel[row] = d_s.T @ pattern
         d_disp[row, 0] = -pattern @ (k_s @ t)
         e_vel[row, 0] = -pattern @ (d_s @ t)
-    # Road on tire, vertical: Σ cos_j (k p_j + c ṗ_j) over the contact nodes.
-    out_disp[2, nodes] = cos * k_node
-    out_vel[2, nodes] = cos * c_node
-    d_disp[2, 0] = np.sum(cos * k_node * (cos - sec))
-    e_vel[2, 0] = np.sum(cos * c_node * (cos - sec))
-    np.add.at(d_disp[2], 1 + group, cos * k_node * sec)
-    np.add.at(e_vel[2], 1 + group, cos * c_node * sec)
+    # Road on tire, vertical: Σ (I cos θ)_p (k p + c ṗ) over the contact points.
+    out_disp[2, zone.nodes] = (cos * k_pt) @ interp
+    out_vel[2, zone.nodes] = (cos * c_pt) @ interp
+    d_disp[2, 0] = np.sum(cos * k_pt * (cos - sec))
+    e_vel[2, 0] = np.sum(cos * c_pt * (cos - sec))
+    np.add.at(d_disp[2], 1 + group, cos * k_pt * sec)
+    np.add.at(e_vel[2], 1 + group, cos * c_pt * sec)
     # Compression of the tread at the patch centre relative to the rim: -(u_r0 - T_0 z_rim).
     out_disp[3, 0] = -1.0
     d_disp[3, 0] = t[0]

@@ -46,6 +46,7 @@ from .contact import (
     computed_patch,
     computed_patch_at_deflection,
     contact_zone,
+    point_count_problems,
     prescribed_patch,
     zone_problems,
 )
@@ -162,10 +163,10 @@ class TireModel:
 
     @cached_property
     def contact_stiffness(self) -> sp.csr_matrix:
-        """The road springs k_j of the patch on their tread DOFs."""
+        """The road springs of the patch on the tread DOFs: Iᵀ diag(k_p) I over the zone
+        nodes (diagonal for one point per node)."""
         patch = self.patch
-        return _on_tread(self.grid, patch.node_indices,
-                         patch.node_stiffness_n_per_m[patch.contact_positions])
+        return _on_tread(self.n_dof, patch.zone.nodes, patch.node_stiffness_matrix())
 
     @property
     def n_elements(self) -> int:
@@ -221,13 +222,13 @@ class TireModel:
         }
 
 
-def _on_tread(grid: Grid, nodes: np.ndarray, values: np.ndarray) -> sp.csr_matrix:
-    """A diagonal matrix on the 2N DOFs with ``values`` on the tread DOFs ``nodes``."""
+def _on_tread(n_dof: int, nodes: np.ndarray, block: np.ndarray) -> sp.csr_matrix:
+    """An n_dof x n_dof matrix holding ``block`` on the tread DOFs ``nodes``."""
     import scipy.sparse as sp
 
-    diagonal = np.zeros(2 * grid.n_elements)
-    diagonal[nodes] = values
-    return sp.diags(diagonal, format="csr")
+    rows, cols = np.nonzero(block)
+    return sp.csr_matrix((block[rows, cols], (nodes[rows], nodes[cols])),
+                         shape=(n_dof, n_dof))
 
 
 def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> ContactPatch:
@@ -235,15 +236,16 @@ def contact_patch(tire: TireParameters, grid: Grid, op: OperatingPoint) -> Conta
     paper's prescribed patch. Raises ParameterError with the allowed range of the load."""
     spin = op.speed_m_s / tire.R
     zone_length = op.contact_zone_length_m
-    if op.patch_length_m is None:
-        problems = zone_problems(grid, zone_length)
-        if problems:
-            raise ParameterError(problems)
-    else:
+    if op.patch_length_m is not None:
         # the patch must lie inside the zone: widen it if the patch asks for more
         zone_length = max(zone_length, 2 * tire.R * math.tan(
             0.5 * op.patch_length_m / tire.R + grid.dtheta))
-    zone = contact_zone(grid, tire.k_cw, tire.beta, zone_length)
+    problems = (zone_problems(grid, zone_length, op.contact_point_spacing_m)
+                if op.patch_length_m is None else
+                point_count_problems(grid, zone_length, op.contact_point_spacing_m))
+    if problems:
+        raise ParameterError(problems)
+    zone = contact_zone(grid, tire.k_cw, tire.beta, zone_length, op.contact_point_spacing_m)
     compliance = zone_compliance(ring_static_gain(tire, grid, spin, zone.nodes))
     if op.patch_length_m is not None:
         return prescribed_patch(zone, compliance, float(op.patch_length_m), op.speed_m_s)

@@ -336,7 +336,8 @@ class OperatingPoint:
     :data:`DEFAULT_LOAD_N`. A load gives the footprint the model computes; a patch length is
     the paper's prescribed patch (``patch_length_m = 0``: the undeformed tire, no contact).
     ``allow_supercritical`` lets a speed at or above the critical (standing-wave) speed through.
-    ``contact_zone_length_m`` is the length of road under the nodes that may meet the road.
+    ``contact_zone_length_m`` is the length of road under the nodes that may meet the road,
+    ``contact_point_spacing_m`` the largest distance between the contact points on the tread.
     """
 
     n_elements: int = 100
@@ -345,6 +346,7 @@ class OperatingPoint:
     speed_m_s: float = 0.0
     allow_supercritical: bool = False
     contact_zone_length_m: float = 0.6  # contact.DEFAULT_ZONE_LENGTH_M
+    contact_point_spacing_m: float = 2.5e-3  # contact.DEFAULT_CONTACT_POINT_SPACING_M
 
     def __post_init__(self) -> None:
         problems = operating_point_problems(self.as_dict())
@@ -384,6 +386,10 @@ def operating_point_problems(
         problems.append(Problem("n_elements", n, "",
                                 f"an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]",
                                 ELEMENTS_REASON))
+    if "contact_point_spacing_m" in values:
+        from .contact import point_spacing_problems  # contact builds on this module
+
+        problems += point_spacing_problems(values["contact_point_spacing_m"])
     load, patch = values.get("load_n"), values.get("patch_length_m")
     if load is not None and patch is not None:
         problems.append(Problem("patch_length_m", patch, "m", "unset when load_n is given",

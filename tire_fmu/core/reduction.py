@@ -154,7 +154,7 @@ class ErrorReport:
 #: Fields of :class:`OperatingPointRecord`, as :meth:`TireModel.summary` names them.
 _OPERATING_POINT_FIELDS = ("n_elements", "speed_m_s", "spin_rad_s", "critical_speed_m_s",
                            "patch_length_m", "deflection_m", "load_n",
-                           "vertical_stiffness_n_per_m", "patch_nodes")
+                           "vertical_stiffness_n_per_m", "patch_points", "points_per_node")
 
 
 @dataclass(frozen=True)
@@ -169,14 +169,19 @@ class OperatingPointRecord:
     deflection_m: float
     load_n: float
     vertical_stiffness_n_per_m: float
-    patch_nodes: int
+    patch_points: int  # contact points with a spring in the linearisation
+    points_per_node: int  # contact points per node arc (1: the node model)
 
     @classmethod
     def from_summary(cls, summary: Mapping[str, Any]) -> OperatingPointRecord:
         """From a model summary (or its JSON); keys beyond the record's fields are ignored."""
+        summary = dict(summary)
+        if "patch_points" not in summary and "patch_nodes" in summary:
+            # written before the contact points: one point per node
+            summary["patch_points"], summary["points_per_node"] = summary["patch_nodes"], 1
         values = {name: summary[name] for name in _OPERATING_POINT_FIELDS}
-        values["n_elements"], values["patch_nodes"] = (int(values["n_elements"]),
-                                                       int(values["patch_nodes"]))
+        for name in ("n_elements", "patch_points", "points_per_node"):
+            values[name] = int(values[name])
         return cls(**values)
 
     def to_dict(self) -> dict[str, Any]:

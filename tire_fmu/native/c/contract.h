@@ -40,7 +40,7 @@ typedef struct {
     const int32_t* zone_offset; /* [n_zone] node offset from the centre */
     const int32_t* point_support; /* [n_points, n_support] zone nodes read */
     const double* point_weight; /* [n_points, n_support] their weights */
-    const double* point_cos; /* [n_points] cos of the point's ray angle */
+    const double* point_cos; /* [n_points] vertical force on the ring per unit push: (I cos)_p */
     const double* point_sec; /* [n_points] 1/cos of it */
     const double* point_x_road; /* [n_points] x where its ray meets the road */
     const double* point_stiffness; /* [n_points] k (N/m) */

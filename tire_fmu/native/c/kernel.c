@@ -936,7 +936,8 @@ int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
                         double report[KERNEL_REPORT])
 {
     double h = kn->has_last ? kn->last_step : NAN;
-    if ((kernel_step_problems(kn, 1.0, inputs) & ~(KERNEL_SHORT_H | KERNEL_UNRESOLVED_H)) != 0) {
+    if ((kernel_step_problems(kn, 1.0, inputs) &
+         ~(KERNEL_SHORT_H | KERNEL_UNRESOLVED_H | KERNEL_LONG_H)) != 0) {
         return KERNEL_REFUSED;  /* the inputs alone are checked: there is no step */
     }
     if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
