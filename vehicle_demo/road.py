@@ -17,7 +17,8 @@ follow.
 
 Cleat: a short obstacle of height H and length L across the road, rectangular (its edges are
 steps of the road history; each tread node averages them over its arc) or rounded, a
-(1 - cos) bump. Pothole: the same shapes downwards.
+(1 - cos) bump. Pothole: the same shapes downwards. Their profiles are
+:class:`tire_fmu.core.obstacles.Obstacle`'s, the ones the cleat study reads.
 """
 
 from __future__ import annotations
@@ -26,6 +27,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from tire_fmu.core.obstacles import OBSTACLE_SHAPES, Obstacle
+from tire_fmu.core.parameters import ParameterError
 
 #: Geometric-mean G_d(n0) per ISO 8608 class, m³ (= m²/(cycles/m)).
 ISO_8608_GD_N0_M3 = {c: 16e-6 * 4**i for i, c in enumerate("ABCDEFGH")}
@@ -131,7 +135,7 @@ def iso8608_road(road_class: str, speed_m_s: float, duration_s: float, step_s: f
     return signal, spectrum
 
 
-CLEAT_SHAPES = ("rectangular", "rounded")
+CLEAT_SHAPES = OBSTACLE_SHAPES
 
 
 def cleat(height_m: float, length_m: float, speed_m_s: float, duration_s: float,
@@ -159,15 +163,13 @@ def _obstacle(height_m, length_m, speed_m_s, duration_s, step_s, shape, distance
     samples = int(round(duration_s / step_s))
     time = step_s * np.arange(samples + 1)
     x = speed_m_s * time - distance_m  # position of the zone front on the obstacle
-    on = (x >= 0) & (x < length_m)
-    if shape == "rectangular":
-        height = np.where(on, height_m, 0.0)
-        velocity = np.zeros_like(height)
-    else:
-        wave = 2 * np.pi * x / length_m
-        height = np.where(on, 0.5 * height_m * (1 - np.cos(wave)), 0.0)
-        velocity = np.where(on, 0.5 * height_m * np.sin(wave) * 2 * np.pi / length_m
-                            * speed_m_s, 0.0)
+    # the profile is the core's (tire_fmu.core.obstacles), the one the cleat study reads
+    try:
+        obstacle = Obstacle(float(height_m), float(length_m), shape)
+    except ParameterError as error:
+        raise RoadError(f"{kind}: {error}") from None
+    height, slope = obstacle.profile(x)
+    velocity = slope * speed_m_s
     return RoadSignal(time, height, velocity, float(speed_m_s),
                       f"{shape} {kind} {size * 1e3:g} mm x {length_m * 1e3:g} mm at "
                       f"{speed_m_s:g} m/s")

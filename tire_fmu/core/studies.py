@@ -8,9 +8,10 @@ Long loops take an optional ``progress(done, total)`` callback so a front end ca
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
@@ -472,3 +473,355 @@ def dispersion_at_speed(
         at_rest=dispersion_relation(swept_tire, orders, 0.0, n_elements),
         loaded=loaded,
     )
+
+
+# --------------------------------------------------------------------------------------------
+# Mesh convergence over a cleat (issue 21): the rim held at its static height
+
+
+#: The default point spacing of the study (m): the contact points' default, which resolves a
+#: 10 mm feature with four points.
+CLEAT_POINT_SPACING_M = 2.5e-3
+#: Meshes of the study: doubling, so the Richardson ratio is 2.
+CLEAT_ELEMENT_COUNTS = (100, 200, 400, 800)
+#: Default communication step (s): the contact sub-step; the test halves it once.
+CLEAT_STEP_S = 1e-4
+#: Time the run goes on after the obstacle has left the contact zone (s): the rim load rings
+#: down at the tire's low modes.
+CLEAT_SETTLE_S = 0.02
+#: The observed order of the Richardson extrapolation is searched in (0, this].
+MAX_OBSERVED_ORDER = 10.0
+
+
+def _cleat_operating_point(n: int, speed: float, load: float, spacing: float,
+                           zone_length: float) -> OperatingPoint:
+    """The operating point of one mesh; the point spacing where the core has contact points
+    (without them every node is its own point, as at a spacing above the node arc)."""
+    values = dict(n_elements=int(n), load_n=float(load), speed_m_s=float(speed),
+                  contact_zone_length_m=float(zone_length))
+    if "contact_point_spacing_m" in {f.name for f in fields(OperatingPoint)}:
+        values["contact_point_spacing_m"] = float(spacing)
+    return OperatingPoint(**values)
+
+
+def points_per_node(contract) -> int:
+    """Contact points per node arc of a step contract (1: the nodes are the points)."""
+    offsets = contract.zone_offset
+    carrying = np.count_nonzero(np.abs(offsets) <= np.abs(offsets).max()
+                                - (2 if contract.n_support > 1 else 0))
+    return max(int(round(contract.n_points / max(carrying, 1))), 1)
+
+
+def line_amplitude(time_s: np.ndarray, values: np.ndarray, frequency_hz: float) -> float:
+    """Amplitude of the line at ``frequency_hz`` in a record: the Hann-windowed discrete
+    Fourier sum at that one frequency, 2|Σ w x e^{-2πift}| / Σ w, of the record less its
+    mean (a sine of amplitude A reads A); nan at or above the record's Nyquist frequency."""
+    t = np.asarray(time_s, dtype=float)
+    x = np.asarray(values, dtype=float)
+    if t.size < 4 or not frequency_hz < 0.5 / float(np.mean(np.diff(t))):
+        return math.nan
+    window = np.hanning(t.size)
+    x = x - np.sum(window * x) / np.sum(window)
+    return float(2 * abs(np.sum(window * x * np.exp(-2j * np.pi * frequency_hz * t)))
+                 / np.sum(window))
+
+
+def richardson(sizes, values) -> tuple[float, float]:
+    """(extrapolated value, observed order) from the three finest of ``values`` on meshes of
+    spacing ``sizes`` (any ratios): the order p solves (f1 - f2)/(f2 - f3) =
+    (h1^p - h2^p)/(h2^p - h3^p), and f = f3 - (f2 - f3) h3^p/(h2^p - h3^p). When the three do
+    not converge monotonically (the differences change sign or grow) there is no order to
+    observe: (the finest value, nan)."""
+    h = np.asarray(sizes, dtype=float)[-3:]
+    f = np.asarray(values, dtype=float)[-3:]
+    if h.size < 3 or not np.all(np.isfinite(f)):
+        return (float(f[-1]) if f.size else math.nan), math.nan
+    e1, e2 = f[1] - f[0], f[2] - f[1]
+    if e2 == 0.0:
+        return float(f[2]), math.nan
+    target = e1 / e2
+
+    def ratio(p: float) -> float:
+        return (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p)
+
+    low, high = 1e-6, MAX_OBSERVED_ORDER
+    if not ratio(low) < target <= ratio(high):
+        return float(f[2]), math.nan
+    for _ in range(200):
+        middle = 0.5 * (low + high)
+        if ratio(middle) < target:
+            low = middle
+        else:
+            high = middle
+    p = 0.5 * (low + high)
+    return float(f[2] + e2 * h[2] ** p / (h[1] ** p - h[2] ** p)), p
+
+
+@dataclass(frozen=True, eq=False)
+class CleatConvergence:
+    """The rim load over an obstacle against the mesh, the rim held at its static height.
+
+    Arrays are indexed [mesh] or [mesh, time]; ``time_s`` is common to every mesh and counts
+    from the moment the obstacle's first edge passes the contact centre. The obstacle is
+    "under the tire" (``under_tire_s``, per mesh) while it overlaps the stretch of road
+    |x| <= ``reach_m`` where the undeformed tread, the rim at its static height, would reach
+    down to the obstacle's top (to the road, for a pothole): from the first touch to the last.
+    The minimum of contact_Fz and the spectrum lines (of contact_Fz, sampled at ``step_s``)
+    are read over that time.
+    """
+
+    obstacle: object  # obstacles.Obstacle
+    speed_m_s: float
+    load_n: float
+    step_s: float
+    point_spacing_m: float  # asked for
+    element_counts: np.ndarray
+    points_per_node: np.ndarray
+    n_points: np.ndarray
+    time_s: np.ndarray
+    rim_fz_n: np.ndarray  # [mesh, time]
+    contact_fz_n: np.ndarray  # [mesh, time]
+    static_rim_fz_n: np.ndarray
+    under_tire_s: np.ndarray  # [mesh, (start, end)]
+    reach_m: np.ndarray  # [mesh]
+    contact_zone_length_m: np.ndarray  # [mesh]
+    node_line_n: np.ndarray  # contact_Fz line at the node-passing frequency
+    point_line_n: np.ndarray  # and at the point-passing frequency
+    run_s: np.ndarray  # wall time of each mesh's run (s)
+    radius_m: float
+
+    @property
+    def node_arc_m(self) -> np.ndarray:
+        return 2 * np.pi * self.radius_m / self.element_counts
+
+    @property
+    def point_arc_m(self) -> np.ndarray:
+        """Spacing of the contact points on the tread (m)."""
+        return self.node_arc_m / self.points_per_node
+
+    @property
+    def node_passing_hz(self) -> np.ndarray:
+        """V/(R·2π/N): the rate at which nodes pass a point of the road."""
+        return self.speed_m_s / self.node_arc_m
+
+    @property
+    def point_passing_hz(self) -> np.ndarray:
+        return self.speed_m_s / self.point_arc_m
+
+    @property
+    def peak_rise_n(self) -> np.ndarray:
+        """Largest rim_Fz over the run less the static rim load."""
+        return self.rim_fz_n.max(axis=1) - self.static_rim_fz_n
+
+    @property
+    def min_contact_fz_n(self) -> np.ndarray:
+        """Smallest contact_Fz while the obstacle is under the tire."""
+        out = np.empty(self.element_counts.size)
+        for i, (start, end) in enumerate(self.under_tire_s):
+            inside = (self.time_s >= start) & (self.time_s <= end)
+            out[i] = self.contact_fz_n[i, inside].min() if inside.any() else math.nan
+        return out
+
+    def extrapolated_rise(self) -> tuple[float, float]:
+        """(mesh-converged peak rise, observed order): :func:`richardson` over the meshes."""
+        return richardson(1.0 / self.element_counts, self.peak_rise_n)
+
+    def rise_error(self) -> np.ndarray:
+        """Peak rise of each mesh over the extrapolated one, less 1."""
+        return self.peak_rise_n / self.extrapolated_rise()[0] - 1.0
+
+    def history_difference(self) -> np.ndarray:
+        """rms of each rim_Fz history less the finest mesh's, over the rms of the finest's
+        deviation from its static value (0 for the finest)."""
+        finest = self.rim_fz_n[-1]
+        scale = np.sqrt(np.mean((finest - self.static_rim_fz_n[-1]) ** 2))
+        return np.sqrt(np.mean((self.rim_fz_n - finest[None, :]) ** 2, axis=1)) / scale
+
+    def table_rows(self) -> list[dict]:
+        """One row per mesh: what the convergence table shows."""
+        error, difference = self.rise_error(), self.history_difference()
+        return [{"n_elements": int(n), "points_per_node": int(m), "point_arc_mm": 1e3 * s,
+                 "peak_rise_kn": rise / 1e3, "rise_error": float(e),
+                 "history_rms_difference": float(d), "min_contact_fz_kn": fmin / 1e3,
+                 "node_passing_hz": float(fn), "node_line_kn": ln / 1e3,
+                 "point_passing_hz": float(fp), "point_line_kn": lp / 1e3}
+                for n, m, s, rise, e, d, fmin, fn, ln, fp, lp in zip(
+                    self.element_counts, self.points_per_node, self.point_arc_m,
+                    self.peak_rise_n, error, difference, self.min_contact_fz_n,
+                    self.node_passing_hz, self.node_line_n, self.point_passing_hz,
+                    self.point_line_n)]
+
+    def to_dict(self, histories: bool = True) -> dict:
+        rise, order = self.extrapolated_rise()
+        data = {
+            "obstacle": self.obstacle.to_dict(),
+            "speed_m_s": self.speed_m_s,
+            "load_n": self.load_n,
+            "step_s": self.step_s,
+            "point_spacing_m": self.point_spacing_m,
+            "element_counts": self.element_counts.tolist(),
+            "static_rim_fz_n": self.static_rim_fz_n.tolist(),
+            "extrapolated_rise_kn": rise / 1e3,
+            "observed_order": order,
+            "meshes": self.table_rows(),
+            "under_tire_s": self.under_tire_s.tolist(),
+            "reach_m": self.reach_m.tolist(),
+            "contact_zone_length_m": self.contact_zone_length_m.tolist(),
+            "run_s": self.run_s.tolist(),
+        }
+        if histories:
+            data["time_s"] = self.time_s.tolist()
+            data["rim_fz_n"] = self.rim_fz_n.tolist()
+            data["contact_fz_n"] = self.contact_fz_n.tolist()
+        return data
+
+
+def obstacle_reach_m(radius_m: float, deflection_m: float, obstacle) -> float:
+    """Half-length of the road |x| <= reach over which the undeformed tread, its rim lowered
+    by ``deflection_m``, is below the obstacle's top (for a pothole: below the road)."""
+    top = max(obstacle.height_m, 0.0)
+    return math.sqrt(max(radius_m**2 - (radius_m - deflection_m - top) ** 2, 0.0))
+
+
+def zone_length_for_reach(radius_m: float, reach_m: float) -> float:
+    """The contact zone whose rays reach the road beyond the undeformed tread's first touch
+    at ``reach_m``, with :data:`CLEAT_ZONE_MARGIN_M` to spare."""
+    return 2 * radius_m * math.tan(math.asin(min(reach_m / radius_m, 1.0))) \
+        + CLEAT_ZONE_MARGIN_M
+
+
+#: Road the contact zone reaches beyond the obstacle's first touch of the undeformed tread.
+CLEAT_ZONE_MARGIN_M = 0.05
+
+
+def cleat_convergence(
+    tire: TireParameters | None = None,
+    obstacle=None,
+    speed_m_s: float = 10.0,
+    n_elements: Iterable[int] = CLEAT_ELEMENT_COUNTS,
+    point_spacing_m: float = CLEAT_POINT_SPACING_M,
+    load_n: float | None = None,
+    step_s: float = CLEAT_STEP_S,
+    settle_s: float = CLEAT_SETTLE_S,
+    contact_zone_length_m: float | None = None,
+    backend: str = "auto",
+    progress: Progress | None = None,
+) -> CleatConvergence:
+    """The rim held at the static height for ``load_n`` (default the FMU's 27.7 kN) while the
+    tire rolls over ``obstacle`` (default a 20 mm x 20 mm cleat) at ``speed_m_s``, on each
+    mesh, with :class:`~.simulator.ContactSimulator`.
+
+    The road input is the obstacle's profile at the front of each mesh's contact zone
+    (road_z, and road_vz = V dz/ds), sampled at ``step_s`` as
+    :meth:`~.obstacles.Obstacle.road_samples` says; the obstacle lies on the ground,
+    so every mesh meets it at the same time. ``point_spacing_m`` sets the contact points
+    (above the node arc, every node is its own point). The contact zone is by default the
+    FMU's, widened where the obstacle would meet the tread before the zone
+    (:func:`zone_length_for_reach`); a zone given that is too short is refused.
+    """
+    import time
+
+    from .contact import DEFAULT_ZONE_LENGTH_M
+    from .contact_dynamics import build_contact_model
+    from .obstacles import Obstacle
+    from .parameters import DEFAULT_LOAD_N
+    from .simulator import ContactSimulator
+
+    tire = tire or TireParameters()
+    obstacle = obstacle if obstacle is not None else Obstacle(0.02, 0.02)
+    load = DEFAULT_LOAD_N if load_n is None else load_n
+    counts = _orders(n_elements, "n_elements", 8)
+    problems = []
+    if not isinstance(obstacle, Obstacle):
+        problems.append(Problem("obstacle", obstacle, "", "an Obstacle (core.obstacles)"))
+    if not (math.isfinite(speed_m_s) and speed_m_s > 0):
+        problems.append(Problem("speed_m_s", speed_m_s, "m/s", "> 0 m/s",
+                                "the tire must roll over the obstacle"))
+    if not (math.isfinite(load) and load > 0):
+        problems.append(Problem("load_n", load, "N", "> 0 N"))
+    if not (math.isfinite(step_s) and 0 < step_s <= 1e-3):
+        problems.append(Problem("step_s", step_s, "s", "in (0, 1e-3] s"))
+    if not (math.isfinite(settle_s) and 0 <= settle_s <= 1.0):
+        problems.append(Problem("settle_s", settle_s, "s", "in [0, 1] s"))
+    if np.any(np.diff(counts) <= 0):
+        problems.append(Problem("n_elements", counts.tolist(), "", "ascending and distinct"))
+    if problems:
+        raise ParameterError(problems)
+
+    def build(n: int, zone_length: float):
+        op = _cleat_operating_point(n, speed_m_s, load, point_spacing_m, zone_length)
+        return build_contact_model(tire, op)
+
+    contacts, found = [], []
+    for n in counts:  # every mesh's problems at once
+        try:
+            zone = DEFAULT_ZONE_LENGTH_M if contact_zone_length_m is None \
+                else contact_zone_length_m
+            contact = build(n, zone)
+            reach = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
+            needed = zone_length_for_reach(tire.R, reach)
+            if zone < needed:
+                if contact_zone_length_m is not None:
+                    raise ParameterError([Problem(
+                        "contact_zone_length_m", zone, "m", f"at least {needed:.4g} m",
+                        f"the {obstacle.label} meets the undeformed tread {reach:.4g} m ahead "
+                        "of the contact centre")])
+                contact = build(n, needed)
+            contacts.append(contact)
+        except ParameterError as error:
+            found += error.details
+    if found:
+        raise ParameterError(found)
+    # the obstacle's first edge starts just ahead of the farthest zone front, and the run
+    # ends once its last edge has left the farthest zone rear, then settles
+    fronts = np.array([c.windows.front_m for c in contacts])
+    rears = np.array([c.windows.front_m - speed_m_s * c.windows.horizon_s for c in contacts])
+    # ... a whole number of steps ahead, so the samples fall on t = k·h from its passing the
+    # contact centre, whatever the meshes
+    lead = (math.ceil(float(fronts.max()) / (speed_m_s * step_s)) + 2) * speed_m_s * step_s
+    steps = int(math.ceil(((lead + obstacle.length_m - rears.min()) / speed_m_s + settle_s)
+                          / step_s))
+    absolute = step_s * np.arange(steps + 1)
+    time_s = step_s * (np.arange(steps + 1) - round(lead / (speed_m_s * step_s)))
+
+    size = counts.size
+    rim, contact_fz = np.empty((size, steps + 1)), np.empty((size, steps + 1))
+    statics, per_node, n_points = np.empty(size), np.empty(size, int), np.empty(size, int)
+    under, reaches, zones = np.empty((size, 2)), np.empty(size), np.empty(size)
+    node_line, point_line, run_s = np.empty(size), np.empty(size), np.empty(size)
+    for i, contact in enumerate(contacts):
+        started = time.perf_counter()
+        simulator = ContactSimulator(contact, backend=backend)
+        front = contact.windows.front_m
+        height, slope = obstacle.road_samples(front - lead + speed_m_s * absolute,
+                                              speed_m_s * step_s)
+        road_v = slope * speed_m_s
+        out = np.empty((steps + 1, 2))
+        first = simulator.outputs
+        out[0] = first[0], first[2]
+        step = simulator.step_values
+        for k in range(steps):
+            values = step(step_s, 0.0, 0.0, float(height[k]), float(road_v[k]))
+            out[k + 1] = values[0], values[2]
+        run_s[i] = time.perf_counter() - started
+        rim[i], contact_fz[i] = out[:, 0], out[:, 1]
+        statics[i] = contact.static_outputs["rim_Fz"]
+        per_node[i] = points_per_node(simulator.contract)
+        n_points[i] = simulator.contract.n_points
+        zones[i] = contact.patch.zone.length_m
+        reaches[i] = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
+        # the obstacle [X, X + L], X = -V t, overlaps [-reach, reach] for these t
+        under[i] = -reaches[i] / speed_m_s, (obstacle.length_m + reaches[i]) / speed_m_s
+        arc = 2 * np.pi * tire.R / counts[i]
+        inside = (time_s >= under[i, 0]) & (time_s <= under[i, 1])
+        node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], speed_m_s / arc)
+        point_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside],
+                                       speed_m_s * per_node[i] / arc)
+        _report(progress, i + 1, size)
+    return CleatConvergence(
+        obstacle=obstacle, speed_m_s=float(speed_m_s), load_n=float(load), step_s=float(step_s),
+        point_spacing_m=float(point_spacing_m), element_counts=counts,
+        points_per_node=per_node, n_points=n_points, time_s=time_s, rim_fz_n=rim,
+        contact_fz_n=contact_fz, static_rim_fz_n=statics, under_tire_s=under,
+        reach_m=reaches, contact_zone_length_m=zones, node_line_n=node_line,
+        point_line_n=point_line, run_s=run_s, radius_m=float(tire.R))

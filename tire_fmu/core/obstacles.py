@@ -1,0 +1,121 @@
+"""Short road obstacles: cleats and potholes, as height profiles along the road.
+
+One definition, used by the cleat study (:func:`.studies.cleat_convergence`), by the vehicle
+demo's road signals (``vehicle_demo/road.py``) and by the tests. An obstacle of height H
+(negative: a pothole of depth -H) and length L across the road is a function of s, the
+distance along the road behind its first edge (the edge a rolling tire meets first):
+
+- rectangular: H for 0 <= s < L, else 0 (its edges are steps; the tire's contact points
+  average them over their own windows of road);
+- rounded: a (1 - cos) bump, H/2 (1 - cos 2πs/L) on 0 <= s < L, with its slope.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .parameters import ParameterError, Problem
+
+OBSTACLE_SHAPES = ("rectangular", "rounded")
+#: Obstacles higher (or deeper) than this are outside what a tire model is asked to meet.
+MAX_OBSTACLE_SIZE_M = 0.3
+#: Obstacles longer than this are roads, not obstacles.
+MAX_OBSTACLE_LENGTH_M = 10.0
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A cleat (``height_m > 0``) or a pothole (``height_m < 0``) of ``length_m``."""
+
+    height_m: float
+    length_m: float
+    shape: str = "rectangular"
+
+    def __post_init__(self) -> None:
+        problems = []
+        if not (isinstance(self.height_m, (int, float)) and math.isfinite(self.height_m)
+                and 0 < abs(self.height_m) <= MAX_OBSTACLE_SIZE_M):
+            problems.append(Problem("height_m", self.height_m, "m",
+                                    f"in [-{MAX_OBSTACLE_SIZE_M:g}, {MAX_OBSTACLE_SIZE_M:g}] m "
+                                    "and not 0", "negative: a pothole"))
+        if not (isinstance(self.length_m, (int, float)) and math.isfinite(self.length_m)
+                and 0 < self.length_m <= MAX_OBSTACLE_LENGTH_M):
+            problems.append(Problem("length_m", self.length_m, "m",
+                                    f"in (0, {MAX_OBSTACLE_LENGTH_M:g}] m"))
+        if self.shape not in OBSTACLE_SHAPES:
+            problems.append(Problem("shape", self.shape, "",
+                                    f"one of {', '.join(OBSTACLE_SHAPES)}"))
+        if problems:
+            raise ParameterError(problems)
+
+    @property
+    def kind(self) -> str:
+        return "cleat" if self.height_m > 0 else "pothole"
+
+    @property
+    def label(self) -> str:
+        """``20 x 20 mm cleat``, ``50 mm deep pothole, 0.3 m long`` (rounded ones say so)."""
+        size, length = abs(self.height_m) * 1e3, self.length_m * 1e3
+        rounded = "rounded " if self.shape == "rounded" else ""
+        if self.kind == "cleat":
+            return f"{size:g} x {length:g} mm {rounded}cleat"
+        return f"{size:g} mm deep {rounded}pothole, {length / 1e3:g} m long"
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at distances ``s`` (m) behind the first edge; a rectangular
+        obstacle's slope is 0 (its edges are steps)."""
+        s = np.asarray(s, dtype=float)
+        on = (s >= 0) & (s < self.length_m)
+        if self.shape == "rectangular":
+            return np.where(on, self.height_m, 0.0), np.zeros_like(s)
+        wave = 2 * np.pi * s / self.length_m
+        height = np.where(on, 0.5 * self.height_m * (1 - np.cos(wave)), 0.0)
+        slope = np.where(on, 0.5 * self.height_m * np.sin(wave) * 2 * np.pi / self.length_m,
+                         0.0)
+        return height, slope
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first edge to ``s`` (m²; 0 before it, constant after)."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length_m)
+        if self.shape == "rectangular":
+            return self.height_m * s
+        wave = 2 * np.pi * s / self.length_m
+        return 0.5 * self.height_m * (s - self.length_m / (2 * np.pi) * np.sin(wave))
+
+    def mean_height(self, s_lo, s_hi) -> np.ndarray:
+        """Mean height over the road [s_lo, s_hi] (the height itself where s_lo = s_hi)."""
+        s_lo, s_hi = np.asarray(s_lo, dtype=float), np.asarray(s_hi, dtype=float)
+        width = s_hi - s_lo
+        point = width <= 0
+        mean = (self.integral(s_hi) - self.integral(s_lo)) / np.where(point, 1.0, width)
+        return np.where(point, self.profile(s_lo)[0], mean)
+
+    def road_samples(self, s, spacing_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope) of a road signal sampled every ``spacing_m`` of road at ``s``.
+
+        A rectangular obstacle is sampled by its mean over each sample's stretch of road
+        [s - spacing/2, s + spacing/2], slope 0: the trapezoid sum of such samples, which is
+        what a cubic Hermite interpolant with zero slopes integrates to, is then the exact
+        integral of the steps at every sample, whatever the phase of the edges between
+        samples (a point sample would shift each edge by up to half a sample). A rounded one
+        is smooth: its height and slope at the sample."""
+        if self.shape == "rectangular":
+            s = np.asarray(s, dtype=float)
+            half = 0.5 * spacing_m
+            return self.mean_height(s - half, s + half), np.zeros_like(s)
+        return self.profile(s)
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "height_m": self.height_m, "length_m": self.length_m,
+                "shape": self.shape, "label": self.label}
+
+
+def cleat(height_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:
+    return Obstacle(float(height_m), float(length_m), shape)
+
+
+def pothole(depth_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:
+    return Obstacle(-float(depth_m), float(length_m), shape)
