@@ -110,7 +110,7 @@ def test_every_variable_has_unit_description_and_legal_attributes():
                 "static_correction", "R", "b", "rhoA", "m_s", "k_r1", "k_r2", "EI", "k_cw",
                 "alpha", "beta", "sidewall_shear", "sidewall_pressure_exponent",
                 "reference_pressure", "allow_supercritical", "contact_zone_length",
-                "linear_contact", *INPUT_NAMES,
+                "contact_point_spacing", "linear_contact", *INPUT_NAMES,
                 *OUTPUT_NAMES, "in_contact"}
     assert set(variables) == expected
     units = {"load": "N", "speed": "m/s", "f_max": "Hz", "inflation_pressure": "Pa",

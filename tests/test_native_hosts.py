@@ -163,5 +163,8 @@ def test_other_hosts_give_fmpys_outputs(native_fmu_path, host, load, speed, tmp_
     reference = _in_host(native_fmu_path, "fmpy", load, speed, tmp_path)
     other = _in_host(native_fmu_path, host, load, speed, tmp_path)
     assert reference.shape == other.shape == (400, len(OUTPUTS))
-    assert (reference[:, 2] == 0.0).any()  # through a lift-off
+    if speed == 0.0:
+        assert (reference[:, 2] == 0.0).any()  # through a lift-off
+    else:  # rolling, the 22 cm of dropped road is bridged by the tread on its edges
+        assert reference[:, 2].min() < 0.6 * load  # but it loses much of its load
     assert relative_errors(reference, other).max() < 1e-9
