@@ -496,18 +496,28 @@ CLEAT_SETTLE_S = 0.02
 MAX_OBSERVED_ORDER = 10.0
 
 
-def line_amplitude(time_s: np.ndarray, values: np.ndarray, frequency_hz: float) -> float:
-    """Amplitude of the line at ``frequency_hz`` in a record: the Hann-windowed discrete
-    Fourier sum at that one frequency, 2|Σ w x e^{-2πift}| / Σ w, of the record less its
-    mean (a sine of amplitude A reads A); nan at or above the record's Nyquist frequency."""
+#: A line is looked for within this fraction of its frequency either side: the rays of the
+#: nodes (points) meet the road (R - δ)·δθ·sec²θ apart, closest at the contact centre.
+LINE_BAND = 0.05
+
+
+def line_amplitude(time_s: np.ndarray, values: np.ndarray, frequency_hz: float,
+                   band: float = LINE_BAND) -> float:
+    """Amplitude of the line near ``frequency_hz`` in a record: the largest Hann-windowed
+    discrete Fourier sum 2|Σ w x e^{-2πift}| / Σ w of the record less its mean (a sine of
+    amplitude A reads A) for f within ``band`` of it (on a grid of an eighth of the window's
+    resolution); nan if that reaches the record's Nyquist frequency."""
     t = np.asarray(time_s, dtype=float)
     x = np.asarray(values, dtype=float)
-    if t.size < 4 or not frequency_hz < 0.5 / float(np.mean(np.diff(t))):
+    if t.size < 4 or not frequency_hz * (1 + band) < 0.5 / float(np.mean(np.diff(t))):
         return math.nan
     window = np.hanning(t.size)
     x = x - np.sum(window * x) / np.sum(window)
-    return float(2 * abs(np.sum(window * x * np.exp(-2j * np.pi * frequency_hz * t)))
-                 / np.sum(window))
+    resolution = 1.0 / (t[-1] - t[0])
+    count = max(int(math.ceil(16 * band * frequency_hz / resolution)), 1) + 1
+    f = np.linspace(frequency_hz * (1 - band), frequency_hz * (1 + band), count)
+    sums = np.exp(-2j * np.pi * f[:, None] * (t - t[0])[None, :]) @ (window * x)
+    return float(2 * np.max(np.abs(sums)) / np.sum(window))
 
 
 def richardson(sizes, values) -> tuple[float, float]:
@@ -572,6 +582,7 @@ class CleatConvergence:
     node_line_n: np.ndarray  # contact_Fz line at the node-passing frequency
     point_line_n: np.ndarray  # and at the point-passing frequency
     run_s: np.ndarray  # wall time of each mesh's run (s)
+    deflection_m: np.ndarray  # the rim's static lowering on each mesh
     radius_m: float
 
     @property
@@ -585,12 +596,15 @@ class CleatConvergence:
 
     @property
     def node_passing_hz(self) -> np.ndarray:
-        """V/(R·2π/N): the rate at which nodes pass a point of the road."""
-        return self.speed_m_s / self.node_arc_m
+        """V/((R - δ)·2π/N): the rate at which the nodes' rays pass over a point of the road
+        at the contact centre (on the tread they are R·2π/N apart, on the road (R - δ)/R of
+        that)."""
+        return self.speed_m_s / ((self.radius_m - self.deflection_m) * 2 * np.pi
+                                 / self.element_counts)
 
     @property
     def point_passing_hz(self) -> np.ndarray:
-        return self.speed_m_s / self.point_arc_m
+        return self.node_passing_hz * self.points_per_node
 
     @property
     def peak_rise_n(self) -> np.ndarray:
@@ -645,6 +659,7 @@ class CleatConvergence:
             "point_spacing_m": self.point_spacing_m,
             "element_counts": self.element_counts.tolist(),
             "static_rim_fz_n": self.static_rim_fz_n.tolist(),
+            "deflection_m": self.deflection_m.tolist(),
             "extrapolated_rise_kn": rise / 1e3,
             "observed_order": order,
             "meshes": self.table_rows(),
@@ -775,6 +790,7 @@ def cleat_convergence(
     statics, per_node, n_points = np.empty(size), np.empty(size, int), np.empty(size, int)
     under, reaches, zones = np.empty((size, 2)), np.empty(size), np.empty(size)
     node_line, point_line, run_s = np.empty(size), np.empty(size), np.empty(size)
+    deflections = np.empty(size)
     for i, contact in enumerate(contacts):
         started = time.perf_counter()
         simulator = ContactSimulator(contact, backend=backend)
@@ -797,11 +813,12 @@ def cleat_convergence(
         reaches[i] = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
         # the obstacle [X, X + L], X = -V t, overlaps [-reach, reach] for these t
         under[i] = -reaches[i] / speed_m_s, (obstacle.length_m + reaches[i]) / speed_m_s
-        arc = 2 * np.pi * tire.R / counts[i]
+        deflections[i] = contact.patch.deflection_m
+        passing = speed_m_s / ((tire.R - deflections[i]) * 2 * np.pi / counts[i])
         inside = (time_s >= under[i, 0]) & (time_s <= under[i, 1])
-        node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], speed_m_s / arc)
+        node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], passing)
         point_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside],
-                                       speed_m_s * per_node[i] / arc)
+                                       passing * per_node[i])
         _report(progress, i + 1, size)
     return CleatConvergence(
         obstacle=obstacle, speed_m_s=float(speed_m_s), load_n=float(load), step_s=float(step_s),
@@ -809,4 +826,40 @@ def cleat_convergence(
         points_per_node=per_node, n_points=n_points, time_s=time_s, rim_fz_n=rim,
         contact_fz_n=contact_fz, static_rim_fz_n=statics, under_tire_s=under,
         reach_m=reaches, contact_zone_length_m=zones, node_line_n=node_line,
-        point_line_n=point_line, run_s=run_s, radius_m=float(tire.R))
+        point_line_n=point_line, run_s=run_s, deflection_m=deflections, radius_m=float(tire.R))
+
+
+#: Columns of the cleat convergence table (the CLI, its figure and docs/theory.md show it).
+CLEAT_TABLE_HEADER = ("N", "points per node (arc)", "rim_Fz peak rise", "vs converged",
+                      "rim_Fz rms vs finest", "min contact_Fz", "line at node passing",
+                      "line at point passing")
+
+
+def cleat_table(data: dict) -> tuple[list[list[str]], str]:
+    """Rows of :data:`CLEAT_TABLE_HEADER` and the sentence on the converged value, from
+    :meth:`CleatConvergence.to_dict` (or its record): the one formatting of the table."""
+
+    def line(amplitude_kn, hz) -> str:
+        if amplitude_kn is None or not math.isfinite(amplitude_kn):
+            return f"- ({hz:.0f} Hz above Nyquist)"
+        return f"{amplitude_kn:.3g} kN at {hz:.0f} Hz"
+
+    rows = [[str(row["n_elements"]),
+             f"{row['points_per_node']} ({row['point_arc_mm']:.3g} mm)",
+             f"{row['peak_rise_kn']:.2f} kN",
+             f"{100 * row['rise_error']:+.1f} %",
+             f"{100 * row['history_rms_difference']:.1f} %",
+             f"{row['min_contact_fz_kn']:.1f} kN",
+             line(row["node_line_kn"], row["node_passing_hz"]),
+             line(row["point_line_kn"], row["point_passing_hz"])]
+            for row in data["meshes"]]
+    counts = ", ".join(str(row["n_elements"]) for row in data["meshes"][-3:])
+    order = data["observed_order"]
+    if order is not None and math.isfinite(order):
+        note = (f"converged peak rise {data['extrapolated_rise_kn']:.2f} kN: Richardson "
+                f"extrapolation over N = {counts}, observed order {order:.2f}")
+    else:
+        note = (f"converged peak rise {data['extrapolated_rise_kn']:.2f} kN, the finest "
+                f"mesh's: N = {counts} do not converge monotonically, so no order is "
+                "observed to extrapolate with")
+    return rows, note
