@@ -17,6 +17,7 @@ import numpy as np
 
 from .analytic import analytic_modes
 from .complex_modal import complex_modes
+from .contact import DEFAULT_CONTACT_POINT_SPACING_M
 from .dispersion import Dispersion, body_frequencies, dispersion_relation
 from .modal import ANTISYMMETRIC, SYMMETRIC, ModalResult, real_modes
 from .model import SupercriticalSpeedWarning, build_model
@@ -481,7 +482,7 @@ def dispersion_at_speed(
 
 #: The default point spacing of the study (m): the contact points' default, which resolves a
 #: 10 mm feature with four points.
-CLEAT_POINT_SPACING_M = 2.5e-3
+CLEAT_POINT_SPACING_M = DEFAULT_CONTACT_POINT_SPACING_M
 #: Meshes of the study: doubling, so the Richardson ratio is 2.
 CLEAT_ELEMENT_COUNTS = (100, 200, 400, 800)
 #: Default communication step (s). The rim load's peak over a 20 mm cleat at 10 m/s moves by
