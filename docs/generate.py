@@ -135,18 +135,24 @@ def fmu_variables_table() -> str:
 def contact_footprint_table() -> str:
     from tire_fmu.core import OperatingPoint, TireParameters, build_model
 
-    lines = ["| N | load | deflection | footprint | pushing nodes | secant K_v | tangent K_v |",
-             "|---|---|---|---|---|---|---|"]
-    for n in (100, 200, 400):
+    lines = ["| N | load | deflection | footprint | pushing points (per node) | secant K_v | "
+             "tangent K_v | footprint, one point per node |",
+             "|---|---|---|---|---|---|---|---|"]
+    for n in (100, 200, 400, 800):
         for load in (10e3, 27.7e3, 60e3):
             fp = build_model(TireParameters(), OperatingPoint(n_elements=n,
                                                               load_n=load)).patch.footprint
+            nodes = build_model(TireParameters(), OperatingPoint(
+                n_elements=n, load_n=load, contact_point_spacing_m=1.0)).patch.footprint
             lines.append(f"| {n} | {load / 1e3:.3g} kN | {fp.deflection_m * 1e3:.2f} mm | "
-                         f"{fp.length_m * 100:.2f} cm | {fp.n_active} | "
+                         f"{fp.length_m * 100:.2f} cm | {fp.n_active} "
+                         f"({fp.zone.points_per_node}) | "
                          f"{fp.secant_stiffness_n_per_m / 1e6:.3f} MN/m | "
-                         f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m |")
+                         f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m | "
+                         f"{nodes.length_m * 100:.2f} cm |")
     lines += ["", "Computed by `docs/generate.py` from `build_model(...).patch.footprint` "
-              "(the same numbers as `tire-fmu patch --load L --elements N`)."]
+              "(the same numbers as `tire-fmu patch --load L --elements N`; the last column "
+              "with `--point-spacing 1`, one contact point per node)."]
     return "\n".join(lines)
 
 
@@ -619,8 +625,13 @@ def readme_fit() -> str:
     for p in fit["parameters"]:
         lines.append(f"| {p['name']} [{p['unit']}] | {p['start']:.4g} | {p['value']:.6g} | "
                      f"{getattr(truth, p['name']):.6g} |")
+    # a residual at rounding level differs in its digits from one BLAS to the next: say so,
+    # rather than print a number the next machine does not reproduce
+    residual = fit["max_abs_residual_percent"]
+    residual_text = (f"{residual:.1g} %" if residual >= 1e-9 else
+                     "below 1e-9 % (rounding: the data came from these parameters)")
     lines += ["", f"The start's frequencies are up to {100 * first:.0f} % off the table's; the "
-              f"fit ends at a largest residual of {fit['max_abs_residual_percent']:.1g} % "
+              f"fit ends at a largest residual {residual_text} "
               f"({fit['evaluations']} evaluations, rank {fit['rank']} of "
               f"{len(fit['parameters'])}). Computed by `docs/generate.py` running that command "
               "(`--json`)."]

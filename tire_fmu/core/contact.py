@@ -63,21 +63,19 @@ from functools import cached_property
 import numpy as np
 
 from .discretisation import Grid
-from .parameters import Problem, render
+from .parameters import (
+    DEFAULT_POINT_SPACING_M,
+    Problem,
+    point_spacing_range_problems,
+    render,
+)
 
 #: Default length of road under the contact zone (m): wide enough for the largest credible
 #: footprint and for a 40 mm cleat to be met before it reaches the footprint.
 DEFAULT_ZONE_LENGTH_M = 0.6
-#: Default largest distance between contact points along the tread (m): four points on a
-#: 10 mm road feature, and a rim load over a 20 mm cleat converged to about 1 % on any mesh
-#: (docs/theory.md, "Contact points: convergence over cleats").
-DEFAULT_CONTACT_POINT_SPACING_M = 2.5e-3
-MIN_CONTACT_POINT_SPACING_M = 1e-4
-MAX_CONTACT_POINT_SPACING_M = 1.0
-#: A contact solve takes at most this many points (its interface is dense in them).
-MAX_CONTACT_POINTS = 4000
-#: Relative slack on the spacing, so that a node arc exactly m times it has m points.
-POINT_SPACING_SLACK = 1e-9
+#: Default largest distance between contact points along the tread (m), and its range: the
+#: operating point's (parameters.DEFAULT_POINT_SPACING_M), under the contact's own name.
+DEFAULT_CONTACT_POINT_SPACING_M = DEFAULT_POINT_SPACING_M
 #: The zone may reach at most this far around the ring (|θ| < 60°): beyond, the flat-road
 #: ray geometry and the small-deflection ring stop being credible.
 MAX_ZONE_HALF_ANGLE = math.pi / 3
@@ -96,6 +94,19 @@ SEGMENTS_PER_NODE = 8
 MAX_DEFLECTION_FRACTION = 0.5
 #: Bisections for the deflection at which the footprint reaches its longest credible length.
 LENGTH_BISECTIONS = 60
+#: Relative slack on the contact point spacing, so a node arc of exactly m spacings makes m
+#: points per node.
+POINT_SPACING_SLACK = 1e-9
+#: The most contact points a zone may have: the step's contact solve is dense in the points.
+MAX_CONTACT_POINTS = 4000
+#: How a spacing that makes too many points is refused (printf, so that the native FMU says
+#: the same): the smallest spacing allowed; then the points per node, the carrying nodes, the
+#: points and the limit.
+#: points_per_node counts at most this many (an int in C): far beyond any spacing in range
+_MOST_PER_NODE = 100_000_000
+POINTS_ALLOWED = "at least %.4g m with this mesh and contact zone"
+POINTS_REASON = ("%d points on each of its %d carrying nodes make %d contact points, more than "
+                 "the %d the contact solve takes")
 
 
 # -- the zone ---------------------------------------------------------------------------------
@@ -191,14 +202,6 @@ class ContactZone:
                 -height * np.tan(self.point_theta - half))
 
 
-def points_per_node(grid: Grid, spacing_m: float) -> int:
-    """m: the smallest odd number of points per node arc no farther apart than ``spacing_m``
-    (odd, so that a point sits on every node and the points are mirror-symmetric)."""
-    ratio = grid.node_arc_m / (float(spacing_m) * (1 + POINT_SPACING_SLACK))
-    m = max(1, math.ceil(ratio))
-    return m if m % 2 else m + 1
-
-
 def lagrange_weights(s: np.ndarray) -> np.ndarray:
     """Cubic Lagrange weights (.., 4) on nodes -1, 0, 1, 2 for a point at s in [0, 1)."""
     s = np.asarray(s, dtype=float)[..., None]
@@ -220,7 +223,7 @@ def contact_zone(grid: Grid, k_cw: float, beta: float,
     """
     half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
     half = int(math.floor(half_angle * (1 + ZONE_ANGLE_SLACK) / grid.dtheta))
-    m = points_per_node(grid, point_spacing_m)
+    m = points_per_node(grid.node_arc_m, point_spacing_m)
     reach = 0 if m == 1 else 2
     offsets = np.arange(-half - reach, half + reach + 1)
     nodes = np.mod(offsets, grid.n_elements)
@@ -253,7 +256,7 @@ def zone_problems(grid: Grid, zone_length_m,
     except (TypeError, ValueError):
         length = math.nan
     limit = 2 * grid.radius_m * math.tan(MAX_ZONE_HALF_ANGLE)
-    problems = point_spacing_problems(point_spacing_m)
+    problems = point_spacing_range_problems(point_spacing_m)
     if not (math.isfinite(length) and 0 < length <= limit):
         return problems + [Problem(
             "contact_zone_length_m", zone_length_m, "m", f"in (0, {limit:.4g}] m",
@@ -269,42 +272,49 @@ def zone_problems(grid: Grid, zone_length_m,
 
 
 def point_count_problems(grid: Grid, zone_length_m: float, point_spacing_m) -> list[Problem]:
-    """Whether the zone's contact points stay within MAX_CONTACT_POINTS."""
-    problems = point_spacing_problems(point_spacing_m)
-    if problems:
-        return problems
-    length, spacing = float(zone_length_m), float(point_spacing_m)
-    half_angle = min(math.atan(0.5 * length / grid.radius_m), MAX_ZONE_HALF_ANGLE)
-    carrying = 2 * int(math.floor(half_angle * (1 + ZONE_ANGLE_SLACK) / grid.dtheta)) + 1
-    points = carrying * points_per_node(grid, spacing)
-    if points > MAX_CONTACT_POINTS:
-        # the finest spacing that stays within the limit: the largest odd m that fits
-        m = max(1, MAX_CONTACT_POINTS // carrying)
-        m = m if m % 2 else m - 1
-        smallest = grid.node_arc_m / m
-        return [Problem("contact_point_spacing_m", spacing, "m",
-                        f"at least {smallest:.4g} m on this mesh and zone (n_elements = "
-                        f"{grid.n_elements}, contact_zone_length_m = {length:g})",
-                        f"it makes {points} contact points, more than the "
-                        f"{MAX_CONTACT_POINTS} a contact solve may take")]
-    return []
+    """Whether a spacing is in range and its zone's contact points stay within
+    MAX_CONTACT_POINTS (the native FMU says the same: spec.POINTS_ALLOWED/REASON)."""
+    return (point_spacing_range_problems(point_spacing_m)
+            or point_spacing_problems(grid, float(zone_length_m), float(point_spacing_m)))
 
 
-def point_spacing_problems(spacing_m) -> list[Problem]:
-    """Whether a contact point spacing is a number in the allowed range (m)."""
-    try:
-        spacing = float(spacing_m)
-    except (TypeError, ValueError):
-        spacing = math.nan
-    if not (isinstance(spacing_m, (int, float, np.integer, np.floating))
-            and not isinstance(spacing_m, bool) and math.isfinite(spacing)
-            and MIN_CONTACT_POINT_SPACING_M <= spacing <= MAX_CONTACT_POINT_SPACING_M):
-        return [Problem("contact_point_spacing_m", spacing_m, "m",
-                        f"in [{MIN_CONTACT_POINT_SPACING_M:g}, "
-                        f"{MAX_CONTACT_POINT_SPACING_M:g}] m",
-                        "the largest distance between contact points along the tread; "
-                        "resolve the shortest road feature with several")]
-    return []
+def points_per_node(node_arc_m: float, spacing_m: float) -> int:
+    """The smallest odd m with node_arc / m <= spacing (1 + POINT_SPACING_SLACK); odd, so
+    that a point sits on every node, the contact centre's among them (the native FMU's
+    contact.c counts alike)."""
+    limit = spacing_m * (1 + POINT_SPACING_SLACK)
+    guess = math.ceil(node_arc_m / limit)
+    if not guess <= _MOST_PER_NODE:
+        return _MOST_PER_NODE + 1  # (no spacing in range comes near) refused as too many
+    m = max(1, int(guess))
+    if m % 2 == 0:
+        m += 1
+    while m > 1 and node_arc_m / (m - 2) <= limit:
+        m -= 2
+    while node_arc_m / m > limit:
+        m += 2
+    return m
+
+
+def _round_up(value: float, digits: int = 4) -> float:
+    """``value`` rounded up to ``digits`` significant digits (a bound that, as printed, holds)."""
+    step = 10.0 ** (math.floor(math.log10(value)) - digits + 1)
+    return math.ceil(value / step) * step
+
+
+def point_spacing_problems(grid: Grid, zone_length_m: float, spacing_m: float) -> list[Problem]:
+    """Why a contact point spacing (in range: parameters.point_spacing_range_problems) makes
+    more points than MAX_CONTACT_POINTS on this mesh and zone (empty when it does not)."""
+    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
+    carrying = int(np.count_nonzero(np.abs(grid.theta) <= half_angle * (1 + ZONE_ANGLE_SLACK)))
+    m = points_per_node(grid.node_arc_m, spacing_m)
+    if carrying * m <= MAX_CONTACT_POINTS:
+        return []
+    most = max(1, MAX_CONTACT_POINTS // carrying)
+    most -= 1 - most % 2  # odd
+    smallest = _round_up(grid.node_arc_m / max(most, 1))
+    return [Problem("contact_point_spacing_m", float(spacing_m), "m", POINTS_ALLOWED % smallest,
+                    POINTS_REASON % (m, carrying, carrying * m, MAX_CONTACT_POINTS))]
 
 
 # -- the law ----------------------------------------------------------------------------------

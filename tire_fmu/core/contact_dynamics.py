@@ -150,7 +150,7 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
     zone = model.patch.zone
     work = substep_work(modes.n_modes, model.grid.n_elements // 2 + 1, zone.n_nodes,
-                        zone.n_points)
+                        zone.n_points, int(zone.point_support.shape[1]))
     per_interval = math.ceil(WORK_INTERVAL_S / substep * (1 - 1e-12))
     if per_interval * work > MAX_STEP_WORK:
         from .parameters import TIRE_FIELDS, ParameterError, Problem

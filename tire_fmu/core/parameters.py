@@ -46,6 +46,15 @@ MIN_ELEMENTS = 8
 #: machine (20000, the former limit, needed more than 23 GB; the modal analysis of
 #: benchmarks/bench_modal.py goes to it). benchmarks/bench_mesh_size.py prints what a mesh costs.
 MAX_ELEMENTS = 1_600
+#: The contact points' spacing along the tread (m): the default resolves a 10 mm road feature
+#: with four points; the range keeps the points within what a road means (0.1 mm) and at most
+#: one per node (any spacing beyond the node arc puts one point on each node).
+DEFAULT_POINT_SPACING_M = 2.5e-3
+MIN_POINT_SPACING_M = 1e-4
+MAX_POINT_SPACING_M = 1.0
+POINT_SPACING_ALLOWED = "in [%g, %g] m"
+POINT_SPACING_REASON = ("the spacing of the contact points along the tread; at or beyond the "
+                        "node arc, one point on each node")
 ELEMENTS_REASON = (f"the 5-point bending stencil needs at least {MIN_ELEMENTS} nodes around the "
                    f"ring; meshes above {MAX_ELEMENTS} cost too much time and memory to build")
 
@@ -346,7 +355,7 @@ class OperatingPoint:
     speed_m_s: float = 0.0
     allow_supercritical: bool = False
     contact_zone_length_m: float = 0.6  # contact.DEFAULT_ZONE_LENGTH_M
-    contact_point_spacing_m: float = 2.5e-3  # contact.DEFAULT_CONTACT_POINT_SPACING_M
+    contact_point_spacing_m: float = DEFAULT_POINT_SPACING_M
 
     def __post_init__(self) -> None:
         problems = operating_point_problems(self.as_dict())
@@ -386,10 +395,6 @@ def operating_point_problems(
         problems.append(Problem("n_elements", n, "",
                                 f"an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]",
                                 ELEMENTS_REASON))
-    if "contact_point_spacing_m" in values:
-        from .contact import point_spacing_problems  # contact builds on this module
-
-        problems += point_spacing_problems(values["contact_point_spacing_m"])
     load, patch = values.get("load_n"), values.get("patch_length_m")
     if load is not None and patch is not None:
         problems.append(Problem("patch_length_m", patch, "m", "unset when load_n is given",
@@ -416,7 +421,23 @@ def operating_point_problems(
                 name, number, unit, f"in [0, {max_patch:.4g}] m",
                 f"at most {MAX_PATCH_FRACTION:g} of the circumference, beyond which the linear "
                 "ring is not credible"))
+    problems += point_spacing_range_problems(
+        values.get("contact_point_spacing_m", DEFAULT_POINT_SPACING_M))
     return problems
+
+
+def point_spacing_range_problems(spacing_m) -> list[Problem]:
+    """The contact points' spacing on its own (how many points it makes on a mesh:
+    :func:`.contact.point_spacing_problems`)."""
+    try:
+        number = float(spacing_m)
+    except (TypeError, ValueError):
+        number = math.nan
+    if MIN_POINT_SPACING_M <= number <= MAX_POINT_SPACING_M:  # false for nan
+        return []
+    return [Problem("contact_point_spacing_m", spacing_m if math.isnan(number) else number,
+                    "m", POINT_SPACING_ALLOWED % (MIN_POINT_SPACING_M, MAX_POINT_SPACING_M),
+                    POINT_SPACING_REASON)]
 
 
 #: The stiffest local term of the tire may exceed the ring's weakest support at most this many

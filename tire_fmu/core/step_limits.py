@@ -42,9 +42,11 @@ SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring tru
 
 #: The work of one internal sub-step of the kernel, in units: a fixed part (the road read, the
 #: solve's set-up, the outputs), one per mode kept (its decay and ramp), two per order and zone
-#: node pair (the forces' DFT and the readout's inverse at the zone nodes) and three per pair
-#: of contact points (the interface the contact solve reads). benchmarks/bench_step_work.py
-#: measures a unit at 0.5-1.5 ns on the machines this was written on.
+#: node pair (the forces' DFT and the readout's inverse at the zone nodes), three per pair
+#: of contact points (the interface the contact solve reads) and two per point and support
+#: node (reading the tread at the points, spreading their forces back to the nodes).
+#: benchmarks/bench_step_work.py measures a unit at 0.5-1.5 ns on the machines this was
+#: written on.
 SUBSTEP_WORK_BASE = 1000
 #: The most work one communication step may take (units): about a second of CPU. A tire whose
 #: millisecond would take more (a stiff contact on a light tread, sub-stepped at
@@ -55,9 +57,12 @@ MAX_STEP_WORK = 500_000_000
 WORK_INTERVAL_S = 1e-3
 
 
-def substep_work(n_modes: int, n_orders: int, n_zone: int, n_points: int) -> int:
-    """The work of one sub-step (see SUBSTEP_WORK_BASE), the same sum in both builders."""
-    return SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone // 2 + 1) + 3 * n_points ** 2
+def substep_work(n_modes: int, n_orders: int, n_zone: int, n_points: int,
+                 n_support: int) -> int:
+    """The work of one sub-step (see SUBSTEP_WORK_BASE), the same sum in both builders
+    (contract_pack.c's contract_substep_work)."""
+    return (SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone // 2 + 1) + 3 * n_points ** 2
+            + 2 * n_points * n_support)
 
 
 #: How a step that would take more than MAX_STEP_WORK is refused: h (repr), the sub-steps it

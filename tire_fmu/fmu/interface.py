@@ -15,8 +15,11 @@ from ..core.contact_dynamics import INPUT_NAMES, OUTPUT_NAMES, OUTPUT_UNITS
 from ..core.free_ring import RingTruncation
 from ..core.parameters import (
     DEFAULT_LOAD_N,
+    DEFAULT_POINT_SPACING_M,
     MAX_ELEMENTS,
+    MAX_POINT_SPACING_M,
     MIN_ELEMENTS,
+    MIN_POINT_SPACING_M,
     TIRE_FIELDS,
     TireParameters,
 )
@@ -47,7 +50,8 @@ from ..core.step_limits import MAX_DELAY_STEPS, MAX_HISTORY_SAMPLES, MAX_STEP_S 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.
 FMU_NAMES = {"load_n": "load", "speed_m_s": "speed", "f_max_hz": "f_max",
-             "contact_zone_length_m": "contact_zone_length"}
+             "contact_zone_length_m": "contact_zone_length",
+             "contact_point_spacing_m": "contact_point_spacing"}
 FMU_UNSET = "0"
 
 CAPABILITIES = {
@@ -162,6 +166,11 @@ def _parameters() -> list[FmuVariable]:
         FmuVariable("contact_zone_length", "Real", "parameter", DEFAULT_ZONE_LENGTH_M, "m",
                     "length of road under the tread nodes that may meet it, centred on the "
                     "contact centre (road_z is measured at its front)", "--zone-length"),
+        FmuVariable("contact_point_spacing", "Real", "parameter", DEFAULT_POINT_SPACING_M, "m",
+                    "spacing of the contact points along the tread, each meeting the road at "
+                    "its own point (an odd number per node, interpolated between the nodes; "
+                    "at or beyond the node arc, one per node); allowed "
+                    f"[{MIN_POINT_SPACING_M:g}, {MAX_POINT_SPACING_M:g}]", "--point-spacing"),
         FmuVariable("linear_contact", "Boolean", "parameter", False, "",
                     "two-sided springs on the static footprint instead of the unilateral "
                     "contact (the linearised tire, for comparison with linear tools)",

@@ -317,7 +317,8 @@ class TireModal(Fmi2Slave):
         op_values = {"n_elements": named["n_elements"], "load_n": named["load"],
                      "speed_m_s": named["speed"],
                      "allow_supercritical": bool(named["allow_supercritical"]),
-                     "contact_zone_length_m": named["contact_zone_length"]}
+                     "contact_zone_length_m": named["contact_zone_length"],
+                     "contact_point_spacing_m": named["contact_point_spacing"]}
         problems = []
         f_max, n_modes = named["f_max"], named["n_modes"]
         truncation = None

@@ -100,6 +100,13 @@ CONSTANTS: dict[str, float | int] = {
     "SEGMENTS_PER_NODE": contact.SEGMENTS_PER_NODE,
     "MAX_DEFLECTION_FRACTION": contact.MAX_DEFLECTION_FRACTION,
     "LENGTH_BISECTIONS": contact.LENGTH_BISECTIONS,
+    # the contact points
+    "DEFAULT_POINT_SPACING_M": parameters.DEFAULT_POINT_SPACING_M,
+    "MIN_POINT_SPACING_M": parameters.MIN_POINT_SPACING_M,
+    "MAX_POINT_SPACING_M": parameters.MAX_POINT_SPACING_M,
+    "POINT_SPACING_SLACK": contact.POINT_SPACING_SLACK,
+    "MAX_CONTACT_POINTS": contact.MAX_CONTACT_POINTS,
+    "MOST_POINTS_PER_NODE": contact._MOST_PER_NODE,
     "MAX_PATCH_FRACTION": parameters.MAX_PATCH_FRACTION,
     # the free ring's modes: their canonical normalisation and order
     "MODE_TIE_TOLERANCE": modal_form.MODE_TIE_TOLERANCE,
@@ -160,6 +167,10 @@ MESSAGES: dict[str, str] = {
     "ZONE_TOO_SHORT": "contact_zone_length = %s: must be at least %.4g m (one node either "
                       "side), or refine the mesh (it holds only the centre node of a mesh of %d "
                       "elements)",
+    "POINT_SPACING_ALLOWED": parameters.POINT_SPACING_ALLOWED,
+    "POINT_SPACING_REASON": parameters.POINT_SPACING_REASON,
+    "POINTS_ALLOWED": contact.POINTS_ALLOWED,
+    "POINTS_REASON": contact.POINTS_REASON,
     "LOAD_RANGE": "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N "
                   "(deflection %.3g mm) %s",
     "LOAD_REASON_ZONE": "its footprint reaches the end of the contact zone (raise "

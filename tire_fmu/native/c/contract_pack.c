@@ -1,16 +1,16 @@
 /* contract_pack.c: the native FMU's builder hands its model to the step kernel as a contract
  * (contract.h), the same fields core/contract.py's build_contract fills in Python, from the
- * same quantities: the free ring's modes grouped by order (ring.c), the zone and the static
- * footprint (contact.c), the road windows. Contact points are the zone nodes themselves. */
+ * same quantities: the free ring's modes grouped by order (ring.c), the zone, its contact
+ * points and the static footprint on them (contact.c), the points' road windows. */
 #include <string.h>
 
 #include "contract_pack.h"
 #include "spec.h"
 
-int contract_substep_work(int n_modes, int n_orders, int n_zone, int n_points)
+int contract_substep_work(int n_modes, int n_orders, int n_zone, int n_points, int n_support)
 {
     return SPEC_SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone / 2 + 1)
-           + 3 * n_points * n_points;
+           + 3 * n_points * n_points + 2 * n_points * n_support;
 }
 
 void contract_free(TireContract* c, const Memory* mem)
@@ -29,7 +29,8 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
                   double deflection, double substep_s, int linear, double speed,
                   double min_step_s)
 {
-    int K = ring->n_modes, Z = zone->n_zone, P = Z, rows = ring->rows, cols = ring->cols, j, r;
+    int K = ring->n_modes, Z = zone->n_zone, P = zone->n_points, S = zone->n_support;
+    int rows = ring->rows, cols = ring->cols, j, r, p, s;
     int32_t *order_start, *zone_offset, *point_support;
     cx *lam, *beta, *gamma, *eta, *b_rim, *c_rim;
     double *d, *e, *point_weight, *point_cos, *point_sec, *point_x_road, *point_stiffness;
@@ -42,20 +43,20 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     c->n_modes = K;
     c->n_zone = Z;
     c->n_points = P;
-    c->n_support = 1;
+    c->n_support = S;
     c->n_ring_rows = rows;
     c->n_ring_cols = cols;
     c->linear = linear;
-    c->centre_point = zone->centre;
-    c->substep_work = contract_substep_work(K, ring->n_orders, Z, P);
+    c->centre_point = zone->centre_point;
+    c->substep_work = contract_substep_work(K, ring->n_orders, Z, P, S);
     c->substep_s = substep_s;
     c->speed_m_s = speed;
     c->static_deflection_m = deflection;
     c->min_step_s = min_step_s;
     if (NEW(order_start, ring->n_orders + 1) || NEW(lam, K) || NEW(beta, K) || NEW(gamma, K) ||
         NEW(eta, K) || NEW(b_rim, K) || NEW(c_rim, 2 * K) || NEW(d, rows * cols) ||
-        NEW(e, rows * cols) || NEW(zone_offset, Z) || NEW(point_support, P) ||
-        NEW(point_weight, P) || NEW(point_cos, P) || NEW(point_sec, P) || NEW(point_x_road, P) ||
+        NEW(e, rows * cols) || NEW(zone_offset, Z) || NEW(point_support, P * S) ||
+        NEW(point_weight, P * S) || NEW(point_cos, P) || NEW(point_sec, P) || NEW(point_x_road, P) ||
         NEW(point_stiffness, P) || NEW(point_damping, P) || NEW(f_static, P) ||
         NEW(pen_static, P) || NEW(window_early_s, P) || NEW(window_late_s, P) ||
         NEW(static_ring_out, 3)) {
@@ -74,24 +75,32 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     }
     memcpy(d, ring->d, sizeof(double) * (size_t)(rows * cols));
     memcpy(e, ring->e, sizeof(double) * (size_t)(rows * cols));
-    for (j = 0; j < Z; j++) {
-        zone_offset[j] = j - zone->half;
-        point_support[j] = j;
-        point_weight[j] = 1.0;
-        point_cos[j] = zone->cos[j];
-        point_sec[j] = zone->sec[j];
-        point_x_road[j] = -(zone->radius - deflection) * tan(zone->theta[j]);
-        point_stiffness[j] = zone->stiffness;
-        point_damping[j] = zone->damping;
-        f_static[j] = fp->forces[j];
-        pen_static[j] = fp->penetration[j];
-        window_early_s[j] = windows->early[j];
-        window_late_s[j] = windows->late[j];
+    for (j = 0; j < Z; j++) zone_offset[j] = j - zone->half;
+    for (j = 0; j < P * S; j++) {
+        point_support[j] = zone->support[j];
+        point_weight[j] = zone->weight[j];
     }
-    for (j = 0; j < Z; j++) {
-        static_ring_out[0] += zone->cos[j] * fp->forces[j];
-        static_ring_out[1] += zone->sin[j] * fp->forces[j];
-        static_ring_out[2] += compliance[zone->centre * Z + j] * fp->forces[j];
+    for (p = 0; p < P; p++) {
+        point_cos[p] = zone->load_cos[p];
+        point_sec[p] = zone->sec[p];
+        point_x_road[p] = -(zone->radius - deflection) * tan(zone->point_theta[p]);
+        point_stiffness[p] = zone->stiffness;
+        point_damping[p] = zone->damping;
+        f_static[p] = fp->forces[p];
+        pen_static[p] = fp->penetration[p];
+        window_early_s[p] = windows->early[p];
+        window_late_s[p] = windows->late[p];
+    }
+    /* the static outputs: the points' forces on the rim and the tread's compression at the
+     * centre node, (G I^T f)_centre */
+    for (p = 0; p < P; p++) {
+        static_ring_out[0] += zone->load_cos[p] * fp->forces[p];
+        static_ring_out[1] += zone->load_sin[p] * fp->forces[p];
+        if (fp->forces[p] == 0.0) continue;
+        for (s = 0; s < S; s++) {
+            static_ring_out[2] += compliance[zone->centre * Z + zone->support[p * S + s]]
+                                  * (zone->weight[p * S + s] * fp->forces[p]);
+        }
     }
     return 0;
 }

@@ -36,6 +36,12 @@
 #define SPEC_SEGMENTS_PER_NODE 8
 #define SPEC_MAX_DEFLECTION_FRACTION 0.5
 #define SPEC_LENGTH_BISECTIONS 60
+#define SPEC_DEFAULT_POINT_SPACING_M 0.0025
+#define SPEC_MIN_POINT_SPACING_M 0.0001
+#define SPEC_MAX_POINT_SPACING_M 1.0
+#define SPEC_POINT_SPACING_SLACK 1e-09
+#define SPEC_MAX_CONTACT_POINTS 4000
+#define SPEC_MOST_POINTS_PER_NODE 100000000
 #define SPEC_MAX_PATCH_FRACTION 0.125
 #define SPEC_MODE_TIE_TOLERANCE 1e-06
 #define SPEC_CRITICAL_SPEED_WARNING_FRACTION 0.8
@@ -56,7 +62,7 @@
 #define SPEC_BLOCK_OUTPUTS_FIRST 4
 #define SPEC_BLOCK_N_OUTPUTS 6
 #define SPEC_BLOCK_IN_CONTACT 10
-#define SPEC_N_VARIABLES 34
+#define SPEC_N_VARIABLES 35
 #define SPEC_VR_RIM_Z 0
 #define SPEC_VR_RIM_VZ 1
 #define SPEC_VR_ROAD_Z 2
@@ -76,21 +82,22 @@
 #define SPEC_VR_STATIC_CORRECTION 16
 #define SPEC_VR_ALLOW_SUPERCRITICAL 17
 #define SPEC_VR_CONTACT_ZONE_LENGTH 18
-#define SPEC_VR_LINEAR_CONTACT 19
-#define SPEC_VR_R 20
-#define SPEC_VR_B 21
-#define SPEC_VR_INFLATION_PRESSURE 22
-#define SPEC_VR_RHOA 23
-#define SPEC_VR_M_S 24
-#define SPEC_VR_K_R1 25
-#define SPEC_VR_K_R2 26
-#define SPEC_VR_EI 27
-#define SPEC_VR_K_CW 28
-#define SPEC_VR_ALPHA 29
-#define SPEC_VR_BETA 30
-#define SPEC_VR_SIDEWALL_SHEAR 31
-#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 32
-#define SPEC_VR_REFERENCE_PRESSURE 33
+#define SPEC_VR_CONTACT_POINT_SPACING 19
+#define SPEC_VR_LINEAR_CONTACT 20
+#define SPEC_VR_R 21
+#define SPEC_VR_B 22
+#define SPEC_VR_INFLATION_PRESSURE 23
+#define SPEC_VR_RHOA 24
+#define SPEC_VR_M_S 25
+#define SPEC_VR_K_R1 26
+#define SPEC_VR_K_R2 27
+#define SPEC_VR_EI 28
+#define SPEC_VR_K_CW 29
+#define SPEC_VR_ALPHA 30
+#define SPEC_VR_BETA 31
+#define SPEC_VR_SIDEWALL_SHEAR 32
+#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 33
+#define SPEC_VR_REFERENCE_PRESSURE 34
 
 typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;
 typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;
@@ -122,6 +129,7 @@ static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {
     {"static_correction", SPEC_BOOLEAN, SPEC_PARAMETER, 1.0, ""},
     {"allow_supercritical", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, ""},
     {"contact_zone_length", SPEC_REAL, SPEC_PARAMETER, 0.6, "m"},
+    {"contact_point_spacing", SPEC_REAL, SPEC_PARAMETER, 0.0025, "m"},
     {"linear_contact", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, ""},
     {"R", SPEC_REAL, SPEC_PARAMETER, 0.65, "m"},
     {"b", SPEC_REAL, SPEC_PARAMETER, 0.35, "m"},
@@ -339,6 +347,10 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_NEAR_CRITICAL "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): sidewall modes near zero frequency dominate the response"
 #define SPEC_MSG_ZONE_RANGE "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of the ring either side of the contact centre)"
 #define SPEC_MSG_ZONE_TOO_SHORT "contact_zone_length = %s: must be at least %.4g m (one node either side), or refine the mesh (it holds only the centre node of a mesh of %d elements)"
+#define SPEC_MSG_POINT_SPACING_ALLOWED "in [%g, %g] m"
+#define SPEC_MSG_POINT_SPACING_REASON "the spacing of the contact points along the tread; at or beyond the node arc, one point on each node"
+#define SPEC_MSG_POINTS_ALLOWED "at least %.4g m with this mesh and contact zone"
+#define SPEC_MSG_POINTS_REASON "%d points on each of its %d carrying nodes make %d contact points, more than the %d the contact solve takes"
 #define SPEC_MSG_LOAD_RANGE "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N (deflection %.3g mm) %s"
 #define SPEC_MSG_LOAD_REASON_ZONE "its footprint reaches the end of the contact zone (raise contact_zone_length)"
 #define SPEC_MSG_LOAD_REASON_LENGTH "its footprint reaches %.4g m, beyond which the linear ring is not credible"

@@ -1,6 +1,7 @@
 /* tire.h: the tire model's parts, each the C of one module of tire_fmu.core:
  *   ring.c       free_ring.py, dispersion.py, standing_waves.py (the free ring, order by order)
- *   contact.c    contact.py (zone, static footprint by active-set continuation, road windows)
+ *   contact.c    contact.py (zone, contact points, static footprint by active-set continuation,
+ *                road windows)
  *   road.c       road.py (the road under each node: history and delay line)
  *   kernel.c     kernel_numpy.py (the step, for either builder's contract: kernel.h)
  * Everything an instance needs is in its structs: no global mutable state. */
@@ -76,70 +77,90 @@ void ring_compliance(const Ring* ring, double* compliance);
 /* the lowest speed at which a ground-frame frequency of the undeformed mesh reaches zero */
 double critical_speed(const Tire* tire, int n_elements);
 
-/* -- the contact zone and the static footprint (contact.c) -------------------------------- */
+/* -- the contact zone, its contact points and the static footprint (contact.c) ------------ */
+/* The zone nodes are the ring nodes the contact points read (offsets -half .. half); the
+ * carrying nodes -carry .. carry are those whose unloaded ray meets the road within the zone
+ * length. Each carrying node carries per_node contact points (odd; 1 reproduces the node
+ * model: a point on each node, weight 1), each reading the ring at n_support zone nodes by
+ * cubic Lagrange interpolation (4 nodes; 1 for per_node = 1), front (theta < 0) to rear. */
 typedef struct {
-    int n_zone, half, centre;
-    double radius;
-    double* theta;     /* front (theta < 0) to rear */
-    double* cos;
-    double* sin;
-    double* sec;
-    double stiffness;  /* k_j, the same for every node */
-    double damping;    /* c_j = beta k_j */
+    int n_zone, half, centre;  /* zone nodes; centre = the zone index of node 0 */
+    int carry, per_node;       /* carrying nodes -carry .. carry, points per node m */
+    int n_points, n_support, centre_point;
+    double radius, dtheta;
+    double* theta;     /* Z node angles */
+    double* cos;       /* Z */
+    double* sin;       /* Z */
+    int* support;      /* P x S zone indices */
+    double* weight;    /* P x S */
+    double* point_theta; /* P: the point's ray angle */
+    double* ray_cos;   /* P: cos of it (its gap to a flat road) */
+    double* sec;       /* P: 1 / ray_cos */
+    double* load_cos;  /* P: sum of weight x cos(theta_node): its force's vertical share */
+    double* load_sin;  /* P: the same with sin: its force's fore-aft share */
+    double stiffness;  /* k_p = k_cw a / m, the same for every point */
+    double damping;    /* c_p = beta k_p */
 } Zone;
 
 int zone_half_count(double radius, int n_elements, double zone_length);
+/* the smallest odd m with node_arc / m <= spacing (1 + SPEC_POINT_SPACING_SLACK) */
+int points_per_node(double node_arc, double spacing);
+/* 0, or -1 out of memory (nothing allocated then) */
 int zone_build(Zone* zone, const Memory* mem, int n_elements, double radius, double k_cw,
-               double beta, int half);
+               double beta, int carry, int per_node);
 void zone_free(Zone* zone, const Memory* mem);
 
 typedef struct {
     double deflection, load, length, front, rear, tangent;
-    double* forces;      /* Z */
-    double* penetration; /* Z */
-    char* active;        /* Z */
-    double* x;           /* Z: where each node's ray meets the road */
+    double* forces;      /* P */
+    double* penetration; /* P */
+    char* active;        /* P */
+    double* x;           /* P: where each point's ray meets the road */
+    double* node_w;      /* Z: the zone nodes' compression G I^T f (m) */
     int touches_edge;
 } Footprint;
 
+/* The continuation in the zone nodes' space: on a segment with active set A the node
+ * compressions y = y0 + y1 d solve (I + G M_A) y = G b_A, M_A = sum_A k w w^T, b_A = sum_A k r w
+ * (Woodbury: a Z x Z system however many points push), and every point's penetration is
+ * r - I y, its force k times that where it pushes. */
 typedef struct {
     int count, capacity;
     double* start;    /* deflection where each segment starts */
-    char* active;     /* count x Z */
-    double* f0;       /* count x Z: f = f0 + f1 d */
-    double* f1;
-    double* p0;       /* penetration = p0 + p1 d */
-    double* p1;
+    char* active;     /* count x P */
+    double* y0;       /* count x Z: node compressions y = y0 + y1 d */
+    double* y1;
     double* w0;       /* load = w0 + w1 d */
     double* w1;
     double max_deflection;
 } FootprintPath;
 
 /* 0, or -1 (out of memory), or -2 (the continuation did not terminate) */
-int footprint_path(FootprintPath* path, const Memory* mem, const Zone* zone, double radius,
+int footprint_path(FootprintPath* path, const Memory* mem, const Zone* zone,
                    const double* compliance, double max_deflection);
 void footprint_path_free(FootprintPath* path, const Memory* mem);
-int footprint_alloc(Footprint* fp, const Memory* mem, int n_zone);
+int footprint_alloc(Footprint* fp, const Memory* mem, const Zone* zone);
 void footprint_free(Footprint* fp, const Memory* mem);
-void footprint_at_deflection(const FootprintPath* path, const Zone* zone, double radius,
-                             double deflection, Footprint* out);
-int footprint_at_load(const FootprintPath* path, const Zone* zone, double radius, double load,
+void footprint_at_deflection(const FootprintPath* path, const Zone* zone, double deflection,
+                             Footprint* out);
+int footprint_at_load(const FootprintPath* path, const Zone* zone, double load,
                       Footprint* out); /* -1 beyond the path */
-void max_credible_load(const FootprintPath* path, const Zone* zone, double radius,
-                       double max_length, Footprint* out);
+void max_credible_load(const FootprintPath* path, const Zone* zone, double max_length,
+                       Footprint* out);
 /* front and rear edge (road x) of the footprint */
 void footprint_edges(const double* x, const double* penetration, const char* active, int n,
                      double* front, double* rear);
 
 typedef struct {
-    double* early; /* Z: delays of each window's ends from the zone front (s) */
+    double* early; /* P: delays of each point's window ends from the zone front (s) */
     double* late;
     double front, horizon;
     int delayed;
 } Windows;
 
-int windows_build(Windows* w, const Memory* mem, const Zone* zone, double radius,
-                  int n_elements, double deflection, double speed);
+/* each point's window is the road its sub-arc [theta_p -+ dtheta / 2m] covers */
+int windows_build(Windows* w, const Memory* mem, const Zone* zone, double deflection,
+                  double speed);
 void windows_free(Windows* w, const Memory* mem);
 
 /* -- the road under each node (road.c) ------------------------------------------------------- */

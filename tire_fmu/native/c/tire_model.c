@@ -134,6 +134,9 @@ static void tire_from_values(const double* values, Tire* t)
     t->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
 }
 
+static void add_problem(Problems* p, const char* name, double value, const char* unit,
+                        const char* allowed, const char* reason);
+
 /* what the Python FMU checks before it builds: truncation, tire data, operating point; the
  * count of problems beyond the truncation's (with none, the model is still built, for the
  * problems only the model finds) */
@@ -197,6 +200,16 @@ static int plain_problems(const double* values, Problems* p)
                 value_text(value, op[i].unit, text, sizeof text);
                 PROBLEM(p, SPEC_MSG_MIN_ROLLING_SPEED, text, SPEC_MIN_ROLLING_SPEED_M_S);
             }
+        }
+    }
+    {   /* parameters.point_spacing_range_problems */
+        double spacing = values[SPEC_VR_CONTACT_POINT_SPACING];
+        if (!(SPEC_MIN_POINT_SPACING_M <= spacing && spacing <= SPEC_MAX_POINT_SPACING_M)) {
+            char allowed[64];
+            snprintf(allowed, sizeof allowed, SPEC_MSG_POINT_SPACING_ALLOWED,
+                     SPEC_MIN_POINT_SPACING_M, SPEC_MAX_POINT_SPACING_M);
+            add_problem(p, "contact_point_spacing", spacing, "m", allowed,
+                        SPEC_MSG_POINT_SPACING_REASON);
         }
     }
     return p->count - truncation_problems;
@@ -392,7 +405,8 @@ static int contact_problem(const Tire* t, const Ring* ring, const Zone* zone, in
 {
     double rate = sqrt(t->k_cw / t->rhoA), substep = fmin(SPEC_MAX_SUBSTEP_S, 1.0 / rate);
     double per_interval = ceil(SPEC_WORK_INTERVAL_S / substep * (1 - 1e-12));
-    int work = contract_substep_work(ring->n_modes, ring->n_orders, zone->n_zone, zone->n_zone);
+    int work = contract_substep_work(ring->n_modes, ring->n_orders, zone->n_zone,
+                                     zone->n_points, zone->n_support);
     char allowed[256], reason[256];
     if (1.0 / rate < SPEC_MIN_SUBSTEP_S) {
         snprintf(allowed, sizeof allowed, SPEC_MSG_SUBSTEP_ALLOWED,
@@ -428,13 +442,37 @@ static int zone_problem(double radius, int n_elements, double length, Problems* 
     return 0;
 }
 
+/* the contact points the spacing makes on this mesh and zone (contact.point_spacing_problems);
+ * 0 when at most SPEC_MAX_CONTACT_POINTS, with the points per node in *per_node */
+static int points_problem(double radius, int n_elements, int carry, double spacing,
+                          int* per_node, Problems* p)
+{
+    double arc = radius * (2.0 * PI / n_elements), points;
+    int carrying = 2 * carry + 1, most;
+    char allowed[128], reason[256];
+    *per_node = points_per_node(arc, spacing);
+    points = (double)carrying * *per_node;
+    if (points <= SPEC_MAX_CONTACT_POINTS) return 0;
+    most = SPEC_MAX_CONTACT_POINTS / carrying;
+    if (most < 1) most = 1;
+    most -= 1 - most % 2;  /* odd */
+    {   /* the smallest spacing allowed, rounded up to 4 digits (as printed, it holds) */
+        double smallest = arc / (most > 1 ? most : 1), step = pow(10.0, floor(log10(smallest)) - 3);
+        snprintf(allowed, sizeof allowed, SPEC_MSG_POINTS_ALLOWED, ceil(smallest / step) * step);
+    }
+    snprintf(reason, sizeof reason, SPEC_MSG_POINTS_REASON, *per_node, carrying, (int)points,
+             SPEC_MAX_CONTACT_POINTS);
+    add_problem(p, "contact_point_spacing", spacing, "m", allowed, reason);
+    return 1;
+}
+
 /* -- initialisation ------------------------------------------------------------------------- */
 
 static int build(Model* model, const double* values, Problems* p, char* warning)
 {
     const Memory* mem = &model->host.mem;
     Tire* tire = &model->tire;
-    int n = (int)values[SPEC_VR_N_ELEMENTS], half, status;
+    int n = (int)values[SPEC_VR_N_ELEMENTS], half, per_node, status;
     double speed = values[SPEC_VR_SPEED], load = values[SPEC_VR_LOAD], spin;
     Truncation truncation;
     Footprint limit;
@@ -458,13 +496,20 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     }
     if (zone_problem(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH], p)) return MODEL_ERROR;
     half = zone_half_count(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH]);
+    if (points_problem(tire->R, n, half, values[SPEC_VR_CONTACT_POINT_SPACING], &per_node, p)) {
+        return MODEL_ERROR;
+    }
     spin = speed / tire->R;
     /* a truncation already refused builds the whole ring: for the other problems only */
     truncation.f_max_hz = p->count ? 0.0 : values[SPEC_VR_F_MAX];
     truncation.n_modes = p->count ? 0 : (int)values[SPEC_VR_N_MODES];
     truncation.static_correction = values[SPEC_VR_STATIC_CORRECTION] != 0.0;
-    if (zone_build(&model->zone, mem, n, tire->R, tire->k_cw, tire->beta, half) != 0) goto memory;
-    status = ring_build(&model->ring, mem, tire, n, spin, half, &truncation);
+    if (zone_build(&model->zone, mem, n, tire->R, tire->k_cw, tire->beta, half, per_node) != 0) {
+        goto memory;
+    }
+    /* the ring is read at the zone nodes: the carrying nodes and, with points between them,
+     * two more each side (every point's stencil inside) */
+    status = ring_build(&model->ring, mem, tire, n, spin, model->zone.half, &truncation);
     if (status != 0) {
         ring_problem(tire, n, p);
         return MODEL_ERROR;
@@ -473,7 +518,7 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
                                            sizeof(double));
     if (model->compliance == NULL) goto memory;
     ring_compliance(&model->ring, model->compliance);
-    status = footprint_path(&model->path, mem, &model->zone, tire->R, model->compliance,
+    status = footprint_path(&model->path, mem, &model->zone, model->compliance,
                             SPEC_MAX_DEFLECTION_FRACTION * tire->R);
     if (status == -2) {
         PROBLEM(p, "the footprint continuation did not terminate (a degenerate contact path); "
@@ -481,9 +526,9 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
         return MODEL_ERROR;
     }
     if (status != 0) goto memory;
-    if (footprint_alloc(&limit, mem, model->zone.n_zone) != 0) goto memory;
-    max_credible_load(&model->path, &model->zone, tire->R,
-                      SPEC_MAX_PATCH_FRACTION * (2.0 * PI * tire->R), &limit);
+    if (footprint_alloc(&limit, mem, &model->zone) != 0) goto memory;
+    max_credible_load(&model->path, &model->zone, SPEC_MAX_PATCH_FRACTION * (2.0 * PI * tire->R),
+                      &limit);
     if (load > limit.load) {
         char reason[256];
         if (limit.touches_edge) {
@@ -501,14 +546,14 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
     footprint_free(&limit, mem);
     if (resolved_problem(tire, &model->ring, n, p)) return MODEL_ERROR;
     if (contact_problem(tire, &model->ring, &model->zone, n, p)) return MODEL_ERROR;
-    if (footprint_alloc(&model->footprint, mem, model->zone.n_zone) != 0) goto memory;
-    if (footprint_at_load(&model->path, &model->zone, tire->R, load, &model->footprint) != 0) {
+    if (footprint_alloc(&model->footprint, mem, &model->zone) != 0) goto memory;
+    if (footprint_at_load(&model->path, &model->zone, load, &model->footprint) != 0) {
         PROBLEM(p, "load = %g N needs a rim deflection beyond %g m", load,
                 model->path.max_deflection);
         return MODEL_ERROR;
     }
-    if (windows_build(&model->windows, mem, &model->zone, tire->R, n,
-                      model->footprint.deflection, speed) != 0) {
+    if (windows_build(&model->windows, mem, &model->zone, model->footprint.deflection, speed) !=
+        0) {
         goto memory;
     }
     /* the step kernel's contract: the contact is sub-stepped at 1/sqrt(k_cw/rhoA) at most
@@ -571,10 +616,12 @@ int model_initialise(Model* model, const double* values, double start_time, doub
     model->in_contact = kernel_in_contact(model->kernel);
     snprintf(line, sizeof line,
              "ready in %.3f s (CPU): N = %d, %d of %d ring modes, %d contact-zone nodes, "
+             "%d contact points (%d per node), "
              "footprint %.3g cm at %.6g N, deflection %.4g mm, vertical stiffness %.6g N/m, "
              "critical speed %.4g m/s, %s contact",
              (double)(clock() - started) / CLOCKS_PER_SEC, model->n_elements,
              model->ring.n_modes, model->ring.total_modes, model->zone.n_zone,
+             model->zone.n_points, model->zone.per_node,
              model->footprint.length * 100, model->footprint.load,
              model->footprint.deflection * 1e3, model->footprint.tangent, model->critical,
              model->linear ? "linear" : "unilateral");
