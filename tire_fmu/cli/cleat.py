@@ -88,8 +88,8 @@ def _element_list(text: str) -> tuple[list[int], str | None]:
 
 
 def run_cleat(args: argparse.Namespace) -> Output:
-    from ..core.contact import MAX_CONTACT_POINT_SPACING_M, MIN_CONTACT_POINT_SPACING_M
     from ..core.obstacles import MAX_OBSTACLE_LENGTH_M, MAX_OBSTACLE_SIZE_M, Obstacle
+    from ..core.parameters import MAX_POINT_SPACING_M, MIN_POINT_SPACING_M
     from ..core.studies import CLEAT_TABLE_HEADER, cleat_convergence, cleat_table
 
     counts, problem = _element_list(args.elements_list)
@@ -99,8 +99,8 @@ def run_cleat(args: argparse.Namespace) -> Output:
         range_problem("--length", args.length, 1e-4, MAX_OBSTACLE_LENGTH_M, "m"),
         positive_problem("--speed", args.speed, "m/s"),
         range_problem("--step", args.step, 1e-7, 1e-3, "s"),
-        range_problem("--point-spacing", args.point_spacing, MIN_CONTACT_POINT_SPACING_M,
-                      MAX_CONTACT_POINT_SPACING_M, "m"),
+        range_problem("--point-spacing", args.point_spacing, MIN_POINT_SPACING_M,
+                      MAX_POINT_SPACING_M, "m"),
     ]
     problems.append(range_problem("--load", args.load, 0.0, 1e7, "N"))
     tire = checked_tire(args, problems)
