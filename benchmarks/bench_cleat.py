@@ -2,8 +2,10 @@
 matrix of issue 21 (tire_fmu.core.studies.cleat_convergence on each case).
 
 Cases: a 20 mm x 20 mm cleat at 10 and 20 m/s, 10 x 10 mm and 50 x 50 mm cleats and a 50 mm
-deep, 0.3 m long pothole at 10 m/s, all with the contact points at their default spacing; and
-the 20 mm cleat at 10 m/s with one point per node (the node contact, for comparison). Meshes
+deep, 0.3 m long pothole at 10 m/s, all with the contact points at their default spacing; the
+20 mm cleat at 10 m/s with one point per node (the node contact, for comparison); and the
+20 mm cleat at 10 and 20 m/s on the shipped GL073A_shear tire, whose sidewall shear lets the
+finest meshes run at these speeds (with --tire-file, the tire of every case but these). Meshes
 at or above their critical (standing-wave) speed for a case are not run: the record names them
 with that speed. Prints each case's convergence table (the one ``tire-fmu cleat`` prints).
 Then, at N = 200, the 10 mm and 20 mm cleats at finer point spacings (the spacing's own
@@ -35,6 +37,13 @@ CASES = (
     ("cleat 50 x 50 mm, 10 m/s", (0.05, 0.05), 10.0, None),
     ("pothole 50 mm deep, 0.3 m, 10 m/s", (-0.05, 0.3), 10.0, None),
     ("cleat 20 x 20 mm, 10 m/s, one point per node", (0.02, 0.02), 10.0, 1.0),
+)
+#: The same cleat on a tire whose sidewall shear keeps the critical speed of the finest
+#: meshes above the speed (the shipped GL073A_shear), so that N = 800 runs.
+SHEAR_TIRE = "GL073A_shear"
+SHEAR_CASES = (
+    (f"cleat 20 x 20 mm, 10 m/s, {SHEAR_TIRE}", (0.02, 0.02), 10.0, None),
+    (f"cleat 20 x 20 mm, 20 m/s, {SHEAR_TIRE}", (0.02, 0.02), 20.0, None),
 )
 #: The point spacing's own convergence: mesh, cleats (height = length, m), spacings (m).
 SPACING_MESH = 200
@@ -92,13 +101,17 @@ def main() -> None:
     tire = read_tire_file(args.tire_file).tire if args.tire_file else TireParameters()
     step = args.step or CLEAT_STEP_S
     meshes = sorted(set(args.meshes))
-    critical = {n: critical_speed(tire, n).speed_m_s for n in meshes}
-    bar = _bar(sum(len(meshes) for _ in CASES))
+    shear_tire = read_tire_file(SHEAR_TIRE).tire
+    critical = {id(t): {n: critical_speed(t, n).speed_m_s for n in meshes}
+                for t in (tire, shear_tire)}
+    cases = [(case, tire) for case in CASES] + [(case, shear_tire) for case in SHEAR_CASES]
+    bar = _bar(len(cases) * len(meshes))
     done_before = 0
     results = []
-    for name, (height, length), speed, spacing in CASES:
-        runnable = [n for n in meshes if speed < critical[n]]
-        refused = [{"n_elements": n, "critical_speed_m_s": critical[n]}
+    for (name, (height, length), speed, spacing), case_tire in cases:
+        speeds = critical[id(case_tire)]
+        runnable = [n for n in meshes if speed < speeds[n]]
+        refused = [{"n_elements": n, "critical_speed_m_s": speeds[n]}
                    for n in meshes if n not in runnable]
 
         def progress(done: int, total: int, base: int = done_before) -> None:
@@ -109,16 +122,16 @@ def main() -> None:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", SupercriticalSpeedWarning)  # noted per case below
             options = {} if spacing is None else {"point_spacing_m": spacing}
-            study = cleat_convergence(tire, Obstacle(height, length), speed, runnable,
+            study = cleat_convergence(case_tire, Obstacle(height, length), speed, runnable,
                                       step_s=step, progress=progress, **options)
         elapsed = time.perf_counter() - started
         done_before += len(meshes)
         if bar is not None:
             bar.update(done_before - bar.n)
         data = study.to_dict(histories=False)
-        near = [n for n in runnable if speed >= 0.8 * critical[n]]
+        near = [n for n in runnable if speed >= 0.8 * speeds[n]]
         results.append({"name": name, "refused": refused, "near_critical": [
-            {"n_elements": n, "critical_speed_m_s": critical[n]} for n in near],
+            {"n_elements": n, "critical_speed_m_s": speeds[n]} for n in near],
             "seconds": elapsed, "study": data})
         rows, note = cleat_table(data)
         print(f"\n{name} ({elapsed:.1f} s)")

@@ -314,6 +314,21 @@ def _cleat_spacing_deficit_20() -> str:
     return _spacing_deficit(0.02)
 
 
+@value("cleat-shear-meshes")
+def _cleat_shear_meshes() -> str:
+    """How close N = 400 and 800, and N = 100 and 800, are on the GL073A_shear cases."""
+    _, results = _cleat_record()
+    parts = []
+    for case in results["cases"]:
+        if "GL073A_shear" not in case["name"]:
+            continue
+        rise = {row["n_elements"]: row["peak_rise_kn"] for row in case["study"]["meshes"]}
+        speed = case["study"]["speed_m_s"]
+        parts.append(f"at {speed:g} m/s N = 400 is {100 * abs(rise[400] / rise[800] - 1):.1f} % "
+                     f"and N = 100 {100 * abs(rise[100] / rise[800] - 1):.1f} % from N = 800")
+    return "; ".join(parts)
+
+
 def _step_rows() -> list[dict]:
     _, results = _cleat_record()
     return sorted(results["step"]["rows"], key=lambda r: -r["step_s"])
