@@ -872,6 +872,6 @@ def cleat_table(data: dict) -> tuple[list[list[str]], str]:
                 f"{data['extrapolated_rise_kn']:.2f} kN: an order needs three meshes")
     else:
         note = (f"converged peak rise {data['extrapolated_rise_kn']:.2f} kN, the finest "
-                f"mesh's: N = {counts} do not converge monotonically, so no order is "
-                "observed to extrapolate with")
+                f"mesh's: the differences between N = {counts} change sign or do not shrink, "
+                "so no order is observed to extrapolate with")
     return rows, note
