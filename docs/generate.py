@@ -209,6 +209,149 @@ def contact_accuracy() -> str:
               f"{cost['step_us_unilateral_airborne']:.0f} µs airborne.", "", provenance(data)]
     return "\n".join(lines)
 
+def _cleat_record() -> tuple[dict, dict]:
+    data = record("cleat_convergence")
+    return data, data["results"]
+
+
+def _cleat_provenance(data: dict) -> str:
+    return (f"From `{data['command']}` on {data['recorded']} (results of the computation; "
+            "the run times vary with the machine).")
+
+
+@generator("cleat-convergence")
+def cleat_convergence_tables() -> str:
+    from tire_fmu.core.studies import CLEAT_TABLE_HEADER, cleat_table
+
+    data, results = _cleat_record()
+    header = "| " + " | ".join(CLEAT_TABLE_HEADER) + " |"
+    rule = "|" + "---|" * len(CLEAT_TABLE_HEADER)
+    lines = []
+    for case in results["cases"]:
+        rows, note = cleat_table(case["study"])
+        lines += [f"**{case['name']}** (rim held at {case['study']['load_n'] / 1e3:.3g} kN, "
+                  f"step {case['study']['step_s'] * 1e6:g} µs, {case['seconds']:.1f} s)", "",
+                  header, rule]
+        lines += ["| " + " | ".join(row) + " |" for row in rows]
+        notes = [note[0].upper() + note[1:] + "."]
+        if case["refused"]:
+            notes.append("Not run: " + "; ".join(
+                f"N = {r['n_elements']} (critical speed {r['critical_speed_m_s']:.3g} m/s)"
+                for r in case["refused"]) + ".")
+        if case["near_critical"]:
+            notes.append("Within 20 % of the critical speed: " + ", ".join(
+                f"N = {r['n_elements']} ({r['critical_speed_m_s']:.3g} m/s)"
+                for r in case["near_critical"]) + ".")
+        lines += ["", " ".join(notes), ""]
+    lines.append(_cleat_provenance(data))
+    return "\n".join(lines)
+
+
+@generator("cleat-spacing")
+def cleat_spacing_table() -> str:
+    from tire_fmu.core.studies import richardson
+
+    data, results = _cleat_record()
+    spacing = results["spacing"]
+    cleats = sorted({row["cleat_m"] for row in spacing["rows"]})
+    spacings = sorted({row["point_spacing_m"] for row in spacing["rows"]}, reverse=True)
+    by = {(row["cleat_m"], row["point_spacing_m"]): row for row in spacing["rows"]}
+    lines = ["| point spacing asked (points per node, arc) | "
+             + " | ".join(f"{c * 1e3:g} x {c * 1e3:g} mm cleat" for c in cleats)
+             + f" | run time ({cleats[-1] * 1e3:g} mm) |",
+             "|---|" + "---|" * (len(cleats) + 1)]
+    for h in spacings:
+        first = by[(cleats[0], h)]
+        cells = [f"{by[(c, h)]['peak_rise_kn']:.2f} kN" for c in cleats]
+        lines.append(f"| {h * 1e3:g} mm ({first['points_per_node']}, "
+                     f"{first['point_arc_m'] * 1e3:.3g} mm) | " + " | ".join(cells)
+                     + f" | {by[(cleats[-1], h)]['run_s']:.1f} s |")
+    cells = []
+    for c in cleats:
+        arcs = [by[(c, h)]["point_arc_m"] for h in spacings]
+        value, order = richardson(arcs, [by[(c, h)]["peak_rise_kn"] for h in spacings])
+        cells.append(f"{value:.2f} kN (order {order:.2f})")
+    lines.append("| extrapolated to zero spacing (Richardson, last three) | "
+                 + " | ".join(cells) + " | |")
+    lines += ["", f"rim_Fz peak rise at N = {spacing['n_elements']}, 10 m/s, rim held. "
+              + _cleat_provenance(data)]
+    return "\n".join(lines)
+
+
+@generator("cleat-step")
+def cleat_step_table() -> str:
+    data, results = _cleat_record()
+    step = results["step"]
+    lines = ["| step | rim_Fz peak rise | mean rim_Fz under the tire | mean contact_Fz under the "
+             "tire | min contact_Fz |", "|---|---|---|---|---|"]
+    for row in step["rows"]:
+        lines.append(f"| {row['step_s'] * 1e6:g} µs | {row['peak_rise_kn']:.2f} kN | "
+                     f"{row['mean_rim_fz_kn']:.2f} kN | {row['mean_contact_fz_kn']:.2f} kN | "
+                     f"{row['min_contact_fz_kn']:.1f} kN |")
+    lines += ["", f"20 x 20 mm cleat at 10 m/s, N = {step['n_elements']}, contact points at "
+              "the default spacing. " + _cleat_provenance(data)]
+    return "\n".join(lines)
+
+
+def _spacing_deficit(cleat_m: float) -> str:
+    from tire_fmu.core.studies import CLEAT_POINT_SPACING_M, richardson
+
+    _, results = _cleat_record()
+    rows = sorted((r for r in results["spacing"]["rows"] if r["cleat_m"] == cleat_m),
+                  key=lambda r: -r["point_spacing_m"])
+    value, _ = richardson([r["point_arc_m"] for r in rows], [r["peak_rise_kn"] for r in rows])
+    (default,) = [r for r in rows if r["point_spacing_m"] == CLEAT_POINT_SPACING_M]
+    return f"{100 * (1 - default['peak_rise_kn'] / value):.1f} %"
+
+
+@value("cleat-spacing-deficit-10mm")
+def _cleat_spacing_deficit_10() -> str:
+    return _spacing_deficit(0.01)
+
+
+@value("cleat-spacing-deficit-20mm")
+def _cleat_spacing_deficit_20() -> str:
+    return _spacing_deficit(0.02)
+
+
+@value("cleat-shear-meshes")
+def _cleat_shear_meshes() -> str:
+    """How close N = 400 and 800, and N = 100 and 800, are on the GL073A_shear cases."""
+    _, results = _cleat_record()
+    parts = []
+    for case in results["cases"]:
+        if "GL073A_shear" not in case["name"]:
+            continue
+        rise = {row["n_elements"]: row["peak_rise_kn"] for row in case["study"]["meshes"]}
+        speed = case["study"]["speed_m_s"]
+        parts.append(f"at {speed:g} m/s N = 400 is {100 * abs(rise[400] / rise[800] - 1):.1f} % "
+                     f"and N = 100 {100 * abs(rise[100] / rise[800] - 1):.1f} % from N = 800")
+    return "; ".join(parts)
+
+
+def _step_rows() -> list[dict]:
+    _, results = _cleat_record()
+    return sorted(results["step"]["rows"], key=lambda r: -r["step_s"])
+
+
+@value("cleat-fmu-step-peak-low")
+def _cleat_fmu_step_peak_low() -> str:
+    rows = _step_rows()
+    return f"{100 * (1 - rows[0]['peak_rise_kn'] / rows[-1]['peak_rise_kn']):.1f} %"
+
+
+@value("cleat-fmu-step-contact-bias")
+def _cleat_fmu_step_contact_bias() -> str:
+    row = _step_rows()[0]
+    return f"{100 * (row['mean_contact_fz_kn'] / row['mean_rim_fz_kn'] - 1):.0f} %"
+
+
+@value("cleat-finest-step-contact-bias")
+def _cleat_finest_step_contact_bias() -> str:
+    row = _step_rows()[-1]
+    return f"{100 * (row['mean_contact_fz_kn'] / row['mean_rim_fz_kn'] - 1):.1f} %"
+
+
 def _demo_summary() -> tuple[dict, dict]:
     data = record("bench_vehicle")
     return data, data["results"]["demo"]["full_summary"]

@@ -21,7 +21,14 @@ from tire_fmu.core import (
     critical_speed,
     real_modes,
 )
-from tire_fmu.core.studies import convergence_study, dispersion_at_speed, patch_sweep, speed_sweep
+from tire_fmu.core.studies import (
+    CLEAT_STEP_S,
+    cleat_convergence,
+    convergence_study,
+    dispersion_at_speed,
+    patch_sweep,
+    speed_sweep,
+)
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -55,6 +62,7 @@ FAST_COMMANDS = [
     ["dispersion", "--elements", "40", "--nmax", "3"],
     ["speed-sweep", "--elements", "40", "--steps", "2", "--nmax", "2"],
     ["critical-speed", "--elements", "40"],
+    ["cleat", "--elements-list", "20", "--length", "0.01"],
 ]
 
 
@@ -124,6 +132,26 @@ def test_convergence_json_equals_the_study(capsys, tire):
     assert data["in_phase"]["convergence_order"][0] is None  # n = 0 is exact: no slope
 
 
+def test_cleat_json_equals_the_study(capsys, tire):
+    from tire_fmu.core.obstacles import pothole
+
+    data = run_json(capsys, "cleat", "--elements-list", "40,20", "--pothole", "--height",
+                    "0.03", "--length", "0.1", "--speed", "5", "--histories")
+    study = cleat_convergence(tire, pothole(0.03, 0.1), 5.0, (20, 40)).to_dict()
+    for record in (data, study):
+        record.pop("run_s")  # wall time
+    assert data == json.loads(json.dumps(to_jsonable(study)))
+    assert len(data["rim_fz_n"]) == 2 and len(data["time_s"]) == len(data["rim_fz_n"][0])
+
+
+def test_cleat_defaults_are_the_studys():
+    from tire_fmu.cli import cleat
+    from tire_fmu.core.contact import DEFAULT_CONTACT_POINT_SPACING_M
+
+    assert cleat.DEFAULT_STEP_S == CLEAT_STEP_S
+    assert cleat.DEFAULT_POINT_SPACING_M == DEFAULT_CONTACT_POINT_SPACING_M
+
+
 def test_patch_sweep_json_equals_the_study(capsys, tire):
     data = run_json(capsys, "patch-sweep", "--max-length", "0.2", "--steps", "5",
                     "--out-of-phase", "--nmax", "3")
@@ -178,6 +206,7 @@ PLOTS = [
     ["dispersion", "--elements", "40", "--patch-length", "0.204", "--nmax", "6"],
     ["speed-sweep", "--elements", "40", "--steps", "3", "--nmax", "3"],
     ["patch", "--load", "27700"],
+    ["cleat", "--elements-list", "20,40", "--length", "0.01"],
 ]
 
 
@@ -283,6 +312,13 @@ BAD_INPUTS = [
      ["--point-spacing = 0.0001 m: must be at least"]),
     (["modes", "--tire", "sidewall_pressure_exponent=1", "--inflation-pressure", "1e-300"],
      ["--inflation-pressure = 1e-300 Pa: must be at least 10000 Pa"]),
+    (["cleat", "--elements-list", "20,x", "--height", "0", "--speed", "-1", "--step", "1",
+      "--point-spacing", "2", "--load", "-5"],
+     ["--elements-list = '20,x'", "--height = 0", "--speed = -1", "--step = 1",
+      "--point-spacing = 2", "--load = -5", "6 problems"]),
+    (["cleat", "--elements-list", "100", "--zone-length", "0.3"],
+     ["--zone-length = 0.3 m: must be at least", "meets the undeformed tread"]),
+    (["cleat", "--elements-list", "800"], ["--speed = 10 m/s: must be below the critical"]),
 ]
 
 
@@ -301,7 +337,7 @@ def test_bad_input_is_one_line_naming_every_parameter(capsys, argv, fragments):
 
 
 @pytest.mark.parametrize("command", ["convergence", "patch-sweep", "dispersion", "speed-sweep",
-                                     "critical-speed"])
+                                     "critical-speed", "cleat"])
 def test_help(capsys, command):
     with pytest.raises(SystemExit) as stop:
         main([command, "--help"])
@@ -613,7 +649,7 @@ def test_build_fmu_into_a_folder_that_does_not_exist_yet(capsys, tmp_path):
 
 
 LOAD_DEFAULTS = {"modes": 0.0, "frf": DEFAULT_LOAD_N, "reduce": DEFAULT_LOAD_N,
-                 "export": DEFAULT_LOAD_N}
+                 "export": DEFAULT_LOAD_N, "cleat": DEFAULT_LOAD_N}
 
 
 def _load_help(command: str) -> str:
@@ -648,7 +684,9 @@ def test_the_default_load_a_help_states_is_the_one_used(capsys, monkeypatch, tmp
         assert data["start_values"]["load"] == stated
         used = data["model_at_start_values"]["load_n"]
     else:
-        extra = {"modes": ["--max-frequency", "60"], "frf": ["--points", "3"], "reduce": []}
-        data = run_json(capsys, command, "--elements", "20", *extra[command])
+        extra = {"modes": ["--elements", "20", "--max-frequency", "60"],
+                 "frf": ["--elements", "20", "--points", "3"], "reduce": ["--elements", "20"],
+                 "cleat": ["--elements-list", "20", "--length", "0.01"]}
+        data = run_json(capsys, command, *extra[command])
         used = data.get("operating_point", data)["load_n"]
     assert used == pytest.approx(stated, rel=1e-12)

@@ -450,3 +450,50 @@ def plot_footprint(model, patch, path: Path) -> Path:
     for ax in (top, bottom):
         ax.grid(alpha=0.3)
     return _save(fig, plt, path)
+
+
+def plot_cleat_convergence(result, path: Path) -> Path:
+    """The rim load over an obstacle on each mesh (rim held at its static height) with the
+    time the obstacle is under the tire shaded, the road's push below it, and the
+    convergence table."""
+    from .core.studies import CLEAT_TABLE_HEADER, cleat_table
+
+    plt = _pyplot()
+    counts = result.element_counts
+    cmap = plt.get_cmap("viridis")
+    colours = [cmap(0.85 * i / max(counts.size - 1, 1)) for i in range(counts.size)]
+    fig = plt.figure(figsize=(13, 9.5))
+    grid = fig.add_gridspec(3, 1, height_ratios=(2.2, 1.6, 1.1))
+    rim_ax = fig.add_subplot(grid[0])
+    contact_ax = fig.add_subplot(grid[1], sharex=rim_ax)
+    t_ms = 1e3 * result.time_s
+    start, end = 1e3 * result.under_tire_s[-1]
+    for ax in (rim_ax, contact_ax):
+        ax.axvspan(start, end, color="0.92", zorder=0)
+        ax.grid(alpha=0.3)
+    for i, n in enumerate(counts):
+        label = (f"N = {n}, {result.points_per_node[i]} points per node "
+                 f"({1e3 * result.point_arc_m[i]:.2g} mm)")
+        width = 1.8 if i == counts.size - 1 else 1.1
+        rim_ax.plot(t_ms, result.rim_fz_n[i] / 1e3, color=colours[i], lw=width, label=label)
+        contact_ax.plot(t_ms, result.contact_fz_n[i] / 1e3, color=colours[i], lw=0.7)
+    rim_ax.axhline(result.static_rim_fz_n[-1] / 1e3, color="0.5", lw=0.8, ls=":")
+    rim_ax.set_ylabel("rim_Fz [kN]")
+    rim_ax.legend(fontsize=8, loc="upper right")
+    rim_ax.set_title(f"{result.obstacle.label} at {result.speed_m_s:g} m/s, rim held at its "
+                     f"static height for {result.load_n / 1e3:.3g} kN (shaded: the obstacle "
+                     f"under the tire; step {result.step_s * 1e6:g} µs)", fontsize=10)
+    contact_ax.set_ylabel("contact_Fz [kN]")
+    contact_ax.set_xlabel("time since the obstacle's first edge passed the contact centre [ms]")
+    plt.setp(rim_ax.get_xticklabels(), visible=False)
+    table_ax = fig.add_subplot(grid[2])
+    table_ax.axis("off")
+    rows, note = cleat_table(result.to_dict(histories=False))
+    table = table_ax.table(cellText=rows, colLabels=list(CLEAT_TABLE_HEADER), loc="upper center",
+                           cellLoc="center")
+    table.auto_set_font_size(False)
+    table.set_fontsize(8)
+    table.scale(1.0, 1.25)
+    table_ax.text(0.5, 0.0, note, transform=table_ax.transAxes, ha="center", fontsize=9)
+    fig.tight_layout()
+    return _save(fig, plt, path)

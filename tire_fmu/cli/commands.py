@@ -19,6 +19,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                    "(Fig. 18)"),
     "speed-sweep": ("rolling", "ground-frame frequencies vs speed, undeformed and loaded "
                     "(Fig. 19)"),
+    "cleat": ("cleat", "rim load over a cleat or pothole against the mesh, rim held "
+              "(convergence of the contact points)"),
     "critical-speed": ("rolling", "standing-wave speed of the mesh and why it depends on N"),
     "frf": ("reduce", "frequency response of the full model, and of a reduced one (Bode plot)"),
     "reduce": ("reduce", "build a reduced model and report its size and accuracy"),

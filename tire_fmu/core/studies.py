@@ -11,12 +11,13 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .analytic import analytic_modes
 from .complex_modal import complex_modes
+from .contact import DEFAULT_CONTACT_POINT_SPACING_M
 from .dispersion import Dispersion, body_frequencies, dispersion_relation
 from .modal import ANTISYMMETRIC, SYMMETRIC, ModalResult, real_modes
 from .model import SupercriticalSpeedWarning, build_model
@@ -481,11 +482,14 @@ def dispersion_at_speed(
 
 #: The default point spacing of the study (m): the contact points' default, which resolves a
 #: 10 mm feature with four points.
-CLEAT_POINT_SPACING_M = 2.5e-3
+CLEAT_POINT_SPACING_M = DEFAULT_CONTACT_POINT_SPACING_M
 #: Meshes of the study: doubling, so the Richardson ratio is 2.
 CLEAT_ELEMENT_COUNTS = (100, 200, 400, 800)
-#: Default communication step (s): the contact sub-step; the test halves it once.
-CLEAT_STEP_S = 1e-4
+#: Default communication step (s). The rim load's peak over a 20 mm cleat at 10 m/s moves by
+#: under 0.2 % when it is halved (tests/test_cleat_convergence.py halves it once); at the
+#: FMU's 1e-4 s it is up to 1 % low, and the contact force sampled at the step ends is biased
+#: high by O(h) (docs/theory.md, "Contact points: convergence over cleats").
+CLEAT_STEP_S = 2.5e-5
 #: Time the run goes on after the obstacle has left the contact zone (s): the rim load rings
 #: down at the tire's low modes.
 CLEAT_SETTLE_S = 0.02
@@ -493,37 +497,28 @@ CLEAT_SETTLE_S = 0.02
 MAX_OBSERVED_ORDER = 10.0
 
 
-def _cleat_operating_point(n: int, speed: float, load: float, spacing: float,
-                           zone_length: float) -> OperatingPoint:
-    """The operating point of one mesh; the point spacing where the core has contact points
-    (without them every node is its own point, as at a spacing above the node arc)."""
-    values = dict(n_elements=int(n), load_n=float(load), speed_m_s=float(speed),
-                  contact_zone_length_m=float(zone_length))
-    if "contact_point_spacing_m" in {f.name for f in fields(OperatingPoint)}:
-        values["contact_point_spacing_m"] = float(spacing)
-    return OperatingPoint(**values)
+#: A line is looked for within this fraction of its frequency either side: the rays of the
+#: nodes (points) meet the road (R - δ)·δθ·sec²θ apart, closest at the contact centre.
+LINE_BAND = 0.05
 
 
-def points_per_node(contract) -> int:
-    """Contact points per node arc of a step contract (1: the nodes are the points)."""
-    offsets = contract.zone_offset
-    carrying = np.count_nonzero(np.abs(offsets) <= np.abs(offsets).max()
-                                - (2 if contract.n_support > 1 else 0))
-    return max(int(round(contract.n_points / max(carrying, 1))), 1)
-
-
-def line_amplitude(time_s: np.ndarray, values: np.ndarray, frequency_hz: float) -> float:
-    """Amplitude of the line at ``frequency_hz`` in a record: the Hann-windowed discrete
-    Fourier sum at that one frequency, 2|Σ w x e^{-2πift}| / Σ w, of the record less its
-    mean (a sine of amplitude A reads A); nan at or above the record's Nyquist frequency."""
+def line_amplitude(time_s: np.ndarray, values: np.ndarray, frequency_hz: float,
+                   band: float = LINE_BAND) -> float:
+    """Amplitude of the line near ``frequency_hz`` in a record: the largest Hann-windowed
+    discrete Fourier sum 2|Σ w x e^{-2πift}| / Σ w of the record less its mean (a sine of
+    amplitude A reads A) for f within ``band`` of it (on a grid of an eighth of the window's
+    resolution); nan if that reaches the record's Nyquist frequency."""
     t = np.asarray(time_s, dtype=float)
     x = np.asarray(values, dtype=float)
-    if t.size < 4 or not frequency_hz < 0.5 / float(np.mean(np.diff(t))):
+    if t.size < 4 or not frequency_hz * (1 + band) < 0.5 / float(np.mean(np.diff(t))):
         return math.nan
     window = np.hanning(t.size)
     x = x - np.sum(window * x) / np.sum(window)
-    return float(2 * abs(np.sum(window * x * np.exp(-2j * np.pi * frequency_hz * t)))
-                 / np.sum(window))
+    resolution = 1.0 / (t[-1] - t[0])
+    count = max(int(math.ceil(16 * band * frequency_hz / resolution)), 1) + 1
+    f = np.linspace(frequency_hz * (1 - band), frequency_hz * (1 + band), count)
+    sums = np.exp(-2j * np.pi * f[:, None] * (t - t[0])[None, :]) @ (window * x)
+    return float(2 * np.max(np.abs(sums)) / np.sum(window))
 
 
 def richardson(sizes, values) -> tuple[float, float]:
@@ -588,6 +583,7 @@ class CleatConvergence:
     node_line_n: np.ndarray  # contact_Fz line at the node-passing frequency
     point_line_n: np.ndarray  # and at the point-passing frequency
     run_s: np.ndarray  # wall time of each mesh's run (s)
+    deflection_m: np.ndarray  # the rim's static lowering on each mesh
     radius_m: float
 
     @property
@@ -601,17 +597,26 @@ class CleatConvergence:
 
     @property
     def node_passing_hz(self) -> np.ndarray:
-        """V/(R·2π/N): the rate at which nodes pass a point of the road."""
-        return self.speed_m_s / self.node_arc_m
+        """V/((R - δ)·2π/N): the rate at which the nodes' rays pass over a point of the road
+        at the contact centre (on the tread they are R·2π/N apart, on the road (R - δ)/R of
+        that)."""
+        return self.speed_m_s / ((self.radius_m - self.deflection_m) * 2 * np.pi
+                                 / self.element_counts)
 
     @property
     def point_passing_hz(self) -> np.ndarray:
-        return self.speed_m_s / self.point_arc_m
+        return self.node_passing_hz * self.points_per_node
 
     @property
     def peak_rise_n(self) -> np.ndarray:
         """Largest rim_Fz over the run less the static rim load."""
         return self.rim_fz_n.max(axis=1) - self.static_rim_fz_n
+
+    @property
+    def peak_dip_n(self) -> np.ndarray:
+        """Smallest rim_Fz over the run less the static rim load (negative: the load falls;
+        what a pothole shows first)."""
+        return self.rim_fz_n.min(axis=1) - self.static_rim_fz_n
 
     @property
     def min_contact_fz_n(self) -> np.ndarray:
@@ -641,13 +646,14 @@ class CleatConvergence:
         """One row per mesh: what the convergence table shows."""
         error, difference = self.rise_error(), self.history_difference()
         return [{"n_elements": int(n), "points_per_node": int(m), "point_arc_mm": 1e3 * s,
-                 "peak_rise_kn": rise / 1e3, "rise_error": float(e),
+                 "peak_rise_kn": rise / 1e3, "peak_dip_kn": dip / 1e3,
+                 "rise_error": float(e),
                  "history_rms_difference": float(d), "min_contact_fz_kn": fmin / 1e3,
                  "node_passing_hz": float(fn), "node_line_kn": ln / 1e3,
                  "point_passing_hz": float(fp), "point_line_kn": lp / 1e3}
-                for n, m, s, rise, e, d, fmin, fn, ln, fp, lp in zip(
+                for n, m, s, rise, dip, e, d, fmin, fn, ln, fp, lp in zip(
                     self.element_counts, self.points_per_node, self.point_arc_m,
-                    self.peak_rise_n, error, difference, self.min_contact_fz_n,
+                    self.peak_rise_n, self.peak_dip_n, error, difference, self.min_contact_fz_n,
                     self.node_passing_hz, self.node_line_n, self.point_passing_hz,
                     self.point_line_n)]
 
@@ -661,6 +667,7 @@ class CleatConvergence:
             "point_spacing_m": self.point_spacing_m,
             "element_counts": self.element_counts.tolist(),
             "static_rim_fz_n": self.static_rim_fz_n.tolist(),
+            "deflection_m": self.deflection_m.tolist(),
             "extrapolated_rise_kn": rise / 1e3,
             "observed_order": order,
             "meshes": self.table_rows(),
@@ -737,8 +744,8 @@ def cleat_convergence(
     if not (math.isfinite(speed_m_s) and speed_m_s > 0):
         problems.append(Problem("speed_m_s", speed_m_s, "m/s", "> 0 m/s",
                                 "the tire must roll over the obstacle"))
-    if not (math.isfinite(load) and load > 0):
-        problems.append(Problem("load_n", load, "N", "> 0 N"))
+    if not (math.isfinite(load) and load >= 0):
+        problems.append(Problem("load_n", load, "N", ">= 0 N"))
     if not (math.isfinite(step_s) and 0 < step_s <= 1e-3):
         problems.append(Problem("step_s", step_s, "s", "in (0, 1e-3] s"))
     if not (math.isfinite(settle_s) and 0 <= settle_s <= 1.0):
@@ -749,7 +756,9 @@ def cleat_convergence(
         raise ParameterError(problems)
 
     def build(n: int, zone_length: float):
-        op = _cleat_operating_point(n, speed_m_s, load, point_spacing_m, zone_length)
+        op = OperatingPoint(n_elements=int(n), load_n=float(load), speed_m_s=float(speed_m_s),
+                            contact_zone_length_m=float(zone_length),
+                            contact_point_spacing_m=float(point_spacing_m))
         return build_contact_model(tire, op)
 
     contacts, found = [], []
@@ -789,6 +798,7 @@ def cleat_convergence(
     statics, per_node, n_points = np.empty(size), np.empty(size, int), np.empty(size, int)
     under, reaches, zones = np.empty((size, 2)), np.empty(size), np.empty(size)
     node_line, point_line, run_s = np.empty(size), np.empty(size), np.empty(size)
+    deflections = np.empty(size)
     for i, contact in enumerate(contacts):
         started = time.perf_counter()
         simulator = ContactSimulator(contact, backend=backend)
@@ -806,17 +816,17 @@ def cleat_convergence(
         run_s[i] = time.perf_counter() - started
         rim[i], contact_fz[i] = out[:, 0], out[:, 1]
         statics[i] = contact.static_outputs["rim_Fz"]
-        per_node[i] = points_per_node(simulator.contract)
-        n_points[i] = simulator.contract.n_points
-        zones[i] = contact.patch.zone.length_m
+        zone = contact.patch.zone
+        per_node[i], n_points[i], zones[i] = zone.points_per_node, zone.n_points, zone.length_m
         reaches[i] = obstacle_reach_m(tire.R, contact.patch.deflection_m, obstacle)
         # the obstacle [X, X + L], X = -V t, overlaps [-reach, reach] for these t
         under[i] = -reaches[i] / speed_m_s, (obstacle.length_m + reaches[i]) / speed_m_s
-        arc = 2 * np.pi * tire.R / counts[i]
+        deflections[i] = contact.patch.deflection_m
+        passing = speed_m_s / ((tire.R - deflections[i]) * 2 * np.pi / counts[i])
         inside = (time_s >= under[i, 0]) & (time_s <= under[i, 1])
-        node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], speed_m_s / arc)
+        node_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside], passing)
         point_line[i] = line_amplitude(time_s[inside], contact_fz[i, inside],
-                                       speed_m_s * per_node[i] / arc)
+                                       passing * per_node[i])
         _report(progress, i + 1, size)
     return CleatConvergence(
         obstacle=obstacle, speed_m_s=float(speed_m_s), load_n=float(load), step_s=float(step_s),
@@ -824,4 +834,44 @@ def cleat_convergence(
         points_per_node=per_node, n_points=n_points, time_s=time_s, rim_fz_n=rim,
         contact_fz_n=contact_fz, static_rim_fz_n=statics, under_tire_s=under,
         reach_m=reaches, contact_zone_length_m=zones, node_line_n=node_line,
-        point_line_n=point_line, run_s=run_s, radius_m=float(tire.R))
+        point_line_n=point_line, run_s=run_s, deflection_m=deflections, radius_m=float(tire.R))
+
+
+#: Columns of the cleat convergence table (the CLI, its figure and docs/theory.md show it).
+CLEAT_TABLE_HEADER = ("N", "points per node (arc)", "rim_Fz peak rise", "vs converged",
+                      "rim_Fz dip", "rim_Fz rms vs finest", "min contact_Fz",
+                      "line at node passing", "line at point passing")
+
+
+def cleat_table(data: dict) -> tuple[list[list[str]], str]:
+    """Rows of :data:`CLEAT_TABLE_HEADER` and the sentence on the converged value, from
+    :meth:`CleatConvergence.to_dict` (or its record): the one formatting of the table."""
+
+    def line(amplitude_kn, hz) -> str:
+        if amplitude_kn is None or not math.isfinite(amplitude_kn):
+            return f"- ({hz:.0f} Hz above Nyquist)"
+        return f"{amplitude_kn:.3g} kN at {hz:.0f} Hz"
+
+    rows = [[str(row["n_elements"]),
+             f"{row['points_per_node']} ({row['point_arc_mm']:.3g} mm)",
+             f"{row['peak_rise_kn']:.2f} kN",
+             f"{100 * row['rise_error']:+.1f} %",
+             f"{row['peak_dip_kn']:.2f} kN",
+             f"{100 * row['history_rms_difference']:.1f} %",
+             f"{row['min_contact_fz_kn']:.1f} kN",
+             line(row["node_line_kn"], row["node_passing_hz"]),
+             line(row["point_line_kn"], row["point_passing_hz"])]
+            for row in data["meshes"]]
+    counts = ", ".join(str(row["n_elements"]) for row in data["meshes"][-3:])
+    order = data["observed_order"]
+    if order is not None and math.isfinite(order):
+        note = (f"converged peak rise {data['extrapolated_rise_kn']:.2f} kN: Richardson "
+                f"extrapolation over N = {counts}, observed order {order:.2f}")
+    elif len(data["meshes"]) < 3:
+        note = (f"converged peak rise taken as the finest mesh's, "
+                f"{data['extrapolated_rise_kn']:.2f} kN: an order needs three meshes")
+    else:
+        note = (f"converged peak rise {data['extrapolated_rise_kn']:.2f} kN, the finest "
+                f"mesh's: the differences between N = {counts} change sign or do not shrink, "
+                "so no order is observed to extrapolate with")
+    return rows, note
