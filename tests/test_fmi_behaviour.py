@@ -1045,12 +1045,19 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               # in test_native_fmu.py, against both FMUs
               "MAX_STEP_WORK": "test_a_step_of_more_work_than_a_step_may_take_is_refused_alike",
               "WORK_INTERVAL_S": "test_a_contact_the_step_cannot_afford_is_refused_alike",
-              "MIN_SUBSTEP_S": "test_a_contact_the_step_cannot_afford_is_refused_alike"}
+              "MIN_SUBSTEP_S": "test_a_contact_the_step_cannot_afford_is_refused_alike",
+              # the spacing's range is the contact_point_spacing variable's, checked with
+              # every parameter's range above
+              "MIN_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
+              "MAX_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
+              # in tests/test_cli.py (the core's refusal); a test of both FMUs is still to come
+              "MAX_CONTACT_POINTS": "test_bad_input_is_one_line_naming_every_parameter"}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",
              "PGS_TOLERANCE", "DEFAULT_ZONE_LENGTH_M", "ZONE_ANGLE_SLACK", "EVENT_TOLERANCE",
              "EVENTS_TOGETHER", "TOUCH_ATOL", "SEGMENTS_PER_NODE", "MAX_DEFLECTION_FRACTION",
              "LENGTH_BISECTIONS", "MODE_TIE_TOLERANCE", "SCAN_POINTS", "ROOT_TOLERANCE",
-             "SUBSTEP_WORK_BASE"}
+             "SUBSTEP_WORK_BASE", "DEFAULT_POINT_SPACING_M", "POINT_SPACING_SLACK",
+             "MOST_POINTS_PER_NODE"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)
