@@ -13,6 +13,7 @@ from .common import (
     add_output_options,
     add_tire_options,
     checked_tire,
+    element_list,
     load_default_text,
     plot_with,
     positive_problem,
@@ -73,26 +74,12 @@ def register(subparsers) -> None:
     p.set_defaults(handler=run_cleat)
 
 
-def _element_list(text: str) -> tuple[list[int], str | None]:
-    from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
-
-    try:
-        counts = [int(item) for item in text.split(",") if item.strip()]
-    except ValueError:
-        counts = []
-    bad = [n for n in counts if not MIN_ELEMENTS <= n <= MAX_ELEMENTS]
-    if not counts or bad or len(set(counts)) != len(counts):
-        return [], (f"--elements-list = {text!r}: must be distinct integers in "
-                    f"[{MIN_ELEMENTS}, {MAX_ELEMENTS}], comma separated")
-    return sorted(counts), None
-
-
 def run_cleat(args: argparse.Namespace) -> Output:
     from ..core.obstacles import MAX_OBSTACLE_LENGTH_M, MAX_OBSTACLE_SIZE_M, Obstacle
     from ..core.parameters import MAX_POINT_SPACING_M, MIN_POINT_SPACING_M
     from ..core.studies import CLEAT_TABLE_HEADER, cleat_convergence, cleat_table
 
-    counts, problem = _element_list(args.elements_list)
+    counts, problem = element_list(args.elements_list, DEFAULT_ELEMENT_LIST)
     problems = [
         problem,
         range_problem("--height", args.height, 1e-4, MAX_OBSTACLE_SIZE_M, "m"),

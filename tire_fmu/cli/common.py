@@ -415,3 +415,18 @@ def plot_with(function_name: str, *args: Any, **kwargs: Any) -> Callable:
         return getattr(plots, function_name)(*args, path, **kwargs)
 
     return draw
+
+
+def element_list(text: str, example: str) -> tuple[list[int], str | None]:
+    """--elements-list: distinct meshes, ascending (repeats dropped), or the one-line problem."""
+    from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
+
+    try:
+        counts = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        counts = []
+    bad = [n for n in counts if not MIN_ELEMENTS <= n <= MAX_ELEMENTS]
+    if not counts or bad:
+        return [], (f"--elements-list = {text!r}: must be comma-separated integers in "
+                    f"[{MIN_ELEMENTS}, {MAX_ELEMENTS}], e.g. {example}")
+    return sorted(set(counts)), None

@@ -8,7 +8,6 @@ import argparse
 import numpy as np
 
 from ..core import analytic_modes, modal_analysis
-from ..core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
 from ..core.studies import ROUNDING_LEVEL, convergence_study, patch_sweep
 from .commands import command_help
 from .common import (
@@ -20,6 +19,7 @@ from .common import (
     add_speed_options,
     add_tire_options,
     checked_tire,
+    element_list,
     elements_problem,
     model_from_args,
     patch_length_problem,
@@ -207,20 +207,8 @@ def run_patch(args: argparse.Namespace) -> Output:
     return output
 
 
-def _element_list(text: str) -> tuple[list[int], str | None]:
-    try:
-        counts = [int(item) for item in text.split(",") if item.strip()]
-    except ValueError:
-        counts = []
-    bad = [n for n in counts if not MIN_ELEMENTS <= n <= MAX_ELEMENTS]
-    if not counts or bad:
-        return [], (f"--elements-list = {text!r}: must be comma-separated integers in "
-                    f"[{MIN_ELEMENTS}, {MAX_ELEMENTS}], e.g. {DEFAULT_ELEMENT_LIST}")
-    return sorted(set(counts)), None
-
-
 def run_convergence(args: argparse.Namespace) -> Output:
-    counts, problem = _element_list(args.elements_list)
+    counts, problem = element_list(args.elements_list, DEFAULT_ELEMENT_LIST)
     tire = checked_tire(args, [problem, range_problem("--nmax", args.nmax, 1, 200, integer=True)])
     with progress_bar("meshes") as progress:
         result = convergence_study(tire, counts, range(0, args.nmax + 1), progress=progress)
