@@ -175,6 +175,87 @@ def pressure_law_table() -> str:
     return "\n".join(lines)
 
 
+@generator("tied-sidewall")
+def tied_sidewall_table() -> str:
+    import numpy as np
+
+    from tire_fmu.core import TireParameters
+    from tire_fmu.core.analytic import analytic_modes
+    from tire_fmu.core.dispersion import body_frequencies
+    from tire_fmu.core.standing_waves import critical_speed
+    from tire_fmu.tire_files import read_tire_file
+
+    paper, tied = TireParameters(sidewall_max_order=0.0), read_tire_file("GL073A_tied").tire
+    top = int(tied.sidewall_max_order)
+    meshes = (100, 200, 400, 800, 1600)
+    lines = ["| tire | " + " | ".join(f"N = {n}" for n in meshes) + " | continuum |",
+             "|---|" + "---|" * (len(meshes) + 1)]
+    lo, hi = 1.0, 400.0  # the continuum: ω_in(top, Ω) = top·Ω, by bisection on the symbols
+    for _ in range(80):
+        spin = 0.5 * (lo + hi)
+        low, _ = body_frequencies(tied, np.array([top]), spin, None)
+        lo, hi = (spin, hi) if low[0] - top * spin > 0 else (lo, spin)
+    for name, tire, limit in (("GL073A (lumped)", paper, "0"),
+                              ("GL073A_tied", tied, f"{lo * tied.R:.2f}")):
+        speeds = [critical_speed(tire, n) for n in meshes]
+        lines.append(f"| {name} | " + " | ".join(f"{c.speed_m_s:.2f} (n = {c.order})"
+                                                 for c in speeds) + f" | {limit} |")
+    orders = np.arange(top - 1, top + 5)
+    lumped, tied_modes = analytic_modes(paper, orders), analytic_modes(tied, orders)
+    lines += ["", "Critical speed [m/s] and the order that stands still first; computed by "
+              "`docs/generate.py` (the same as `tire-fmu critical-speed --tire-file GL073A_tied "
+              "--elements N`).", "",
+              "| order n | " + " | ".join(str(n) for n in orders) + " |",
+              "|---|" + "---|" * orders.size,
+              "| lumped: in-phase [Hz] | " + " | ".join(f"{f:.1f}" for f in lumped.in_phase_hz)
+              + " |",
+              "| tied: in-phase [Hz] | " + " | ".join(f"{f:.1f}" for f in tied_modes.in_phase_hz)
+              + " |",
+              "| lumped: out-of-phase [Hz] | "
+              + " | ".join(f"{f:.1f}" for f in lumped.out_of_phase_hz) + " |",
+              "| tied: out-of-phase (the tie) [Hz] | "
+              + " | ".join(f"{f:.0f}" for f in tied_modes.out_of_phase_hz) + " |",
+              "| tied: in-phase phase speed ωR/n [m/s] | "
+              + " | ".join(f"{2 * np.pi * f * tied.R / n:.1f}" if n else "-"
+                           for f, n in zip(tied_modes.in_phase_hz, orders)) + " |",
+              "", "The continuum frequencies (analytic.py, eq. 12 with the tie); orders up to "
+              f"{top} are the paper's exactly."]
+    return "\n".join(lines)
+
+
+def _tied_speeds():
+    import numpy as np
+
+    from tire_fmu.core.analytic import analytic_modes
+    from tire_fmu.tire_files import read_tire_file
+
+    tied = read_tire_file("GL073A_tied").tire
+    top = int(tied.sidewall_max_order)
+    top_hz = float(analytic_modes(tied, [top]).in_phase_hz[0])
+    share = tied.k_r1 / (tied.k_r1 + tied.k_r2)
+    k = tied.k_r1 * tied.k_r2 / (tied.k_r1 + tied.k_r2)
+    n = np.arange(top + 1, 200)
+    band = np.sqrt((tied.pretension_n + tied.EI * n**2 / tied.R**2 + k * tied.R**2 / n**2)
+                   / (tied.rhoA + share**2 * tied.m_s)).min()
+    return top, top_hz, 2 * np.pi * top_hz * tied.R / top, float(band)
+
+
+@value("tied-top-mode")
+def _tied_top_mode() -> str:
+    top, hz, _, _ = _tied_speeds()
+    return f"{hz:.1f} Hz at $n = {top}$"
+
+
+@value("tied-top-speed")
+def _tied_top_speed() -> str:
+    return f"{_tied_speeds()[2]:.1f} m/s"
+
+
+@value("tied-band-speed")
+def _tied_band_speed() -> str:
+    return f"{_tied_speeds()[3]:.1f} m/s"
+
+
 # -- measured sections ------------------------------------------------------------------------
 
 

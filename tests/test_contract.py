@@ -445,3 +445,17 @@ def test_the_c_builder_makes_the_spec_points_on_random_tires(c_builder):
                        f"m/s): {text}" for text in differences(reference, native)]
     assert mismatched == []
     assert built >= 25 and len(points_per_node) >= 4
+
+
+@pytest.mark.parametrize("speed, n_elements, top", [(0.0, 100, 8), (20.0, 100, 8),
+                                                    (20.0, 800, 8), (5.0, 64, 1)])
+def test_the_builders_agree_on_a_tied_sidewall(c_builder, speed, n_elements, top):
+    """The sidewall tied to the tread above sidewall_max_order: both builders, field by
+    field (the tie's modes are far above the ring's, so this is also their conditioning)."""
+    tire = {**TireParameters().as_dict(), "sidewall_max_order": float(top)}
+    case = {"tire": tire, "n_elements": n_elements, "speed": speed, "load": 27_654.753,
+            "f_max": 0.0, "n_modes": 0, "static_correction": True, "linear_contact": False,
+            "spacing": 2.5e-3}
+    native, problems = c_builder.build(c_values(case))
+    assert native is not None, problems
+    assert differences(python_contract(case), native) == []

@@ -1008,6 +1008,19 @@ def test_every_parameter_limit_of_the_spec_is_enforced_alike(both, limit):
         assert [_lines(fmu, **at) for fmu in both] == [(OK, [])] * 2
 
 
+@pytest.mark.parametrize("order, allowed", [(2.5, False), (8.0, True), (1e6, False)])
+def test_the_sidewall_order_is_an_integer_in_range_alike(both, order, allowed):
+    """sidewall_max_order is an integer (the tie acts on whole orders): both FMUs refuse a
+    fraction or a value out of range with the same message naming it, and run 8."""
+    results = [_lines(fmu, sidewall_max_order=order) for fmu in both]
+    if allowed:
+        assert results == [(OK, [])] * 2
+    else:
+        (status, python), (_, native) = results
+        assert status == ERROR and python == native
+        assert any("sidewall_max_order" in line and "[0, 100000]" in line for line in python)
+
+
 def test_the_critical_speed_warning_fraction_is_enforced_alike(both):
     """CRITICAL_SPEED_WARNING_FRACTION: above it both FMUs warn with the same text, below it
     neither does."""
@@ -1059,5 +1072,5 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "EVENTS_TOGETHER", "TOUCH_ATOL", "SEGMENTS_PER_NODE", "MAX_DEFLECTION_FRACTION",
              "LENGTH_BISECTIONS", "MODE_TIE_TOLERANCE", "SCAN_POINTS", "ROOT_TOLERANCE",
              "SUBSTEP_WORK_BASE", "DEFAULT_POINT_SPACING_M", "POINT_SPACING_SLACK",
-             "MOST_POINTS_PER_NODE"}
+             "MOST_POINTS_PER_NODE", "SIDEWALL_TIE_FACTOR"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)

@@ -108,9 +108,9 @@ def test_every_variable_has_unit_description_and_legal_attributes():
     variables = {v.get("name"): v for v in root.iter("ScalarVariable")}
     expected = {"load", "speed", "inflation_pressure", "n_elements", "f_max", "n_modes",
                 "static_correction", "R", "b", "rhoA", "m_s", "k_r1", "k_r2", "EI", "k_cw",
-                "alpha", "beta", "sidewall_shear", "sidewall_pressure_exponent",
-                "reference_pressure", "allow_supercritical", "contact_zone_length",
-                "contact_point_spacing", "linear_contact", *INPUT_NAMES,
+                "alpha", "beta", "sidewall_shear", "sidewall_max_order",
+                "sidewall_pressure_exponent", "reference_pressure", "allow_supercritical",
+                "contact_zone_length", "contact_point_spacing", "linear_contact", *INPUT_NAMES,
                 *OUTPUT_NAMES, "in_contact"}
     assert set(variables) == expected
     units = {"load": "N", "speed": "m/s", "f_max": "Hz", "inflation_pressure": "Pa",

@@ -166,6 +166,8 @@ def test_matches_the_python_fmu_through_loss_of_contact(native, python, load, sp
     {"n_modes": 40, "speed": 5.0},
     {"n_elements": 60, "contact_zone_length": 0.4, "sidewall_shear": 5e4, "speed": 8.0,
      "sidewall_pressure_exponent": 1.0, "inflation_pressure": 6e5, "load": 20000.0},
+    # the sidewall tied to the tread above order 8 (GL073A_tied), rolling on a fine mesh
+    {"n_elements": 200, "sidewall_max_order": 8.0, "speed": 20.0, "f_max": 400.0},
 ])
 def test_other_settings_match_the_python_fmu(native, python, parameters):
     reference = run(python, parameters, road_drop, steps=900)

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from tire_fmu.core import TireParameters, analytic_modes, critical_speed, validate
+from tire_fmu.core.parameters import TIRE_FIELDS
 from tire_fmu.tire_files import (
     TireFileError,
     read_tire_file,
@@ -29,15 +30,16 @@ def test_the_shipped_gl073a_file_is_the_defaults_exactly():
     assert shipped.defaulted == () and shipped.name == "GL073A"
     assert "Liu" in shipped.source
     assert shipped_tire_path("gl073a") == shipped.path  # names are case-insensitive
-    assert {"GL073A", "GL073A_shear"} <= set(shipped_tire_names())
+    assert {"GL073A", "GL073A_shear", "GL073A_tied"} <= set(shipped_tire_names())
 
 
 def test_any_tire_round_trips_exactly(tmp_path):
     rng = np.random.default_rng(7)
     for _ in range(20):
         tire = TireParameters(**{
-            f.name: f.default * float(rng.uniform(0.5, 1.5)) if f.default else
-            float(rng.uniform(0.0, 1.0)) for f in fields(TireParameters)})
+            f.name: (float(rng.integers(0, 20)) if TIRE_FIELDS[f.name].integer else
+                     f.default * float(rng.uniform(0.5, 1.5)) if f.default else
+                     float(rng.uniform(0.0, 1.0))) for f in fields(TireParameters)})
         path = write_tire_file(tmp_path / "t.toml", tire, name='quote " and \\ back',
                                metadata={"fit": {"free": ["k_r1"], "rms": 1e-3,
                                                  "intervals": {"k_r1": [1.0, 2.5e6]}}})

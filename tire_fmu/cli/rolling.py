@@ -119,8 +119,8 @@ def _rolling_checks(args: argparse.Namespace, tire, top_speed: float | None) -> 
             found.append(
                 f"{_speed_option(args)} = {top_speed:g} m/s: must be below the critical "
                 f"speed {critical:.4g} m/s of this mesh (--elements {args.elements}) for "
-                "the loaded tire; use fewer elements, --tire sidewall_shear=..., or "
-                "--allow-supercritical"
+                "the loaded tire; use --tire-file GL073A_tied (--tire sidewall_max_order=8), "
+                "fewer elements, or --allow-supercritical"
             )
     return found
 
@@ -234,7 +234,16 @@ LUMPED_SIDEWALL = (
     "grows. It is an artefact of the lumped sidewall, not a property of the tire. A "
     "circumferential sidewall shear stiffness (--tire sidewall_shear=G with G > 0) gives the "
     "band a wave speed of order sqrt(G/m_s) and a critical speed that converges as N grows; "
-    "--tire-file GL073A_shear is the GL073A tire re-identified with it (docs/theory.md §8.8)."
+    "--tire-file GL073A_shear is the GL073A tire re-identified with it (docs/theory.md §8.8). "
+    "A sidewall tied to the tread above the measured orders (--tire sidewall_max_order=8, "
+    "--tire-file GL073A_tied) removes the band there and the critical speed converges "
+    "(docs/theory.md §8.10)."
+)
+TIED_SIDEWALL = (
+    "This tire's sidewall moves on its own only in the orders n <= {top}; above, it is tied to "
+    "the tread at its static share, so no band without wave speed is left there. The critical "
+    "speed is where the in-phase mode of order {top} stands still: it converges as N grows, to "
+    "the tire's own standing-wave speed (docs/theory.md §8.10)."
 )
 SHEARED_SIDEWALL = (
     "This tire's sidewall masses are coupled along the circumference by a shear stiffness "
@@ -248,6 +257,8 @@ SHEARED_SIDEWALL = (
 def explanation(tire) -> str:
     """Why the critical speed is what it is, for this tire's sidewall."""
     shear = tire.effective_sidewall_shear
+    if tire.sidewall_max_order > 0:
+        return STANDING_WAVE + TIED_SIDEWALL.format(top=int(tire.sidewall_max_order))
     if shear <= 0.0:
         return STANDING_WAVE + LUMPED_SIDEWALL
     return STANDING_WAVE + SHEARED_SIDEWALL.format(shear=shear,

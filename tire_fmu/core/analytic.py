@@ -9,7 +9,11 @@ frequencies of order n. The paper's eqs. 13-18 print garbled coefficients; this 
 use them. Nothing here touches the finite-difference code, so it is an independent reference.
 The optional sidewall shear G adds G n²/R² to the sidewall stiffness (0 in the paper). The
 sidewall stiffnesses are taken at the inflation pressure (``TireParameters.effective_k_r1`` etc.,
-the optional pressure law; equal to k_r1, k_r2, G when it is off).
+the optional pressure law; equal to k_r1, k_r2, G when it is off). Above
+``sidewall_max_order`` K > 0 the sidewall is tied to the tread: the energy ½p(B - rA)² with
+r = k_r1/(k_r1 + k_r2 + G n²/R²) and p = F·(a_n + k_r1 + k_r2 + G n²/R²), F the tie factor,
+adds p r², p and -p r to the three stiffnesses of order n > K (written out here apart from
+:func:`tire_fmu.core.dispersion.sidewall_tie`, which the FDM code uses).
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .parameters import TireParameters
+from .parameters import SIDEWALL_TIE_FACTOR, TireParameters
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,8 +77,13 @@ def analytic_modes(tire: TireParameters, orders) -> AnalyticModes:
     """Both roots of eq. 12 for each order n (Hz), with their amplitude ratios."""
     n = np.asarray(orders, dtype=int)
     a = tread_stiffness(tire, n)
-    k_r1 = tire.effective_k_r1
-    low, high = two_mass_eigenvalues(a, sidewall_stiffness(tire, n), k_r1, tire.rhoA, tire.m_s)
+    side = sidewall_stiffness(tire, n)
+    k_r1 = np.full(a.shape, tire.effective_k_r1)
+    if tire.sidewall_max_order > 0:
+        tie = np.where(np.abs(n) > tire.sidewall_max_order, SIDEWALL_TIE_FACTOR * (a + side), 0.0)
+        share = tire.effective_k_r1 / side
+        a, side, k_r1 = a + tie * share**2, side + tie, k_r1 + tie * share
+    low, high = two_mass_eigenvalues(a, side, k_r1, tire.rhoA, tire.m_s)
 
     def ratio(lam):  # B/A from the first row of eq. 12
         return (a - tire.rhoA * lam) / k_r1

@@ -23,7 +23,7 @@ import numpy as np
 
 from .analytic import continuum_symbols, two_mass_eigenvalues
 from .discretisation import symbols as fdm_symbols
-from .parameters import TireParameters
+from .parameters import SIDEWALL_TIE_FACTOR, TireParameters
 
 
 def order_symbols(orders, n_elements: int | None) -> dict[str, np.ndarray]:
@@ -33,20 +33,53 @@ def order_symbols(orders, n_elements: int | None) -> dict[str, np.ndarray]:
     return fdm_symbols(orders, 2.0 * np.pi / n_elements)
 
 
-def per_order_matrices(tire: TireParameters, sym, spin_rad_s: float):
+def lumped_stiffness(tire: TireParameters, sym):
+    """Tread and sidewall stiffness per order and metre at rest, without the tie (the lumped
+    sidewall's): EI/R⁴ λ4 + P/R² λ2 + k_r1 and k_r1 + k_r2 + G/R² λ2."""
+    lam2 = -sym["d2"]
+    k0_tt = tire.EI / tire.R**4 * sym["d4"] + tire.pretension_n / tire.R**2 * lam2
+    k0_tt = k0_tt + tire.effective_k_r1
+    k0_ss = (tire.effective_k_r1 + tire.effective_k_r2
+             + tire.effective_sidewall_shear / tire.R**2 * lam2)
+    return k0_tt, k0_ss
+
+
+def sidewall_tie(tire: TireParameters, orders, k0_tt, k0_ss):
+    """The tie of the sidewall to the tread above ``sidewall_max_order``, per order and metre:
+    (tt, ss, ts) entries of p·[[r², -r], [-r, 1]] with r = k_r1 / k0_ss, zero at and below
+    the order (and everywhere for sidewall_max_order = 0).
+
+    Energy ½p(w_s - r w_r)²: with r the sidewall's static share of the tread's displacement,
+    the free ring's static state at rest stores none, so static compliances (footprint, vertical
+    stiffness) are the lumped sidewall's, while the sidewall's own band, which has no wave speed
+    and so would set a critical speed that falls as 1/N, is moved out of those orders: the
+    sidewall there rides on the tread. p = SIDEWALL_TIE_FACTOR (k0_tt + k0_ss) rises with the
+    tread's bending, so the tie's own branch has a phase speed that grows with n.
+    """
+    n = np.abs(np.asarray(orders, dtype=float))
+    top = tire.sidewall_max_order
+    tied = (n > top) if top > 0 else np.zeros(n.shape, dtype=bool)
+    ratio = tire.effective_k_r1 / k0_ss
+    p = np.where(tied, SIDEWALL_TIE_FACTOR * (k0_tt + k0_ss), 0.0)
+    return p * ratio * ratio, p, -p * ratio
+
+
+def per_order_matrices(tire: TireParameters, sym, spin_rad_s: float, orders):
     """Body-frame 2×2 stiffness (K*) and material damping entries per order, per metre."""
-    lam2, lam4 = -sym["d2"], sym["d4"]
-    pre = tire.pretension_n
+    lam2 = -sym["d2"]
     centrifugal = tire.rhoA * tire.R**2 * spin_rad_s**2
-    bend = tire.EI / tire.R**4 * lam4
     k_r1 = tire.effective_k_r1  # sidewall stiffnesses at the inflation pressure
-    k0_tt = bend + pre / tire.R**2 * lam2 + k_r1
-    k0_ss = k_r1 + tire.effective_k_r2 + tire.effective_sidewall_shear / tire.R**2 * lam2
-    k_tt = k0_tt + centrifugal / tire.R**2 * lam2 - tire.rhoA * spin_rad_s**2
-    k_ss = k0_ss - tire.m_s * spin_rad_s**2
+    k0_tt, k0_ss = lumped_stiffness(tire, sym)
+    # material damping on the lumped structure: the tie is an (elastic) constraint, no damper,
+    # so its modes stay oscillatory and apart from the tread's overdamped roots near -1/β
     c_tt = tire.alpha * tire.rhoA + tire.beta * k0_tt
     c_ss = tire.alpha * tire.m_s + tire.beta * k0_ss
-    return (k_tt, k_ss, -k_r1), (c_tt, c_ss, -tire.beta * k_r1)
+    c_ts = -tire.beta * k_r1
+    tie_tt, tie_ss, tie_ts = sidewall_tie(tire, orders, k0_tt, k0_ss)
+    k0_tt, k0_ss, k0_ts = k0_tt + tie_tt, k0_ss + tie_ss, tie_ts - k_r1
+    k_tt = k0_tt + centrifugal / tire.R**2 * lam2 - tire.rhoA * spin_rad_s**2
+    k_ss = k0_ss - tire.m_s * spin_rad_s**2
+    return (k_tt, k_ss, k0_ts), (c_tt, c_ss, c_ts)
 
 
 def body_frequencies(tire: TireParameters, orders, spin_rad_s: float = 0.0, n_elements=None):
@@ -56,7 +89,7 @@ def body_frequencies(tire: TireParameters, orders, spin_rad_s: float = 0.0, n_el
     nan, the body-frame ring having buckled.
     """
     sym = order_symbols(orders, n_elements)
-    (k_tt, k_ss, k_ts), _ = per_order_matrices(tire, sym, spin_rad_s)
+    (k_tt, k_ss, k_ts), _ = per_order_matrices(tire, sym, spin_rad_s, orders)
     low, high = two_mass_eigenvalues(k_tt, k_ss, k_ts, tire.rhoA, tire.m_s)
     with np.errstate(invalid="ignore"):
         return np.sqrt(low), np.sqrt(high)
@@ -70,7 +103,7 @@ def eigenvalues(tire: TireParameters, orders, spin_rad_s: float = 0.0, n_element
     """
     n = np.atleast_1d(np.asarray(orders, dtype=float))
     sym = order_symbols(n, n_elements)
-    (k_tt, k_ss, k_ts), (c_tt, c_ss, c_ts) = per_order_matrices(tire, sym, spin_rad_s)
+    (k_tt, k_ss, k_ts), (c_tt, c_ss, c_ts) = per_order_matrices(tire, sym, spin_rad_s, n)
     m_inv = np.array([1.0 / tire.rhoA, 1.0 / tire.m_s])
     companion = np.zeros((n.size, 4, 4))
     companion[:, 0, 2] = companion[:, 1, 3] = 1.0

@@ -138,7 +138,7 @@ def order_matrices(tire: TireParameters, grid: Grid, spin_rad_s: float, orders):
     """Per-node ground-frame (M, D_n, K_n) for each order n: M (2,), D and K (n, 2, 2)."""
     orders = np.asarray(orders)
     sym = fdm_symbols(orders, grid.dtheta)
-    (k_tt, k_ss, k_ts), (c_tt, c_ss, c_ts) = per_order_matrices(tire, sym, spin_rad_s)
+    (k_tt, k_ss, k_ts), (c_tt, c_ss, c_ts) = per_order_matrices(tire, sym, spin_rad_s, orders)
     arc = grid.node_arc_m
     mass = arc * np.array([tire.rhoA, tire.m_s])
     kappa = (sym["d1"] / 1j).real

@@ -143,7 +143,7 @@ def undeformed_class_labels(model: TireModel) -> dict[str, list[tuple[float, int
     orders = np.arange(0, n_el // 2 + 1)
     tire = model.tire
     sym = order_symbols(orders, n_el)
-    (k_tt, k_ss, k_ts), _ = per_order_matrices(tire, sym, 0.0)
+    (k_tt, k_ss, k_ts), _ = per_order_matrices(tire, sym, 0.0, orders)
     low, high = two_mass_eigenvalues(k_tt, k_ss, k_ts, tire.rhoA, tire.m_s)
     labels: dict[str, list[tuple[float, int, str]]] = {SYMMETRIC: [], ANTISYMMETRIC: []}
     for n, lo, hi in zip(orders, low, high):

@@ -7,7 +7,9 @@ rolling terms from :mod:`tire_fmu.core.rotation`)
     ρA ü_r + EI/R⁴ ∂⁴w_r - P*/R² ∂²w_r + k_r1 (w_r - w_s) = -f
     m_s ü_s + k_r1 (w_s - w_r) + k_r2 w_s - G/R² ∂²w_s = 0,     w = u - T z_rim,
 
-with P* = p₀bR + ρA R²Ω², T(θ) = -cos θ the radial pattern of a rigid upward translation and
+with P* = p₀bR + ρA R²Ω², G the optional sidewall shear, and above ``sidewall_max_order`` the
+sidewall's tie to the tread (:func:`.dispersion.sidewall_tie`, dense circulant blocks here,
+undamped), T(θ) = -cos θ the radial pattern of a rigid upward translation and
 f the road's push on the tread (:mod:`.contact`). Internal forces act on the rim-relative
 displacement w; inertia stays absolute. A rigid translation of rim and road together
 (u = T z, z_rim = z_road = z) leaves every force unchanged: a radial-only ring is not
@@ -112,9 +114,12 @@ def structural_matrices(
     sidewall = ((k_r1 + tire.effective_k_r2) * eye
                 - tire.effective_sidewall_shear / tire.R**2 * ops.d2)
     coupling = -k_r1 * eye
-    stiffness = arc * sp.bmat([[tread, coupling], [coupling, sidewall]], format="csr")
+    lumped = arc * sp.bmat([[tread, coupling], [coupling, sidewall]], format="csr")
     mass = arc * sp.diags(np.r_[np.full(n, tire.rhoA), np.full(n, tire.m_s)], format="csr")
-    damping = (tire.alpha * mass + tire.beta * stiffness).tocsr()
+    damping = (tire.alpha * mass + tire.beta * lumped).tocsr()  # the tie has no damper
+    stiffness = lumped
+    if 0 < tire.sidewall_max_order < n // 2:  # (TireModel.sidewall_tied)
+        stiffness = (lumped + arc * sidewall_tie_matrix(tire, grid)).tocsr()
     centrifugal_tension = tire.rhoA * tire.R**2 * spin_rad_s**2
     tension = sp.block_diag(
         [-arc * centrifugal_tension / tire.R**2 * ops.d2, sp.csr_matrix((n, n))], format="csr"
@@ -126,6 +131,25 @@ def structural_matrices(
         rolling=rolling_terms(ops, mass, damping, spin_rad_s),
         tension_stiffness_from_spin=tension,
     )
+
+
+def sidewall_tie_matrix(tire: TireParameters, grid: Grid) -> sp.csr_matrix:
+    """The sidewall's tie to the tread (:func:`.dispersion.sidewall_tie`) on the nodes, per
+    metre: three circulant blocks with the tie's per-order values as their symbols. They are
+    dense (the tie acts on orders, not on neighbours), which the assembled model can afford
+    where the per-order code (the FMU, the simulator) never builds it."""
+    import scipy.linalg as sla
+    import scipy.sparse as sp
+
+    from .dispersion import lumped_stiffness, order_symbols, sidewall_tie
+
+    n = grid.n_elements
+    orders = np.arange(n // 2 + 1)
+    k0_tt, k0_ss = lumped_stiffness(tire, order_symbols(orders, n))
+    # a real even symbol s_n (n = 0..N/2) is the circulant whose first column is its inverse DFT
+    tt, ss, ts = (sla.circulant(np.fft.irfft(symbol, n=n))
+                  for symbol in sidewall_tie(tire, orders, k0_tt, k0_ss))
+    return sp.csr_matrix(np.block([[tt, ts], [ts, ss]]))
 
 
 def translation_pattern(grid: Grid) -> np.ndarray:
@@ -171,6 +195,11 @@ class TireModel:
     @property
     def n_elements(self) -> int:
         return self.grid.n_elements
+
+    @property
+    def sidewall_tied(self) -> bool:
+        """Whether the sidewall's tie acts on this mesh (some order above sidewall_max_order)."""
+        return 0 < self.tire.sidewall_max_order < self.grid.n_elements // 2
 
     @property
     def n_dof(self) -> int:
@@ -285,8 +314,9 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
     if speed >= critical and not op.allow_supercritical:
         raise ParameterError([Problem(
             "speed_m_s", speed, "m/s", f"below the critical (standing-wave) speed {critical:.4g} "
-            f"m/s of this mesh (n_elements = {op.n_elements}); a finer mesh lowers it, "
-            "sidewall_shear > 0 raises it, allow_supercritical runs anyway")])
+            f"m/s of this mesh (n_elements = {op.n_elements}); with sidewall_max_order = 0 a finer "
+            "mesh lowers it, sidewall_max_order = 8 (the GL073A_tied tire) makes it converge, "
+            "allow_supercritical runs anyway")])
     if CRITICAL_SPEED_WARNING_FRACTION * critical <= speed < critical:
         warnings.warn(
             f"speed {speed:g} m/s is {100 * speed / critical:.0f} % of the critical speed "

@@ -138,6 +138,7 @@ class FieldSpec:
     low: float
     high: float
     low_inclusive: bool = False
+    integer: bool = False
 
     def problem(self, value: Any) -> Problem | None:
         """What is wrong with ``value`` for this field, or None."""
@@ -152,6 +153,9 @@ class FieldSpec:
         below = number < self.low if self.low_inclusive else number <= self.low
         if below or number > self.high:
             return Problem(self.name, number, self.unit, f"in {self.range_text()}",
+                           self.description)
+        if self.integer and number != math.floor(number):
+            return Problem(self.name, number, self.unit, f"an integer in {self.range_text()}",
                            self.description)
         return None
 
@@ -172,6 +176,14 @@ class FieldSpec:
 MIN_MASS_KG_M = 1e-6
 MIN_CONTACT_STIFFNESS_N_M2 = 1e4
 MIN_LAW_PRESSURE_PA = 1e4
+#: Largest sidewall_max_order accepted: beyond every mesh (n_elements <= 1600, orders <= 800).
+MAX_SIDEWALL_ORDER = 100_000.0
+#: Stiffness of the tie that slaves the sidewall above sidewall_max_order to the tread's static
+#: shape, as a multiple of the order's own tread and sidewall stiffness. The tie's modes then
+#: sit 10x and more above the ring's own at every order (a phase speed that grows with n) while
+#: the per-order solve loses at most two digits; the tie stores no energy in the free ring's
+#: static state, so the static compliance at rest is that of the lumped sidewall.
+SIDEWALL_TIE_FACTOR = 100.0
 
 TIRE_FIELDS: dict[str, FieldSpec] = {
     spec.name: spec
@@ -198,6 +210,17 @@ TIRE_FIELDS: dict[str, FieldSpec] = {
             0.0,
             1.0e9,
             True,
+        ),
+        FieldSpec(
+            "sidewall_max_order",
+            "",
+            "highest circumferential order n in which the sidewall moves on its own; above it "
+            "the sidewall is tied to the tread's static shape (0 = every order, the paper's "
+            "lumped sidewall)",
+            0.0,
+            MAX_SIDEWALL_ORDER,
+            True,
+            integer=True,
         ),
         FieldSpec(
             "sidewall_pressure_exponent",
@@ -276,6 +299,7 @@ class TireParameters:
     alpha: float = 8.2e-5
     beta: float = 1.1e-4
     sidewall_shear: float = 0.0
+    sidewall_max_order: float = 0.0
     sidewall_pressure_exponent: float = 0.0
     reference_pressure: float = 7.9e5
 

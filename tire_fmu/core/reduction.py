@@ -292,13 +292,15 @@ def modal_decomposition(io: InputOutputModel) -> ModalForm:
     (the antisymmetric one: rim and a resting road push symmetrically) is left out, which
     changes no transfer function; within a class the lumped sidewall is eliminated exactly
     (:func:`~tire_fmu.core.modal.two_level_eigenpairs`), halving the problem again. Rolling
-    needs the general (dense LAPACK) eigenproblem.
+    needs the general (dense LAPACK) eigenproblem, and so does a tied sidewall, whose tie
+    carries no damping.
     """
     model = io.model
     # a mode of zero frequency, or one exactly critically damped, divides by zero: checked
     # below, with a message, rather than warned about here
     with np.errstate(divide="ignore", invalid="ignore"):
-        if model.speed_m_s == 0.0:
+        # the sidewall's tie (sidewall_max_order) has no damper: C is then not αM + βK
+        if model.speed_m_s == 0.0 and not model.sidewall_tied:
             decomp = _resting_decomposition(io)
         else:
             decomp = diagonalise(io.a.toarray(), io.b, io.c)

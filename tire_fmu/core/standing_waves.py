@@ -6,7 +6,10 @@ the sidewall band (just below sqrt((k_r1+k_r2)/m_s)/2π) has no wave speed: its 
 ω_s - κ_nΩ first reaches zero at the largest discrete wavenumber κ = 1/δθ, i.e. at
 V ≈ ω_s·R·δθ. The critical speed therefore belongs to a mesh and falls as N grows (about 43 m/s
 at N = 100, 11 m/s at N = 400). A circumferential sidewall shear G > 0 gives the band a wave
-speed ~ sqrt(G/m_s) and a critical speed that converges with N.
+speed ~ sqrt(G/m_s) and a critical speed that converges with N, at first order and to a value
+the modal data cap near 27 m/s. A sidewall tied to the tread above ``sidewall_max_order``
+(:func:`.dispersion.sidewall_tie`) has no band there: the critical speed is where the in-phase
+mode of the top order stands still, and it converges at second order (docs/theory.md §8.10).
 """
 
 from __future__ import annotations

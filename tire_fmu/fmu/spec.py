@@ -122,6 +122,7 @@ CONSTANTS: dict[str, float | int] = {
     "N_MODES_LIMIT": free_ring.N_MODES_LIMIT,
     "MIN_ROLLING_SPEED_M_S": parameters.MIN_ROLLING_SPEED_M_S,
     "MIN_LAW_PRESSURE_PA": parameters.MIN_LAW_PRESSURE_PA,
+    "SIDEWALL_TIE_FACTOR": parameters.SIDEWALL_TIE_FACTOR,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -138,6 +139,7 @@ MESSAGES: dict[str, str] = {
     # tire data (TIRE_FIELDS): name, value text, range text, description
     "FIELD_NOT_FINITE": "%s = %s: must be a finite number in %s (%s)",
     "FIELD_RANGE": "%s = %s: must be in %s (%s)",
+    "FIELD_INTEGER": "%s = %s: must be an integer in %s (%s)",
     # the pressure law (inflation_pressure as a value text, the floor, the exponent)
     "PRESSURE_LAW": (f"inflation_pressure = %s: must be {parameters.PRESSURE_LAW_ALLOWED} "
                      f"({parameters.PRESSURE_LAW_REASON})"),
@@ -158,8 +160,9 @@ MESSAGES: dict[str, str] = {
     **{f"STIFF_TERM_{field.upper()}": what for field, what in parameters.STIFF_TERMS.items()},
     # what needs the model
     "SUPERCRITICAL": "speed = %s: must be below the critical (standing-wave) speed %.4g m/s "
-                     "of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > "
-                     "0 raises it, allow_supercritical runs anyway",
+                     "of this mesh (n_elements = %d); with sidewall_max_order = 0 a finer mesh "
+                     "lowers it, sidewall_max_order = 8 (the GL073A_tied tire) makes it "
+                     "converge, allow_supercritical runs anyway",
     "NEAR_CRITICAL": "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): "
                      "sidewall modes near zero frequency dominate the response",
     "ZONE_RANGE": "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of "
@@ -544,7 +547,7 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
         "    const char* description;",
         "    const char* range_text;",
         "    double low, high;",
-        "    int low_inclusive;",
+        "    int low_inclusive, integer;",
         "} SpecField;",
         "",
         f"#define SPEC_N_TIRE_FIELDS {len(parameters.TIRE_FIELDS)}",
@@ -553,7 +556,8 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     for f in parameters.TIRE_FIELDS.values():
         lines.append(f"    {{{_c_string(f.name)}, {_c_string(f.unit)}, "
                      f"{_c_string(f.description)}, {_c_string(f.range_text())}, "
-                     f"{_c_number(f.low)}, {_c_number(f.high)}, {int(f.low_inclusive)}}},")
+                     f"{_c_number(f.low)}, {_c_number(f.high)}, {int(f.low_inclusive)}, "
+                     f"{int(f.integer)}}},")
     lines += ["};", ""]
     lines.append(f"#define SPEC_STATE_MAGIC {_c_string(STATE_MAGIC)}")
     lines.append(f"#define SPEC_STATE_VERSION {STATE_VERSION}")

@@ -18,6 +18,7 @@
 
 typedef struct {
     double lam2, lam4, kappa;
+    int order;
 } Symbols;
 
 /* discretisation.symbols: the stencils' values on e^{i n theta}, summed as the core sums them */
@@ -26,6 +27,7 @@ static Symbols order_symbols(int n, double dtheta)
     Symbols s;
     double x = n * dtheta, x2 = (2.0 * n) * dtheta;
     double c1 = cos(x), c2 = cos(x2);
+    s.order = n;
     s.kappa = sin(x) * (1.0 / dtheta);
     s.lam2 = -(pow(dtheta, -2) * ((c1 + -2.0) + c1));
     s.lam4 = pow(dtheta, -4) * ((((c2 + -4.0 * c1) + 6.0) + -4.0 * c1) + c2);
@@ -55,12 +57,22 @@ static OrderEntries per_order(const Tire* t, Symbols s, double spin)
     double bend = t->EI / (r2 * r2) * s.lam4;
     double k0_tt = bend + pre / r2 * s.lam2 + k_r1;
     double k0_ss = k_r1 + k_r2 + shear / r2 * s.lam2;
-    e.k_tt = k0_tt + centrifugal / r2 * s.lam2 - t->rhoA * (spin * spin);
-    e.k_ss = k0_ss - t->m_s * (spin * spin);
-    e.k_ts = -k_r1;
+    double k0_ts = -k_r1;
+    /* material damping on the lumped structure: the tie is elastic only */
     e.c_tt = t->alpha * t->rhoA + t->beta * k0_tt;
     e.c_ss = t->alpha * t->m_s + t->beta * k0_ss;
     e.c_ts = -t->beta * k_r1;
+    if (t->sidewall_max_order > 0.0 && fabs((double)s.order) > t->sidewall_max_order) {
+        /* dispersion.sidewall_tie: the sidewall rides on the tread above sidewall_max_order */
+        double ratio = k_r1 / k0_ss;
+        double p = SPEC_SIDEWALL_TIE_FACTOR * (k0_tt + k0_ss);
+        k0_tt = k0_tt + p * ratio * ratio;
+        k0_ss = k0_ss + p;
+        k0_ts = -(p * ratio) - k_r1;
+    }
+    e.k_tt = k0_tt + centrifugal / r2 * s.lam2 - t->rhoA * (spin * spin);
+    e.k_ss = k0_ss - t->m_s * (spin * spin);
+    e.k_ts = k0_ts;
     return e;
 }
 

@@ -54,6 +54,7 @@
 #define SPEC_N_MODES_LIMIT 100000
 #define SPEC_MIN_ROLLING_SPEED_M_S 0.001
 #define SPEC_MIN_LAW_PRESSURE_PA 10000.0
+#define SPEC_SIDEWALL_TIE_FACTOR 100.0
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -62,7 +63,7 @@
 #define SPEC_BLOCK_OUTPUTS_FIRST 4
 #define SPEC_BLOCK_N_OUTPUTS 6
 #define SPEC_BLOCK_IN_CONTACT 10
-#define SPEC_N_VARIABLES 35
+#define SPEC_N_VARIABLES 36
 #define SPEC_VR_RIM_Z 0
 #define SPEC_VR_RIM_VZ 1
 #define SPEC_VR_ROAD_Z 2
@@ -96,8 +97,9 @@
 #define SPEC_VR_ALPHA 30
 #define SPEC_VR_BETA 31
 #define SPEC_VR_SIDEWALL_SHEAR 32
-#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 33
-#define SPEC_VR_REFERENCE_PRESSURE 34
+#define SPEC_VR_SIDEWALL_MAX_ORDER 33
+#define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 34
+#define SPEC_VR_REFERENCE_PRESSURE 35
 
 typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;
 typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;
@@ -143,6 +145,7 @@ static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {
     {"alpha", SPEC_REAL, SPEC_PARAMETER, 8.2e-05, "1/s"},
     {"beta", SPEC_REAL, SPEC_PARAMETER, 0.00011, "s"},
     {"sidewall_shear", SPEC_REAL, SPEC_PARAMETER, 0.0, "N"},
+    {"sidewall_max_order", SPEC_REAL, SPEC_PARAMETER, 0.0, ""},
     {"sidewall_pressure_exponent", SPEC_REAL, SPEC_PARAMETER, 0.0, ""},
     {"reference_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa"},
 };
@@ -154,25 +157,26 @@ typedef struct {
     const char* description;
     const char* range_text;
     double low, high;
-    int low_inclusive;
+    int low_inclusive, integer;
 } SpecField;
 
-#define SPEC_N_TIRE_FIELDS 14
+#define SPEC_N_TIRE_FIELDS 15
 static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
-    {"R", "m", "tread (belt) radius", "(0.1, 3] m", 0.1, 3.0, 0},
-    {"b", "m", "tread width", "(0.01, 2] m", 0.01, 2.0, 0},
-    {"inflation_pressure", "Pa", "inflation pressure p0", "[0, 3e+06] Pa", 0.0, 3000000.0, 1},
-    {"rhoA", "kg/m", "tread mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1},
-    {"m_s", "kg/m", "sidewall mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1},
-    {"k_r1", "N/m^2", "tread-sidewall radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0},
-    {"k_r2", "N/m^2", "sidewall-rim radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0},
-    {"EI", "N*m^2", "tread bending stiffness", "(0, 1e+08] N*m^2", 0.0, 100000000.0, 0},
-    {"k_cw", "N/m^2", "contact-patch radial stiffness per metre", "[10000, 1e+13] N/m^2", 10000.0, 10000000000000.0, 1},
-    {"alpha", "1/s", "mass-proportional damping coefficient", "[0, 1000] 1/s", 0.0, 1000.0, 1},
-    {"beta", "s", "stiffness-proportional damping coefficient", "[0, 0.1] s", 0.0, 0.1, 1},
-    {"sidewall_shear", "N", "circumferential shear stiffness between neighbouring sidewall masses (0 = the paper's lumped sidewall)", "[0, 1e+09] N", 0.0, 1000000000.0, 1},
-    {"sidewall_pressure_exponent", "", "exponent e of the sidewall stiffness law: k_r1, k_r2 and sidewall_shear scale with (inflation_pressure/reference_pressure)^e (0 = off, the paper's pressure-free sidewall)", "[0, 3]", 0.0, 3.0, 1},
-    {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1},
+    {"R", "m", "tread (belt) radius", "(0.1, 3] m", 0.1, 3.0, 0, 0},
+    {"b", "m", "tread width", "(0.01, 2] m", 0.01, 2.0, 0, 0},
+    {"inflation_pressure", "Pa", "inflation pressure p0", "[0, 3e+06] Pa", 0.0, 3000000.0, 1, 0},
+    {"rhoA", "kg/m", "tread mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1, 0},
+    {"m_s", "kg/m", "sidewall mass per metre of circumference", "[1e-06, 10000] kg/m", 1e-06, 10000.0, 1, 0},
+    {"k_r1", "N/m^2", "tread-sidewall radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0, 0},
+    {"k_r2", "N/m^2", "sidewall-rim radial stiffness per metre", "(0, 1e+12] N/m^2", 0.0, 1000000000000.0, 0, 0},
+    {"EI", "N*m^2", "tread bending stiffness", "(0, 1e+08] N*m^2", 0.0, 100000000.0, 0, 0},
+    {"k_cw", "N/m^2", "contact-patch radial stiffness per metre", "[10000, 1e+13] N/m^2", 10000.0, 10000000000000.0, 1, 0},
+    {"alpha", "1/s", "mass-proportional damping coefficient", "[0, 1000] 1/s", 0.0, 1000.0, 1, 0},
+    {"beta", "s", "stiffness-proportional damping coefficient", "[0, 0.1] s", 0.0, 0.1, 1, 0},
+    {"sidewall_shear", "N", "circumferential shear stiffness between neighbouring sidewall masses (0 = the paper's lumped sidewall)", "[0, 1e+09] N", 0.0, 1000000000.0, 1, 0},
+    {"sidewall_max_order", "", "highest circumferential order n in which the sidewall moves on its own; above it the sidewall is tied to the tread's static shape (0 = every order, the paper's lumped sidewall)", "[0, 100000]", 0.0, 100000.0, 1, 1},
+    {"sidewall_pressure_exponent", "", "exponent e of the sidewall stiffness law: k_r1, k_r2 and sidewall_shear scale with (inflation_pressure/reference_pressure)^e (0 = off, the paper's pressure-free sidewall)", "[0, 3]", 0.0, 3.0, 1, 0},
+    {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1, 0},
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
@@ -329,6 +333,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_REASON "%s (%s)"
 #define SPEC_MSG_FIELD_NOT_FINITE "%s = %s: must be a finite number in %s (%s)"
 #define SPEC_MSG_FIELD_RANGE "%s = %s: must be in %s (%s)"
+#define SPEC_MSG_FIELD_INTEGER "%s = %s: must be an integer in %s (%s)"
 #define SPEC_MSG_PRESSURE_LAW "inflation_pressure = %s: must be at least %g Pa, or sidewall_pressure_exponent = 0 (with sidewall_pressure_exponent = %g the pressure law would leave the sidewall almost without stiffness)"
 #define SPEC_MSG_ELEMENTS_RANGE "n_elements = %d: must be an integer in [%d, %d] (the 5-point bending stencil needs at least 8 nodes around the ring; meshes above 1600 cost too much time and memory to build)"
 #define SPEC_MSG_NOT_NONNEGATIVE "%s = %s: must be a finite number >= 0 %s"
@@ -343,7 +348,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_STIFF_TERM_EI "the tread's bending EI at the mesh's shortest wavelength"
 #define SPEC_MSG_STIFF_TERM_INFLATION_PRESSURE "the tread's inflation tension at the mesh's shortest wavelength"
 #define SPEC_MSG_STIFF_TERM_SIDEWALL_SHEAR "the sidewall on k_r1 + k_r2 and its shear"
-#define SPEC_MSG_SUPERCRITICAL "speed = %s: must be below the critical (standing-wave) speed %.4g m/s of this mesh (n_elements = %d); a finer mesh lowers it, sidewall_shear > 0 raises it, allow_supercritical runs anyway"
+#define SPEC_MSG_SUPERCRITICAL "speed = %s: must be below the critical (standing-wave) speed %.4g m/s of this mesh (n_elements = %d); with sidewall_max_order = 0 a finer mesh lowers it, sidewall_max_order = 8 (the GL073A_tied tire) makes it converge, allow_supercritical runs anyway"
 #define SPEC_MSG_NEAR_CRITICAL "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): sidewall modes near zero frequency dominate the response"
 #define SPEC_MSG_ZONE_RANGE "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of the ring either side of the contact centre)"
 #define SPEC_MSG_ZONE_TOO_SHORT "contact_zone_length = %s: must be at least %.4g m (one node either side), or refine the mesh (it holds only the centre node of a mesh of %d elements)"

@@ -25,7 +25,7 @@ const Memory* mem_default(void); /* calloc and free */
 /* -- tire data and operating point ---------------------------------------------------------- */
 typedef struct {
     double R, b, inflation_pressure, rhoA, m_s, k_r1, k_r2, EI, k_cw, alpha, beta;
-    double sidewall_shear, sidewall_pressure_exponent, reference_pressure;
+    double sidewall_shear, sidewall_max_order, sidewall_pressure_exponent, reference_pressure;
 } Tire;
 
 double tire_stiffness_factor(const Tire* tire);  /* the pressure law's (p0/p_ref)^e */

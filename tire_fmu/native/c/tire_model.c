@@ -130,6 +130,7 @@ static void tire_from_values(const double* values, Tire* t)
     t->alpha = values[SPEC_VR_ALPHA];
     t->beta = values[SPEC_VR_BETA];
     t->sidewall_shear = values[SPEC_VR_SIDEWALL_SHEAR];
+    t->sidewall_max_order = values[SPEC_VR_SIDEWALL_MAX_ORDER];
     t->sidewall_pressure_exponent = values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT];
     t->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
 }
@@ -169,6 +170,10 @@ static int plain_problems(const double* values, Problems* p)
         if (below || value > f->high) {
             value_text(value, f->unit, text, sizeof text);
             PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, text, f->range_text, f->description);
+            tire_problems++;
+        } else if (f->integer && value != floor(value)) {
+            value_text(value, f->unit, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_INTEGER, f->name, text, f->range_text, f->description);
             tire_problems++;
         }
     }
