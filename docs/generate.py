@@ -179,13 +179,12 @@ def pressure_law_table() -> str:
 def tied_sidewall_table() -> str:
     import numpy as np
 
-    from tire_fmu.core import TireParameters
     from tire_fmu.core.analytic import analytic_modes
     from tire_fmu.core.dispersion import body_frequencies
     from tire_fmu.core.standing_waves import critical_speed
     from tire_fmu.tire_files import read_tire_file
 
-    paper, tied = TireParameters(sidewall_max_order=0.0), read_tire_file("GL073A_tied").tire
+    paper, tied = read_tire_file("GL073A").tire, read_tire_file("GL073A_tied").tire
     top = int(tied.sidewall_max_order)
     meshes = (100, 200, 400, 800, 1600)
     lines = ["| tire | " + " | ".join(f"N = {n}" for n in meshes) + " | continuum |",

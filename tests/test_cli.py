@@ -16,6 +16,7 @@ from tire_fmu.core import (
     DEFAULT_LOAD_N,
     OperatingPoint,
     ParameterError,
+    TireParameters,
     analytic_modes,
     build_model,
     critical_speed,
@@ -173,20 +174,26 @@ def test_speed_sweep_json_equals_the_study(capsys, tire):
     same(data, speed_sweep(tire, 60, np.linspace(0, 20, 3), 0.204, 200.0, 6))
 
 
-def test_speed_sweep_default_stops_below_a_fine_meshes_critical_speed(capsys, tire):
-    code, out, _ = run(capsys, "speed-sweep", "--elements", "200", "--steps", "2", "--nmax", "2")
+def test_speed_sweep_default_stops_below_a_fine_meshes_critical_speed(capsys):
+    paper = ("--tire-file", "GL073A")  # the lumped sidewall: 21.5 m/s at N = 200
+    code, out, _ = run(capsys, "speed-sweep", "--elements", "200", "--steps", "2", "--nmax", "2",
+                       *paper)
     assert code == 0
     assert "critical speed" in out and "95 %" in out
-    data = run_json(capsys, "speed-sweep", "--elements", "200", "--steps", "2", "--nmax", "2")
-    assert data["speeds_m_s"][-1] == pytest.approx(0.95 * critical_speed(tire, 200).speed_m_s)
+    data = run_json(capsys, "speed-sweep", "--elements", "200", "--steps", "2", "--nmax", "2",
+                    *paper)
+    lumped = TireParameters(sidewall_max_order=0.0)
+    assert data["speeds_m_s"][-1] == pytest.approx(0.95 * critical_speed(lumped, 200).speed_m_s)
 
 
 def test_critical_speed_json_and_text(capsys, tire):
     assert run_json(capsys, "critical-speed") == to_jsonable(critical_speed(tire, 100).to_dict())
     code, out, _ = run(capsys, "critical-speed")
-    assert code == 0 and "lumped" in out and "sidewall_shear" in out
+    assert code == 0 and "tied to the tread" in out and "converges" in out
     for n in (50, 100, 200, 400):
         assert f"{critical_speed(tire, n).speed_m_s:.4g}" in out
+    code, out, _ = run(capsys, "critical-speed", "--tire-file", "GL073A")
+    assert code == 0 and "lumped" in out and "sidewall_shear" in out
     sheared = run_json(capsys, "critical-speed", "--tire", "sidewall_shear=1e5")
     assert sheared["critical_speed_m_s"] > 100
 
@@ -292,11 +299,14 @@ BAD_INPUTS = [
     (["analytic", "--nmax", "-1", "--inflation-pressure", "-3"],
      ["--nmax = -1", "--inflation-pressure = -3"]),
     (["modes", "--max-frequency", "-1"], ["--max-frequency = -1"]),
-    (["speed-sweep", "--max-speed", "60"], ["--max-speed = 60", "critical speed 42.67"]),
-    (["dispersion", "--speed", "50", "--patch-length", "0.204"],
+    # the paper's lumped sidewall, whose critical speed falls with the mesh
+    (["speed-sweep", "--max-speed", "60", "--tire-file", "GL073A"],
+     ["--max-speed = 60", "critical speed 42.67"]),
+    (["dispersion", "--speed", "50", "--patch-length", "0.204", "--tire-file", "GL073A"],
      ["--speed = 50", "critical speed 42.67"]),
-    (["dispersion", "--patch-length", "0.204", "--elements", "200"],
+    (["dispersion", "--patch-length", "0.204", "--elements", "200", "--tire-file", "GL073A"],
      ["default --speed = 40.84", "critical speed 21.49"]),
+    (["modes", "--speed", "90"], ["--speed = 90", "speed 83.36 m/s of this mesh"]),
     # tiny values: named with their range, not as a critical speed of 0 m/s, a load in
     # [0, 0] N or a singular matrix
     (["modes", "--tire", "rhoA=1e-301"], ["rhoA = 1e-301 kg/m", "[1e-06, 10000] kg/m"]),
@@ -318,7 +328,8 @@ BAD_INPUTS = [
       "--point-spacing = 2", "--load = -5", "6 problems"]),
     (["cleat", "--elements-list", "100", "--zone-length", "0.3"],
      ["--zone-length = 0.3 m: must be at least", "meets the undeformed tread"]),
-    (["cleat", "--elements-list", "800"], ["--speed = 10 m/s: must be below the critical"]),
+    (["cleat", "--elements-list", "800", "--tire-file", "GL073A"],
+     ["--speed = 10 m/s: must be below the critical"]),
 ]
 
 
@@ -603,8 +614,8 @@ def test_export_writes_to_an_unwritable_path_naming_out(capsys):
 
 
 def test_the_speed_error_names_the_command_line_flag(capsys):
-    code, _, err = run(capsys, "modes", "--speed", "50")
-    line = _one_line(err, "tire-fmu modes: error: --speed = 50 m/s: must be below the critical")
+    code, _, err = run(capsys, "modes", "--speed", "90")
+    line = _one_line(err, "tire-fmu modes: error: --speed = 90 m/s: must be below the critical")
     assert "--allow-supercritical runs anyway" in line and "(--elements = 100)" in line
     assert not re.search(r"(?<!-)allow_supercritical", line)
 

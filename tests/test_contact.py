@@ -2,6 +2,8 @@
 per order against the assembled ring, and the time stepping (lift-off, landing, energy,
 substeps, state) against the linearised model and an unreduced integration."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 import scipy.optimize as so
@@ -186,12 +188,16 @@ def test_free_ring_per_order_equals_the_assembled_ring(tire, n_elements, speed):
     assembled = np.stack(assembled, axis=-1)
     # relative to each input-output pair's size over the band, with a floor at the input's
     # largest response (pairs zero by symmetry carry only rounding)
+    # (the tied sidewall's dense blocks, far stiffer than the ring, raise that rounding by
+    # the ratio of their largest entry to the lumped ring's)
     size = np.abs(assembled).max(axis=2, keepdims=True)
-    scale = np.maximum(size, 1e-7 * size.max(axis=0, keepdims=True))
+    lumped = structural_matrices(replace(tire, sidewall_max_order=0.0), grid, speed / tire.R)
+    rounding = 1e-7 * np.abs(k).max() / np.abs(lumped.stiffness.toarray()).max()
+    scale = np.maximum(size, rounding * size.max(axis=0, keepdims=True))
     assert np.max(np.abs(modal - assembled) / scale) < 1e-6
     dc = np.linalg.solve(k, b_z)
     np.testing.assert_allclose(ring.static_gain[3:], (l_u @ dc + direct_r)[3:], rtol=1e-9,
-                               atol=1e-14)
+                               atol=1e-7 * rounding)
     assert ring.n_states == 4 * n_elements  # every mode of the 2N-DOF ring, O(N) to build
 
 

@@ -118,6 +118,8 @@ def random_case(rng: np.random.Generator) -> dict:
         value = getattr(base, name)
         if name == "sidewall_shear":
             value = 0.0 if rng.random() < 0.5 else float(10 ** rng.uniform(3, 5.5))
+        elif name == "sidewall_max_order":  # lumped, or tied above a low order
+            value = 0.0 if rng.random() < 0.5 else float(rng.integers(1, 13))
         elif name == "sidewall_pressure_exponent":
             value = 0.0 if rng.random() < 0.7 else float(rng.uniform(0.2, 1.5))
         elif value > 0:

@@ -99,8 +99,11 @@ def test_critical_speed_explains_the_shear_tire_with_its_wave_speed(capsys):
     shear = read_tire_file("GL073A_shear").tire
     assert f"{np.sqrt(shear.sidewall_shear / shear.m_s):.4g} m/s" in sheared
     assert "artefact of the lumped sidewall" not in sheared
-    assert main(["critical-speed", "--elements", "40"]) == 0
+    assert main(["critical-speed", "--elements", "40", "--tire-file", "GL073A"]) == 0
     assert "artefact of the lumped sidewall" in capsys.readouterr().out
+    assert main(["critical-speed", "--elements", "40"]) == 0  # the default, tied sidewall
+    tied = capsys.readouterr().out
+    assert "artefact of the lumped sidewall" not in tied and "§8.10" in tied
 
 
 # -- the shipped mode table -------------------------------------------------------------------

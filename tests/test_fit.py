@@ -23,9 +23,12 @@ from tire_fmu.core.modal import real_modes
 from tire_fmu.core.parameters import DEFAULT_LOAD_N, OperatingPoint
 from tire_fmu.measurements import MeasurementError, modes_text, parse_modes
 
+#: The paper's tire: the fit identifies the lumped sidewall's parameters from its modes (a
+#: tied sidewall has no sidewall mode above its top order).
+PAPER = TireParameters(sidewall_max_order=0.0)
 FREE = ("m_s", "k_r1", "k_r2", "EI", "b")
 ORDERS = range(10)  # 20 modes
-START = replace(TireParameters(), m_s=13.0, k_r1=5.0e6, k_r2=6.0e6, EI=40.0, b=0.28)
+START = replace(PAPER, m_s=13.0, k_r1=5.0e6, k_r2=6.0e6, EI=40.0, b=0.28)
 
 
 def noisy(modes, level, seed):
@@ -36,7 +39,7 @@ def noisy(modes, level, seed):
 
 @pytest.mark.parametrize("seed", range(5))
 def test_noisy_frequencies_are_fitted_back_within_3_percent_where_determined(seed):
-    true = TireParameters()
+    true = PAPER
     result = fit_tire(noisy(modes_of(true, ORDERS), 0.005, seed), FREE, START)
     assert result.success and result.rank == len(FREE) and not result.undetermined
     determined = [n for n in FREE if n not in result.weakly_determined]
@@ -53,7 +56,7 @@ def test_noisy_frequencies_are_fitted_back_within_3_percent_where_determined(see
 
 
 def test_exact_data_are_recovered_to_solver_precision():
-    true = TireParameters()
+    true = PAPER
     result = fit_tire(modes_of(true, ORDERS), FREE, START)
     for name in FREE:
         assert getattr(result.tire, name) == pytest.approx(getattr(true, name), rel=1e-7)
@@ -64,7 +67,7 @@ def test_the_report_flags_what_frequencies_cannot_see():
     """Scaling every line quantity together leaves every frequency unchanged, and k_cw does
     not act on the undeformed tire: the Jacobian has rank 5 of 7 and names both."""
     free = ("rhoA", "m_s", "k_r1", "k_r2", "EI", "b", "k_cw")
-    result = fit_tire(noisy(modes_of(TireParameters(), ORDERS), 0.005, 0), free, START)
+    result = fit_tire(noisy(modes_of(PAPER, ORDERS), 0.005, 0), free, START)
     assert result.rank == 5
     assert set(result.undetermined) == set(free)
     assert np.all(np.isinf(result.log_std))
@@ -73,7 +76,7 @@ def test_the_report_flags_what_frequencies_cannot_see():
     assert np.allclose(shares / shares[0], 1.0, atol=1e-4)  # all scale alike
     assert any(set(d) == {"k_cw"} for d in result.null_directions)
     # fixing the tread mass (weighed) makes the rest determinable again
-    fixed = fit_tire(noisy(modes_of(TireParameters(), ORDERS), 0.005, 0), free[1:6], START)
+    fixed = fit_tire(noisy(modes_of(PAPER, ORDERS), 0.005, 0), free[1:6], START)
     assert fixed.rank == 5 and not fixed.undetermined
 
 
@@ -83,7 +86,7 @@ def test_fewer_modes_than_free_parameters_leave_a_null_space_the_report_names(tm
     from tire_fmu.cli import main
 
     free = ("m_s", "k_r1", "k_r2", "EI")
-    modes = modes_of(TireParameters(), [2])
+    modes = modes_of(PAPER, [2])
     result = fit_tire(modes, free, START)
     assert result.rank <= len(modes) < len(free)
     assert len(result.null_directions) == len(free) - result.rank
@@ -97,14 +100,14 @@ def test_fewer_modes_than_free_parameters_leave_a_null_space_the_report_names(tm
 
 
 def test_pressure_and_width_enter_only_as_their_product():
-    result = fit_tire(modes_of(TireParameters(), ORDERS), ("b", "inflation_pressure", "k_r1"))
+    result = fit_tire(modes_of(PAPER, ORDERS), ("b", "inflation_pressure", "k_r1"), PAPER)
     (direction,) = result.null_directions
     assert set(direction) == {"b", "inflation_pressure"}
     assert direction["b"] == pytest.approx(-direction["inflation_pressure"], rel=1e-4)
 
 
 def test_fdm_frequencies_are_the_assembled_models():
-    tire = TireParameters(sidewall_shear=5e3)
+    tire = TireParameters(sidewall_shear=5e3, sidewall_max_order=0.0)
     low, high = model_frequencies_hz(tire, range(6), n_elements=40)
     model = build_model(tire, OperatingPoint(n_elements=40, patch_length_m=0.0))
     result = real_modes(model, f_max_hz=400.0)
@@ -115,7 +118,7 @@ def test_fdm_frequencies_are_the_assembled_models():
 
 
 def test_fitting_on_a_mesh_absorbs_its_discretisation_error():
-    true = TireParameters()
+    true = PAPER
     measured = modes_of(true, ORDERS)  # the continuum tire
     on_mesh = fit_tire(measured, FREE, START, n_elements=40)
     analytic = fit_tire(measured, FREE, START)
@@ -135,9 +138,9 @@ def test_fitting_on_a_mesh_absorbs_its_discretisation_error():
 
 
 def test_damping_ratios_fit_alpha_and_beta():
-    true = TireParameters()
+    true = PAPER
     modes = modes_of(true, ORDERS, damping=True)
-    start = replace(TireParameters(), alpha=1.0, beta=3e-4)
+    start = replace(PAPER, alpha=1.0, beta=3e-4)
     result = fit_tire(modes, ("alpha", "beta"), start)
     assert result.tire.beta == pytest.approx(true.beta, rel=1e-6)
     assert result.tire.alpha == pytest.approx(true.alpha, rel=1e-3)
@@ -148,7 +151,7 @@ def test_damping_ratios_fit_alpha_and_beta():
 def test_static_stiffness_and_footprint_pin_the_scale():
     """Frequencies cannot fix the scale of the line quantities; a measured vertical stiffness
     and footprint can (the static contact comes from the one function static_contact)."""
-    true = TireParameters()
+    true = PAPER
     stiffness, length = static_contact(true, DEFAULT_LOAD_N, 40)
     static = StaticMeasurement(DEFAULT_LOAD_N, stiffness, length, n_elements=40)
     free = ("rhoA", "m_s", "k_r1", "k_r2", "b")
@@ -161,8 +164,8 @@ def test_static_stiffness_and_footprint_pin_the_scale():
 
 
 def test_minimax_lowers_the_largest_residual():
-    true = TireParameters(sidewall_shear=8e3)
-    target = modes_of(TireParameters(), [0, 1, 2, 3, 4, 5, 6, 8])
+    true = TireParameters(sidewall_shear=8e3, sidewall_max_order=0.0)
+    target = modes_of(PAPER, [0, 1, 2, 3, 4, 5, 6, 8])
     squares = fit_tire(target, ("m_s", "k_r1", "k_r2", "b"), true)
     minimax = fit_tire(target, ("m_s", "k_r1", "k_r2", "b"), true, criterion="max")
     largest = np.max(np.abs(minimax.residual_percent))
@@ -175,7 +178,7 @@ def test_every_setup_problem_is_reported_at_once():
     modes = [MeasuredMode(2, "in", 68.0), MeasuredMode(2, "in", 69.0, label="row 2"),
              MeasuredMode(80, "sideways", -1.0, weight=0.0, damping_ratio=2.0, label="row 3")]
     with pytest.raises(FitError) as caught:
-        fit_tire(modes, ("k_r1", "nonsense", "alpha"), replace(TireParameters(), alpha=0.0),
+        fit_tire(modes, ("k_r1", "nonsense", "alpha"), replace(PAPER, alpha=0.0),
                  n_elements=100)
     text = str(caught.value)
     for expected in ("'nonsense'", "alpha = 0", "row 2: order 2 in-phase already given",
@@ -188,7 +191,7 @@ def test_every_setup_problem_is_reported_at_once():
 # -- tables ---------------------------------------------------------------------------------
 
 def test_a_table_round_trips():
-    modes = modes_of(TireParameters(), range(4), damping=True)
+    modes = modes_of(PAPER, range(4), damping=True)
     back = parse_modes(modes_text(modes))
     assert [(m.order, m.branch, m.frequency_hz, m.damping_ratio) for m in back] == \
         [(m.order, m.branch, m.frequency_hz, m.damping_ratio) for m in modes]
@@ -229,9 +232,10 @@ def test_fit_command_writes_a_tire_file_that_reproduces_the_fit(tmp_path, capsys
     from tire_fmu.tire_files import read_tire_file
 
     table = tmp_path / "measured.csv"
-    table.write_text(modes_text(noisy(modes_of(TireParameters(), ORDERS), 0.005, 3)))
+    table.write_text(modes_text(noisy(modes_of(PAPER, ORDERS), 0.005, 3)))
     out = tmp_path / "fitted.toml"
-    code = main(["fit", str(table), "--free", "m_s,k_r1,k_r2,b", "--tire", "k_r1=5e6",
+    code = main(["fit", str(table), "--free", "m_s,k_r1,k_r2,b", "--tire-file", "GL073A",
+                 "--tire", "k_r1=5e6",
                  "--out", str(out), "--name", "test tire", "--plot", str(tmp_path / "f.png"),
                  "--json"])
     assert code == 0
@@ -241,6 +245,21 @@ def test_fit_command_writes_a_tire_file_that_reproduces_the_fit(tmp_path, capsys
     assert written.tire.as_dict() == data["tire"]  # exact: floats round-trip through TOML
     assert (tmp_path / "f.png").stat().st_size > 10_000
     assert [p["status"] for p in data["parameters"]] == ["determined"] * 4
+
+
+def test_a_tied_sidewall_refuses_sidewall_modes_above_its_top_order(tmp_path, capsys):
+    """The default tire ties the sidewall above order 8: a measured out-of-phase mode of
+    order 9 has nothing to fit, which the fit says (naming the mode and the remedy) instead of
+    reporting every parameter weak."""
+    from tire_fmu.cli import main
+
+    table = tmp_path / "measured.csv"
+    table.write_text(modes_text(modes_of(PAPER, ORDERS)))
+    assert main(["fit", str(table), "--free", "m_s,k_r1"]) == 2
+    err = capsys.readouterr().err
+    assert "row 20" in err and "sidewall_max_order = 8" in err and "GL073A" in err
+    assert main(["fit", str(table), "--free", "m_s,k_r1", "--tire-file", "GL073A",
+                 "--json"]) == 0
 
 
 def test_fit_command_errors_are_one_line(tmp_path, capsys):
@@ -270,7 +289,7 @@ def test_shear_variant_matches_the_paper_table_on_its_mesh_and_rolls_above_rated
 
     tire = read_tire_file("GL073A_shear").tire
     assert tire.sidewall_shear > 0
-    paper = analytic_modes(TireParameters(), PAPER_ORDERS)
+    paper = analytic_modes(PAPER, PAPER_ORDERS)
     low, high = model_frequencies_hz(tire, PAPER_ORDERS, 100)
     assert np.max(np.abs(low / paper.in_phase_hz - 1)) < 0.01
     assert np.max(np.abs(high / paper.out_of_phase_hz - 1)) < 0.01
@@ -302,7 +321,7 @@ def test_shipped_modes_table_is_the_papers_analytic_table():
     from tire_fmu.tire_files import shipped_tire_path
 
     modes = read_modes(shipped_tire_path("GL073A").with_name("GL073A_modes.csv"))
-    paper = analytic_modes(TireParameters(), PAPER_ORDERS)
+    paper = analytic_modes(PAPER, PAPER_ORDERS)
     expected = dict(zip(PAPER_ORDERS, paper.in_phase_hz)) | {
         (n, "out"): f for n, f in zip(PAPER_ORDERS, paper.out_of_phase_hz)}
     for m in modes:
@@ -314,7 +333,7 @@ def test_shipped_modes_table_is_the_papers_analytic_table():
 # -- sidewall stiffness against inflation pressure ------------------------------------------
 
 def test_pressure_law_is_off_by_default_and_scales_the_sidewall_when_on():
-    paper = TireParameters()
+    paper = PAPER
     assert paper.sidewall_stiffness_factor == 1.0
     law = TireParameters(sidewall_pressure_exponent=0.9, inflation_pressure=3.95e5,
                          sidewall_shear=1e4)

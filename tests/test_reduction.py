@@ -7,7 +7,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from tire_fmu.core import OperatingPoint, ParameterError, build_model
+from tire_fmu.core import OperatingPoint, ParameterError, TireParameters, build_model
 from tire_fmu.core.io_model import OUTPUTS as OUTPUT_NAMES
 from tire_fmu.core.io_model import build_io_model, physical_input
 from tire_fmu.core.modal_form import diagonalise, modal_frequency_response
@@ -28,6 +28,13 @@ from tire_fmu.model_files import (
     save_npz,
     state_space_matrices,
 )
+
+
+@pytest.fixture(scope="module")
+def tire():
+    """The paper's tire (GL073A, its lumped sidewall): this module checks the paper's model."""
+    return TireParameters(sidewall_max_order=0.0)
+
 
 PAPER_SPEED = 20 * np.pi * 0.65
 
@@ -71,6 +78,21 @@ def test_keeping_every_mode_reproduces_the_full_model(small_models):
         assert reduced.n_states == expected
         assert reduced.report.reference == "exact"
         assert reduced.report.max_relative_error < 1e-8
+
+
+@pytest.mark.parametrize("speed", [0.0, 15.0])
+def test_a_tied_sidewall_reduces_exactly_through_the_general_eigenproblem(speed):
+    """The default tire's tie has no damper, so its damping is not proportional: at rest too
+    the reduction takes the general eigenproblem, keeping both mirror classes, and with every
+    mode kept it is the full model."""
+    tied = TireParameters()  # GL073A_tied
+    assert tied.sidewall_max_order == 8.0
+    model = build_model(tied, OperatingPoint(n_elements=48, patch_length_m=0.204,
+                                             speed_m_s=speed))
+    assert model.sidewall_tied
+    reduced = reduce(model, ReductionSettings(target_error=0.0, f_max_hz=1e6), report="exact")
+    assert reduced.n_states == 4 * model.n_elements
+    assert reduced.report.max_relative_error < 1e-8
 
 
 def test_rest_fast_path_equals_the_general_eigensolver(small_models):

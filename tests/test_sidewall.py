@@ -21,7 +21,7 @@ from tire_fmu.core.standing_waves import critical_speed
 from tire_fmu.tire_files import read_tire_file, shipped_tire_path
 
 TOP = 8  # the highest order GL073A_modes.csv holds
-PAPER = TireParameters()
+PAPER = TireParameters(sidewall_max_order=0.0)
 TIED = replace(PAPER, sidewall_max_order=float(TOP))
 
 

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from tire_fmu.core import OperatingPoint, ParameterError, build_model, real_modes
+from tire_fmu.core import OperatingPoint, ParameterError, TireParameters, build_model, real_modes
 from tire_fmu.core.dispersion import body_frequencies
 from tire_fmu.core.studies import (
     convergence_study,
@@ -14,6 +14,12 @@ from tire_fmu.core.studies import (
     patch_sweep,
     speed_sweep,
 )
+
+
+@pytest.fixture(scope="module")
+def tire():
+    """The paper's tire (GL073A, its lumped sidewall): this module checks the paper's model."""
+    return TireParameters(sidewall_max_order=0.0)
 
 
 @pytest.fixture(scope="module")

@@ -22,11 +22,15 @@ from tire_fmu.tire_files import (
 )
 
 
-def test_the_shipped_gl073a_file_is_the_defaults_exactly():
-    shipped = read_tire_file("GL073A")
-    assert shipped.tire == TireParameters()
+def test_the_shipped_gl073a_files_are_the_defaults_exactly():
+    """GL073A_tied is the default tire; GL073A is the paper's, the same data with the
+    lumped sidewall (sidewall_max_order = 0)."""
+    tied, shipped = read_tire_file("GL073A_tied"), read_tire_file("GL073A")
+    assert tied.tire == TireParameters()
     for f in fields(TireParameters):  # bit for bit, not approximately
-        assert getattr(shipped.tire, f.name) == f.default
+        assert getattr(tied.tire, f.name) == f.default
+        paper = 0.0 if f.name == "sidewall_max_order" else f.default
+        assert getattr(shipped.tire, f.name) == paper
     assert shipped.defaulted == () and shipped.name == "GL073A"
     assert "Liu" in shipped.source
     assert shipped_tire_path("gl073a") == shipped.path  # names are case-insensitive

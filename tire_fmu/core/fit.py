@@ -266,6 +266,12 @@ def fit_problems(modes: Sequence[MeasuredMode], free: Sequence[str], start: Tire
             problems.append(f"{m.name}: branch {m.branch!r} must be 'in' or 'out'")
         if not (isinstance(m.order, (int, np.integer)) and m.order >= 0):
             problems.append(f"{m.name}: order {m.order!r} must be an integer >= 0")
+        elif m.branch == "out" and 0 < start.sidewall_max_order < m.order:
+            problems.append(f"{m.name}: the tire's sidewall is tied to the tread above "
+                            f"sidewall_max_order = {start.sidewall_max_order:g}, so it has no "
+                            f"out-of-phase (sidewall) mode of order {m.order}; fit with "
+                            f"sidewall_max_order = 0 or >= {m.order} (--tire "
+                            "sidewall_max_order=0, or --tire-file GL073A)")
         elif n_elements is not None and 2 * m.order > n_elements:
             problems.append(f"{m.name}: order {m.order} is not resolved by a mesh of "
                             f"{n_elements} nodes (n <= N/2 = {n_elements // 2})")

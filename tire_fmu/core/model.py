@@ -320,7 +320,7 @@ def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = 
     if CRITICAL_SPEED_WARNING_FRACTION * critical <= speed < critical:
         warnings.warn(
             f"speed {speed:g} m/s is {100 * speed / critical:.0f} % of the critical speed "
-            f"{critical:.4g} m/s (n_elements = {op.n_elements}): sidewall modes near zero "
+            f"{critical:.4g} m/s (n_elements = {op.n_elements}): modes near zero ground "
             "frequency dominate the response",
             SupercriticalSpeedWarning,
             stacklevel=2,

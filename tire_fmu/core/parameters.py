@@ -280,7 +280,9 @@ def _pressure_law_problems(values: Mapping[str, Any]) -> list[Problem]:
 
 @dataclass(frozen=True)
 class TireParameters:
-    """In-plane ring tire data (defaults: GL073A 16.00R20 truck tire of the seed paper).
+    """In-plane ring tire data (defaults: GL073A_tied, the GL073A 16.00R20 truck tire of the
+    seed paper with its sidewall tied to the tread above order 8, docs/theory.md §8.10; the
+    paper's own sidewall is ``sidewall_max_order=0``, the shipped GL073A tire file).
 
     ``m_s``, ``k_r1``, ``k_r2`` and ``k_cw`` are per metre of tread circumference; with these
     readings eq. 12 of the paper gives the published frequencies and the total masses are
@@ -299,7 +301,7 @@ class TireParameters:
     alpha: float = 8.2e-5
     beta: float = 1.1e-4
     sidewall_shear: float = 0.0
-    sidewall_max_order: float = 0.0
+    sidewall_max_order: float = 8.0
     sidewall_pressure_exponent: float = 0.0
     reference_pressure: float = 7.9e5
 

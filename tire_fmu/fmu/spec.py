@@ -164,7 +164,7 @@ MESSAGES: dict[str, str] = {
                      "lowers it, sidewall_max_order = 8 (the GL073A_tied tire) makes it "
                      "converge, allow_supercritical runs anyway",
     "NEAR_CRITICAL": "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): "
-                     "sidewall modes near zero frequency dominate the response",
+                     "modes near zero ground frequency dominate the response",
     "ZONE_RANGE": "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of "
                   "the ring either side of the contact centre)",
     "ZONE_TOO_SHORT": "contact_zone_length = %s: must be at least %.4g m (one node either "

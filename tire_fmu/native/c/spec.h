@@ -145,7 +145,7 @@ static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {
     {"alpha", SPEC_REAL, SPEC_PARAMETER, 8.2e-05, "1/s"},
     {"beta", SPEC_REAL, SPEC_PARAMETER, 0.00011, "s"},
     {"sidewall_shear", SPEC_REAL, SPEC_PARAMETER, 0.0, "N"},
-    {"sidewall_max_order", SPEC_REAL, SPEC_PARAMETER, 0.0, ""},
+    {"sidewall_max_order", SPEC_REAL, SPEC_PARAMETER, 8.0, ""},
     {"sidewall_pressure_exponent", SPEC_REAL, SPEC_PARAMETER, 0.0, ""},
     {"reference_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa"},
 };
@@ -349,7 +349,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_STIFF_TERM_INFLATION_PRESSURE "the tread's inflation tension at the mesh's shortest wavelength"
 #define SPEC_MSG_STIFF_TERM_SIDEWALL_SHEAR "the sidewall on k_r1 + k_r2 and its shear"
 #define SPEC_MSG_SUPERCRITICAL "speed = %s: must be below the critical (standing-wave) speed %.4g m/s of this mesh (n_elements = %d); with sidewall_max_order = 0 a finer mesh lowers it, sidewall_max_order = 8 (the GL073A_tied tire) makes it converge, allow_supercritical runs anyway"
-#define SPEC_MSG_NEAR_CRITICAL "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): sidewall modes near zero frequency dominate the response"
+#define SPEC_MSG_NEAR_CRITICAL "speed %g m/s is %.0f %% of the critical speed %.4g m/s (n_elements = %d): modes near zero ground frequency dominate the response"
 #define SPEC_MSG_ZONE_RANGE "contact_zone_length = %s: must be in (0, %.4g] m (at most 60 degrees of the ring either side of the contact centre)"
 #define SPEC_MSG_ZONE_TOO_SHORT "contact_zone_length = %s: must be at least %.4g m (one node either side), or refine the mesh (it holds only the centre node of a mesh of %d elements)"
 #define SPEC_MSG_POINT_SPACING_ALLOWED "in [%g, %g] m"
