@@ -73,8 +73,9 @@ from .parameters import (
 #: Default length of road under the contact zone (m): wide enough for the largest credible
 #: footprint and for a 40 mm cleat to be met before it reaches the footprint.
 DEFAULT_ZONE_LENGTH_M = 0.6
-#: Default largest distance between contact points along the tread (m), and its range: the
-#: operating point's (parameters.DEFAULT_POINT_SPACING_M), under the contact's own name.
+#: Default largest distance between contact points along the tread (m): the operating
+#: point's (parameters.DEFAULT_POINT_SPACING_M, which says what error it leaves over a cleat),
+#: under the contact's own name.
 DEFAULT_CONTACT_POINT_SPACING_M = DEFAULT_POINT_SPACING_M
 #: The zone may reach at most this far around the ring (|θ| < 60°): beyond, the flat-road
 #: ray geometry and the small-deflection ring stop being credible.
