@@ -1,30 +1,38 @@
 """Both FMUs' cost per step through fmpy, each beside its floor, printed side by side in one run.
 
 1. Cost per communication step at h = 1e-4 s: setReal of the 4 inputs, doStep, getReal of the
-   6 Real outputs, in three regimes at N = 100: at rest in contact (a 1 mm, 10 Hz road
-   undulation), at 20 m/s in contact (the same road through the delay line), and at 10 m/s
-   over a 40 mm cleat that lifts the tire off (a cleat every 0.2 s, on a contact zone of
-   0.8 m: the default's end is where such a cleat first meets the tread). Each of
+   6 Real outputs, at N = 100 in four regimes: at rest in contact (a 1 mm, 10 Hz road
+   undulation), at 20 m/s in contact (the same road through the delay line), at 10 m/s over a
+   20 mm x 20 mm cleat with the rim held (core/obstacles.py's cleat read at the zone front as
+   the cleat study reads it, one every 0.5 m of road, so that one is under the tread 46 ms of
+   every 50: the figure is the cost while the tire rolls over it), and in lift-off at 10 m/s
+   (the rim raised 0.1 m, clear of the road: no point pushes). The tire FMUs run each regime
+   at the default contact point spacing and at one point per node (contact_point_spacing =
+   1 m: the node contact of before the contact points). Each of
        (a) TireModal.fmu, the Python FMU (its compiled step kernel, one ctypes call a step),
        (b) a minimal pythonfmu slave built here with the same 4 inputs and 6 outputs (its
            do_step copies): the floor of any Python FMU,
        (c) TireModalNative.fmu, the native FMU (the same kernel in C),
        (d) a trivial C FMU with the same interface (benchmarks/trivial_fmu/trivial.c, its
            doStep copies): fmpy's own call cost, the floor of any C FMU,
-   runs the same precomputed inputs; rounds alternate, so load hits all alike. Aims (issue
-   20): (a) / (b) <= 1.5 and (c) / (d) <= 1.2 in every regime.
-2. Initialisation of the Python FMU (instantiate -> exitInitializationMode) at N = 100 and 400
-   in a warm process (benchmarks/bench_fmu_init.py measures a fresh one).
-3. Real-time factor at 10 kHz (step cost / 100 us) and its inverse.
+   runs the same precomputed inputs; rounds alternate, so load hits all alike; medians. Aims
+   (issue 20, set for the node contact): (a) / (b) <= 1.5 and (c) / (d) <= 1.2.
+2. Initialisation (instantiate -> exitInitializationMode) of both FMUs at N = 100 and 400, at
+   both spacings, in a warm process (the FMU's modules imported by an earlier instance).
+3. First initialisation: the same, each sample in a fresh process on a fresh extraction of
+   the FMU (what a host pays once; benchmarks/bench_fmu_init.py splits the Python FMU's into
+   its phases). ``--init-only`` runs 2 and 3 alone.
+4. Real-time factor at 10 kHz (step cost / 100 us) and its inverse.
 
     python benchmarks/bench_fmu.py [--rounds 15] [--steps 2000] [--init-repeats 3]
-                                   [--record JSON]
+                                   [--init-samples 5] [--init-only] [--record JSON]
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import shutil
 import statistics
 import subprocess
 import sys
@@ -38,6 +46,8 @@ from xml.etree import ElementTree
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
+from tire_fmu.core.obstacles import cleat
+from tire_fmu.core.parameters import DEFAULT_POINT_SPACING_M
 from tire_fmu.fmu.builder import build_fmu
 from tire_fmu.native import build_native_fmu
 from tire_fmu.native.builder import c_folder
@@ -121,32 +131,44 @@ def undulation(t: float) -> list[float]:
     return [0.0, 0.0, 1e-3 * math.sin(w * t), 1e-3 * w * math.cos(w * t)]
 
 
-def cleat(t: float, speed: float = 10.0, height: float = 0.04, length: float = 0.04,
-          ramp: float = 0.005, period: float = 0.2) -> list[float]:
-    """A 40 mm x 40 mm cleat every 0.2 s at 10 m/s, its edges raised-cosine ramps of 5 mm."""
-    x = (t % period) * speed  # road passed the zone front since the cleat's start
-    rise, top = ramp, ramp + length
-
-    def edge(s):  # 0 -> 1 over a ramp, and its derivative by s
-        return 0.5 - 0.5 * math.cos(math.pi * s), 0.5 * math.pi * math.sin(math.pi * s)
-
-    if x < rise:
-        z, dz = edge(x / ramp)
-    elif x < top:
-        z, dz = 1.0, 0.0
-    elif x < top + ramp:
-        z, dz = edge(1.0 - (x - top) / ramp)
-        dz = -dz
-    else:
-        z, dz = 0.0, 0.0
-    return [0.0, 0.0, height * z, height * dz * speed / ramp]
+#: The cleat of the cleat study (docs/theory.md §4.6): 20 mm x 20 mm, rectangular.
+CLEAT = cleat(0.02, 0.02)
+CLEAT_SPEED_M_S = 10.0
+#: A cleat every 0.5 m: the tread meets one from 0.22 m ahead of the contact centre until it
+#: is 0.24 m behind, 46 ms of each 50 ms period.
+CLEAT_PERIOD_S = 0.05
+#: The precomputed inputs repeat after this: whole periods of the undulation and the cleats.
+HORIZON_S = 0.2
+#: Lift-off: the rim raised this far above its static height, clear of the road (the static
+#: deflection is 18.6 mm).
+LIFT_M = 0.1
 
 
-#: regime: (speed, inputs, other parameters). A 40 mm cleat meets the tread 0.25 m ahead of
-#: the contact centre, the end of the default zone: the cleat runs on a longer zone.
-REGIMES = {"at rest, in contact": (0.0, undulation, {}),
-           "20 m/s, in contact": (20.0, undulation, {}),
-           "10 m/s, 40 mm cleat (lift-off)": (10.0, cleat, {"contact_zone_length": 0.8})}
+def over_cleat(t: float) -> list[float]:
+    """The cleat's road at the zone front, rim held: its first edge passes the front at the
+    start of every period; each sample is the cleat's mean over its own step of road, as
+    Obstacle.road_samples gives the cleat study (the slope of a rectangular cleat is 0)."""
+    travelled = (t % CLEAT_PERIOD_S) * CLEAT_SPEED_M_S
+    height, slope = CLEAT.road_samples(travelled, CLEAT_SPEED_M_S * H)
+    return [0.0, 0.0, float(height), float(slope) * CLEAT_SPEED_M_S]
+
+
+def lifted(t: float) -> list[float]:
+    return [LIFT_M, 0.0, 0.0, 0.0]
+
+
+#: regime: (speed, inputs). The cleat meets the undeformed tread 0.22 m ahead of the contact
+#: centre, inside the default zone (0.3 m).
+REGIMES = {"at rest, in contact": (0.0, undulation),
+           "20 m/s, in contact": (20.0, undulation),
+           "10 m/s, 20 mm cleat, rim held": (CLEAT_SPEED_M_S, over_cleat),
+           "10 m/s, lift-off (rim 0.1 m up)": (CLEAT_SPEED_M_S, lifted)}
+#: The tire FMUs' contact point spacings: the default, and one point per node.
+SPACINGS = {f"{DEFAULT_POINT_SPACING_M * 1e3:g} mm points": DEFAULT_POINT_SPACING_M,
+            "1 point per node": 1.0}
+#: The FMUs whose cost depends on the contact points; the floors (b), (d) do not.
+TIRES = ("python", "native")
+INIT_ELEMENTS = (100, 400)
 
 
 class Opened:
@@ -204,92 +226,208 @@ class Case:
         self.slave.freeInstance()
 
 
-def init_time(fmu: Opened, n_elements: int, repeats: int) -> float:
+def init_time(fmu: Opened, parameters: dict, repeats: int) -> float:
+    """Median seconds from instantiate to the end of exitInitializationMode, warm process."""
     times = []
     for _ in range(repeats):
         started = time.perf_counter()
-        slave = fmu.initialised({"n_elements": n_elements})
+        slave = fmu.initialised(parameters)
         times.append(time.perf_counter() - started)
         slave.terminate()
         slave.freeInstance()
     return statistics.median(times)
 
 
+#: Run in a fresh process: one FMU's first initialisation, timed from instantiate.
+FIRST_INIT = """
+import sys, time
+from fmpy import read_model_description
+from fmpy.fmi2 import FMU2Slave
+folder, n_elements, spacing = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+md = read_model_description(folder)
+vr = {v.name: v.valueReference for v in md.modelVariables}
+started = time.perf_counter()
+slave = FMU2Slave(guid=md.guid, unzipDirectory=folder,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="first")
+slave.instantiate()
+slave.setupExperiment(startTime=0.0)
+slave.enterInitializationMode()
+slave.setInteger([vr["n_elements"]], [n_elements])
+slave.setReal([vr["contact_point_spacing"]], [spacing])
+built = time.perf_counter()
+slave.exitInitializationMode()
+done = time.perf_counter()
+print(done - started, done - built)
+"""
+
+
+def first_init(path: Path, n_elements: int, spacing: float, scratch: Path) -> tuple[float, float]:
+    """(instantiate -> exitInitializationMode, exitInitializationMode alone) in seconds, in a
+    new process on a new extraction (not timed), as a host's first run meets the FMU."""
+    folder = Path(extract(str(path), unzipdir=tempfile.mkdtemp(dir=scratch)))
+    try:
+        done = subprocess.run([sys.executable, "-c", FIRST_INIT, str(folder), str(n_elements),
+                               repr(spacing)], capture_output=True, text=True, check=False)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{path.name}: the process failed:\n{done.stderr[-2000:]}")
+    total, exit_s = map(float, done.stdout.split()[-2:])
+    return total, exit_s
+
+
 NAMES = {"python": "(a) TireModal (Python FMU)", "minimal": "(b) minimal pythonfmu slave",
          "native": "(c) TireModalNative (native FMU)", "trivial": "(d) trivial C FMU"}
+
+
+def build_all(folder: Path, floors: bool) -> dict[str, Path]:
+    paths = {"python": build_fmu(folder / "tire"),
+             "native": build_native_fmu(folder / "TireModalNative.fmu", platforms=("linux64",))}
+    if floors:
+        paths["minimal"] = build_minimal(folder / "minimal")
+        paths["trivial"] = build_trivial(folder / "trivial")
+    return paths
+
+
+def measure_inits(paths: dict[str, Path], fmus: dict[str, Opened], repeats: int, samples: int,
+                  scratch: Path) -> tuple[dict, dict]:
+    """Warm and first initialisations of both tire FMUs, per spacing and mesh; the first
+    ones alternate FMU, spacing and mesh sample by sample."""
+    for kind in TIRES:  # warm: the modules imported (a run with --init-only has not yet)
+        init_time(fmus[kind], {}, 1)
+    warm = {kind: {label: {n: init_time(fmus[kind], {"n_elements": n,
+                                                     "contact_point_spacing": spacing}, repeats)
+                           for n in INIT_ELEMENTS}
+                   for label, spacing in SPACINGS.items()} for kind in TIRES}
+    runs = {(kind, label, n): [] for kind in TIRES for label in SPACINGS for n in INIT_ELEMENTS}
+    for _ in range(samples):
+        for kind, label, n in runs:
+            runs[kind, label, n].append(first_init(paths[kind], n, SPACINGS[label], scratch))
+    first = {kind: {label: {n: {"total_s": statistics.median(r[0] for r in runs[kind, label, n]),
+                                "exit_s": statistics.median(r[1] for r in runs[kind, label, n])}
+                            for n in INIT_ELEMENTS} for label in SPACINGS} for kind in TIRES}
+    return warm, first
+
+
+def print_inits(warm: dict, first: dict, repeats: int, samples: int, number: int) -> None:
+    print(f"\n{number}. Initialisation, instantiate -> exitInitializationMode, warm process "
+          f"(median of {repeats}), s")
+    header = "".join(f" {f'N = {n}':>9}" for n in INIT_ELEMENTS)
+    print(f"   {'FMU, contact points':<52}{header}")
+    for kind in TIRES:
+        for label in SPACINGS:
+            row = "".join(f" {warm[kind][label][n]:9.3f}" for n in INIT_ELEMENTS)
+            print(f"   {NAMES[kind] + ', ' + label:<52}{row}")
+    print(f"\n{number + 1}. First initialisation: a fresh process and extraction per sample "
+          f"(median of {samples}), s: instantiate -> exit (of it exitInitializationMode)")
+    print(f"   {'FMU, contact points':<52}" + "".join(f" {f'N = {n}':>17}"
+                                                        for n in INIT_ELEMENTS))
+    for kind in TIRES:
+        for label in SPACINGS:
+            cells = [first[kind][label][n] for n in INIT_ELEMENTS]
+            row = "".join(f" {c['total_s']:7.3f} ({c['exit_s']:6.3f})" for c in cells)
+            print(f"   {NAMES[kind] + ', ' + label:<52}{row}")
 
 
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=15, help="alternating rounds (15)")
     parser.add_argument("--steps", type=int, default=2000, help="steps per round (2000)")
-    parser.add_argument("--init-repeats", type=int, default=3, help="initialisations (3)")
+    parser.add_argument("--init-repeats", type=int, default=3,
+                        help="warm initialisations per case (3)")
+    parser.add_argument("--init-samples", type=int, default=5,
+                        help="fresh processes per first-initialisation case (5)")
+    parser.add_argument("--init-only", action="store_true",
+                        help="only the initialisations (2 and 3), not the steps")
     parser.add_argument("--record", metavar="JSON", help="also write the results there (the "
-                        "docs quote docs/measured/bench_fmu.json)")
+                        "docs quote docs/measured/bench_fmu.json; a full run only)")
     args = parser.parse_args(argv)
+    if args.init_only and args.record:
+        parser.error("--record takes a full run (the record holds the step costs too)")
     from record import load_average, write_record
 
     load_at_start = load_average()
-    horizon = int(round(0.2 / H))  # one cleat period
+    horizon = int(round(HORIZON_S / H))
     with tempfile.TemporaryDirectory(prefix="bench_fmu_") as folder:
         folder = Path(folder)
-        fmus = {"python": Opened(build_fmu(folder / "tire")),
-                "minimal": Opened(build_minimal(folder / "minimal")),
-                "native": Opened(build_native_fmu(folder / "TireModalNative.fmu",
-                                                  platforms=("linux64",))),
-                "trivial": Opened(build_trivial(folder / "trivial"))}
-        cases = {(regime, kind): Case(fmu, speed, signal, parameters, horizon)
-                 for regime, (speed, signal, parameters) in REGIMES.items()
-                 for kind, fmu in fmus.items()}
-        for case in cases.values():
-            case.run(horizon)  # past the transient and into the delay line, one cleat pass
-        times = {key: [] for key in cases}
-        for _ in range(args.rounds):
-            for key, case in cases.items():
-                times[key].append(case.run(args.steps))
-        for case in cases.values():
-            case.close()
-        inits = {n: init_time(fmus["python"], n, args.init_repeats) for n in (100, 400)}
-    costs = {key: statistics.median(values) for key, values in times.items()}
+        paths = build_all(folder, floors=not args.init_only)
+        fmus = {kind: Opened(path) for kind, path in paths.items()}
+        if not args.init_only:
+            cases = {}
+            for regime, (speed, signal) in REGIMES.items():
+                for kind in NAMES:
+                    labels = SPACINGS if kind in TIRES else {"": None}
+                    for label, spacing in labels.items():
+                        parameters = {} if spacing is None else {
+                            "contact_point_spacing": spacing}
+                        cases[regime, kind, label] = Case(fmus[kind], speed, signal,
+                                                          parameters, horizon)
+            for case in cases.values():
+                case.run(horizon)  # past the transient and into the delay line
+            times = {key: [] for key in cases}
+            for _ in range(args.rounds):
+                for key, case in cases.items():
+                    times[key].append(case.run(args.steps))
+            for case in cases.values():
+                case.close()
+            costs = {key: statistics.median(values) for key, values in times.items()}
+        scratch = folder / "first"
+        scratch.mkdir()
+        warm, first = measure_inits(paths, fmus, args.init_repeats, args.init_samples, scratch)
 
-    print(f"1. Cost per communication step through fmpy, h = {H:g} s, N = 100 (median of "
-          f"{args.rounds} alternating rounds of {args.steps} steps), µs")
-    print(f"   {'regime':<32} {'(a)':>7} {'(b)':>7} {'(a)/(b)':>8} {'(c)':>7} {'(d)':>7} "
-          f"{'(c)/(d)':>8}")
-    ratios = {}
-    for regime in REGIMES:
-        a, b, c, d = (1e6 * costs[regime, kind] for kind in NAMES)
-        ratios[regime] = (a / b, c / d)
-        print(f"   {regime:<32} {a:7.2f} {b:7.2f} {a / b:8.2f} {c:7.2f} {d:7.2f} {c / d:8.2f}")
-    for name in NAMES.values():
-        print(f"   {name}")
-    worst_python = max(r[0] for r in ratios.values())
-    worst_native = max(r[1] for r in ratios.values())
-    print(f"   worst (a)/(b) = {worst_python:.2f}: "
-          f"{'meets' if worst_python <= 1.5 else 'MISSES'} the aim <= 1.5; worst (c)/(d) = "
-          f"{worst_native:.2f}: {'meets' if worst_native <= 1.2 else 'MISSES'} the aim <= 1.2 "
-          "(issue 20)")
-    print("\n2. Python FMU initialisation, instantiate -> exitInitializationMode, warm process "
-          f"(median of {args.init_repeats})")
-    for n, seconds in inits.items():
-        print(f"   N = {n:<4} {seconds:7.3f} s")
-    print("\n3. Real-time factor at 10 kHz (wall time / simulated time)")
-    for regime in REGIMES:
-        for kind in ("python", "native"):
-            factor = costs[regime, kind] / H
-            print(f"   {NAMES[kind][:3]} {regime:<32} {factor:6.3f}  ({1 / factor:5.1f} x "
-                  "faster than real time)")
+    number = 1
+    if not args.init_only:
+        print(f"1. Cost per communication step through fmpy, h = {H:g} s, N = 100 (median of "
+              f"{args.rounds} alternating rounds of {args.steps} steps), µs")
+        print(f"   {'regime, contact points':<50} {'(a)':>7} {'(b)':>7} {'(a)/(b)':>8} "
+              f"{'(c)':>7} {'(d)':>7} {'(c)/(d)':>8}")
+        rows = {}
+        for regime in REGIMES:
+            b, d = (1e6 * costs[regime, kind, ""] for kind in ("minimal", "trivial"))
+            for label in SPACINGS:
+                a, c = (1e6 * costs[regime, kind, label] for kind in TIRES)
+                rows[f"{regime}, {label}"] = {NAMES["python"]: a, NAMES["minimal"]: b,
+                                              NAMES["native"]: c, NAMES["trivial"]: d}
+                print(f"   {regime + ', ' + label:<50} {a:7.2f} {b:7.2f} {a / b:8.2f} "
+                      f"{c:7.2f} {d:7.2f} {c / d:8.2f}")
+        for name in NAMES.values():
+            print(f"   {name}")
+        ratios = {row: {"python_over_minimal": v[NAMES["python"]] / v[NAMES["minimal"]],
+                        "native_over_trivial": v[NAMES["native"]] / v[NAMES["trivial"]]}
+                  for row, v in rows.items()}
+        for label in SPACINGS:
+            mine = [r for row, r in ratios.items() if row.endswith(label)]
+            worst_python = max(r["python_over_minimal"] for r in mine)
+            worst_native = max(r["native_over_trivial"] for r in mine)
+            print(f"   {label}: worst (a)/(b) = {worst_python:.2f} "
+                  f"({'meets' if worst_python <= 1.5 else 'MISSES'} the aim <= 1.5), worst "
+                  f"(c)/(d) = {worst_native:.2f} "
+                  f"({'meets' if worst_native <= 1.2 else 'MISSES'} the aim <= 1.2)")
+        number = 2
+    print_inits(warm, first, args.init_repeats, args.init_samples, number)
+    if not args.init_only:
+        print(f"\n{number + 2}. Real-time factor at 10 kHz (wall time / simulated time)")
+        for row, values in rows.items():
+            for kind in TIRES:
+                factor = 1e-6 * values[NAMES[kind]] / H
+                print(f"   {NAMES[kind][:3]} {row:<50} {factor:6.3f}  ({1 / factor:5.1f} x "
+                      "faster than real time)")
     print(textwrap.dedent(f"""
-        Python {sys.version.split()[0]}; TireModal's defaults otherwise (N = 100).
+        Python {sys.version.split()[0]}; TireModal's defaults otherwise (N = 100 for the steps).
         """).rstrip())
     if args.record:
         write_record(args.record, {
-            "step_us": {regime: {NAMES[kind]: 1e6 * costs[regime, kind] for kind in NAMES}
-                        for regime in REGIMES},
-            "ratios": {regime: {"python_over_minimal": r[0], "native_over_trivial": r[1]}
-                       for regime, r in ratios.items()},
-            "init_s": {str(n): seconds for n, seconds in inits.items()},
+            "step_us": rows,
+            "ratios": ratios,
+            "init_s": {str(n): warm["python"][next(iter(SPACINGS))][n] for n in INIT_ELEMENTS},
             "init_repeats": args.init_repeats,
+            "warm_init_s": {NAMES[kind]: {label: {str(n): v for n, v in by_n.items()}
+                                          for label, by_n in warm[kind].items()}
+                            for kind in TIRES},
+            "first_init_s": {NAMES[kind]: {label: {str(n): v for n, v in by_n.items()}
+                                           for label, by_n in first[kind].items()}
+                             for kind in TIRES},
+            "init_samples": args.init_samples,
         }, load_at_start)
 
 

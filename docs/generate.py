@@ -553,12 +553,30 @@ def vehicle_performance() -> str:
 @generator("fmu-init")
 def fmu_init() -> str:
     data = record("bench_fmu")
-    init = data["results"]["init_s"]
-    times = " and ".join(f"{seconds:.2f} s at N = {n}" for n, seconds in init.items())
-    return (f"Initialisation of `TireModal.fmu` (instantiate to `fmi2ExitInitializationMode`, "
-            f"which builds and reduces the model; median of {data['results']['init_repeats']}) "
-            f"takes {times} in a process that has run it before (its modules imported). "
-            f"{provenance(data)}")
+    results = data["results"]
+    warm, first = results["warm_init_s"], results["first_init_s"]
+    sizes = list(next(iter(next(iter(warm.values())).values())))
+    lines = ["| initialisation, instantiate to `fmi2ExitInitializationMode`, s | "
+             + " | ".join(f"warm, N = {n}" for n in sizes) + " | "
+             + " | ".join(f"first, N = {n}" for n in sizes) + " |",
+             "|---" * (1 + 2 * len(sizes)) + "|"]
+    for name, by_spacing in warm.items():
+        for label, by_n in by_spacing.items():
+            firsts = first[name][label]
+            lines.append(f"| {name}, {label} | "
+                         + " | ".join(f"{by_n[n]:.3f}" for n in sizes) + " | "
+                         + " | ".join(f"{firsts[n]['total_s']:.3f}" for n in sizes) + " |")
+    lines += ["", "Warm: in a process that has initialised the FMU before (its modules "
+              f"imported; median of {results['init_repeats']}). First: each sample in a fresh "
+              "process on a fresh extraction of the FMU, as a host's first run meets it "
+              f"(median of {results['init_samples']}; for the Python FMU it includes importing "
+              "the slave, which bench_fmu_init.py splits out above). The build itself, "
+              "`fmi2ExitInitializationMode`, takes "
+              + ", ".join(f"{first[name][label][n]['exit_s']:.3f} s ({name[:3]} {label}, "
+                          f"N = {n})" for name in first for label in first[name]
+                          for n in sizes[-1:])
+              + " of the first one at the finest mesh. " + provenance(data)]
+    return "\n".join(lines)
 
 
 #: The rows of the fresh-process table: (label, key in each case of bench_fmu_init's record).

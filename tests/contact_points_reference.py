@@ -39,3 +39,19 @@ def reference_points(n_elements: int, radius_m: float, spacing_m: float, max_ang
             thetas.append(theta)
             rows.append(row)
     return np.array(thetas), np.array(rows), m
+
+
+def zone_length_rounding_to_node(n_elements: int, radius_m: float, node: int) -> float:
+    """A zone length whose half angle, with the zone's slack (1e-12), divided by δθ rounds to
+    ``node`` although node·δθ lies just beyond it: floor(limit/δθ) takes the node into the
+    zone, its angle leaves it out (found within a few ulps of the length that puts the limit
+    on the node)."""
+    dtheta = 2 * math.pi / n_elements
+    start = 2 * radius_m * math.tan(node * dtheta / (1 + 1e-12))
+    for ulps in sorted(range(-64, 65), key=abs):
+        length = start + ulps * math.ulp(start)
+        limit = min(math.atan(0.5 * length / radius_m), math.pi / 3) * (1 + 1e-12)
+        if math.floor(limit / dtheta) == node and node * dtheta > limit:
+            return length
+    raise AssertionError(f"no such zone length near {start!r} m for node {node} of "
+                         f"{n_elements}")

@@ -44,7 +44,7 @@ def spec_points(n_elements: int, radius: float, zone_length: float, spacing: flo
     dtheta = 2 * math.pi / n_elements
     arc = radius * dtheta
     half_angle = min(math.atan(0.5 * zone_length / radius), math.pi / 3)
-    h = int(math.floor(half_angle * (1 + 1e-12) / dtheta + 1e-12))
+    h = sum(1 for j in range(1, n_elements // 2 + 1) if j * dtheta <= half_angle * (1 + 1e-12))
     carrying = np.arange(-h, h + 1)
     m = 1
     while arc / m > spacing * (1 + 1e-9):

@@ -2,6 +2,7 @@
 per order against the assembled ring, and the time stepping (lift-off, landing, energy,
 substeps, state) against the linearised model and an unreduced integration."""
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -9,10 +10,15 @@ import pytest
 import scipy.optimize as so
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from contact_points_reference import reference_points
+from contact_points_reference import reference_points, zone_length_rounding_to_node
 
 from tire_fmu.core import OperatingPoint, TireParameters, build_model
-from tire_fmu.core.contact import DEFAULT_CONTACT_POINT_SPACING_M, contact_zone
+from tire_fmu.core.contact import (
+    DEFAULT_CONTACT_POINT_SPACING_M,
+    MAX_CONTACT_POINTS,
+    contact_zone,
+    point_count_problems,
+)
 from tire_fmu.core.contact_dynamics import (
     OUTPUT_NAMES,
     ContactSettings,
@@ -62,6 +68,34 @@ def independent_footprint(tire, n_elements, load_n, spacing_m=DEFAULT_CONTACT_PO
     delta = so.brentq(lambda d: state(d)[0] - load_n, 1e-6, 0.2, xtol=1e-14, rtol=1e-13)
     load, pushing = state(delta)
     return delta, load, pushing
+
+
+def test_the_zone_and_its_point_limit_count_the_same_carrying_nodes(tire):
+    """The carrying nodes are those whose angle |j|·δθ is at most the zone's half angle
+    (1 + 1e-12). At a zone length whose limit/δθ rounds up to node 7 of 100 while node 7's
+    angle lies beyond the limit, the zone counted floor(limit/δθ) (15 carrying nodes) and its
+    point limit the angles (13): a spacing the limit accepted built more points than
+    MAX_CONTACT_POINTS, and the Python FMU's zone (its front, where road_z is read) was not the
+    native FMU's (test_native_fmu.py runs both at this length)."""
+    n, node = 100, 7
+    grid = Grid(n, tire.R)
+    length = zone_length_rounding_to_node(n, tire.R, node)
+    limit = min(math.atan(0.5 * length / tire.R), math.pi / 3) * (1 + 1e-12)
+    carrying = sum(1 for j in range(-(n // 2), n // 2 + 1) if abs(j) * grid.dtheta <= limit)
+    assert carrying == 2 * node - 1
+    assert contact_zone(grid, tire.k_cw, tire.beta, length, 1.0).n_nodes == carrying
+    # m points per node that the carrying nodes take and one more node each side would not
+    m = MAX_CONTACT_POINTS // carrying
+    m -= 1 - m % 2
+    assert carrying * m <= MAX_CONTACT_POINTS < (carrying + 2) * m
+    spacing = grid.node_arc_m / (m - 0.5)
+    fine = contact_zone(grid, tire.k_cw, tire.beta, length, spacing)
+    assert fine.points_per_node == m and fine.n_points == carrying * m
+    assert fine.n_nodes == carrying + 4  # the stencils reach two nodes beyond each end
+    assert point_count_problems(grid, length, spacing) == []
+    # one odd step finer is refused, counting the same carrying nodes
+    (problem,) = point_count_problems(grid, length, grid.node_arc_m / (m + 1.5))
+    assert f"{m + 2} points on each of its {carrying} carrying nodes" in problem.reason
 
 
 @pytest.mark.parametrize("spacing_m", [DEFAULT_CONTACT_POINT_SPACING_M, 1.0])

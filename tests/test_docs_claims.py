@@ -152,3 +152,37 @@ def test_the_ride_figure_row_says_when_coherence_is_drawn():
               if line.startswith("| `ride_transfer_functions.png` |")]
     assert "<!-- value: demo-coherence-drawn -->" in row
     assert generate.value_text("demo-coherence-drawn") in row
+
+
+# -- the default contact point spacing, as its comment describes it ----------------------------
+
+def test_the_default_spacing_comment_quotes_the_cleat_record():
+    """parameters.DEFAULT_POINT_SPACING_M's comment: the error the default spacing leaves over
+    a 20 mm and a 10 mm cleat, rounded to whole per cent, is the record's (docs/theory.md
+    §4.6 quotes it to 0.1 %), and it is first order in the spacing."""
+    from tire_fmu.core.studies import richardson
+
+    spec = importlib.util.spec_from_file_location("docs_generate",
+                                                  ROOT / "docs" / "generate.py")
+    generate = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generate)
+    lines = (ROOT / "tire_fmu/core/parameters.py").read_text().split("\n")
+    at = next(i for i, line in enumerate(lines) if line.startswith("DEFAULT_POINT_SPACING_M"))
+    start = at
+    while lines[start - 1].startswith("#:"):
+        start -= 1
+    comment = " ".join(line[2:].strip() for line in lines[start:at])
+    assert "first order in the spacing" in comment
+    quoted = re.search(r"20 mm cleat comes out about (\d+) % and over a 10 mm one about (\d+) %",
+                       comment)
+    assert quoted, comment
+    for text, cleat_m in zip(quoted.groups(), (0.02, 0.01)):
+        recorded = float(generate.value_text(f"cleat-spacing-deficit-{cleat_m * 1e3:g}mm")
+                         .rstrip(" %"))
+        assert int(text) == round(recorded)
+    _, results = generate._cleat_record()
+    for cleat_m in (0.01, 0.02):
+        rows = sorted((r for r in results["spacing"]["rows"] if r["cleat_m"] == cleat_m),
+                      key=lambda r: -r["point_spacing_m"])
+        _, order = richardson([r["point_arc_m"] for r in rows], [r["peak_rise_kn"] for r in rows])
+        assert 0.8 < order < 1.5

@@ -1021,6 +1021,37 @@ def test_the_sidewall_order_is_an_integer_in_range_alike(both, order, allowed):
         assert any("sidewall_max_order" in line and "[0, 100000]" in line for line in python)
 
 
+def test_a_spacing_that_makes_too_many_contact_points_is_refused_alike(both):
+    """MAX_CONTACT_POINTS: the smallest spacing in range makes more contact points on this mesh
+    and zone than the contact solve takes; both FMUs refuse it at fmi2ExitInitializationMode
+    with fmi2Error and the same problem line, naming contact_point_spacing, its value and the
+    smallest spacing this mesh and zone take, which makes as many points as the limit allows."""
+    from tire_fmu.core.contact import point_count_problems, points_per_node
+    from tire_fmu.core.discretisation import Grid
+
+    limit, spacing = CONSTANTS["MAX_CONTACT_POINTS"], CONSTANTS["MIN_POINT_SPACING_M"]
+    zone_length = CONSTANTS["DEFAULT_ZONE_LENGTH_M"]
+    grid = Grid(N, TireParameters().R)
+    # the carrying nodes, counted here: those whose angle is within the zone's half angle
+    half_angle = math.atan(0.5 * zone_length / grid.radius_m)
+    carrying = sum(1 for j in range(-N // 2, N // 2 + 1) if abs(j) * grid.dtheta <= half_angle)
+    m = 1
+    while grid.node_arc_m / m > spacing:
+        m += 2
+    assert carrying * m > limit
+    problem = fmu_message(ParameterError(point_count_problems(grid, zone_length,
+                                                              spacing)).problems[0])
+    assert problem.startswith(f"contact_point_spacing = {spacing:g} m: must be at least ")
+    assert f"{m} points on each of its {carrying} carrying nodes make {carrying * m}" in problem
+    results = [_lines(fmu, contact_point_spacing=spacing) for fmu in both]
+    assert results == [(ERROR, [M["PROBLEM_LINE"] % (1, 1, problem)])] * 2
+    # the smallest spacing named is taken, and makes the most points the limit allows
+    smallest = float(re.search(r"must be at least ([0-9.e-]+) m", problem).group(1))
+    assert point_count_problems(grid, zone_length, smallest) == []
+    most = points_per_node(grid.node_arc_m, smallest)
+    assert carrying * most <= limit < carrying * (most + 2)
+
+
 def test_the_critical_speed_warning_fraction_is_enforced_alike(both):
     """CRITICAL_SPEED_WARNING_FRACTION: above it both FMUs warn with the same text, below it
     neither does."""
@@ -1063,8 +1094,7 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               # every parameter's range above
               "MIN_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
               "MAX_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
-              # in tests/test_cli.py (the core's refusal); a test of both FMUs is still to come
-              "MAX_CONTACT_POINTS": "test_bad_input_is_one_line_naming_every_parameter"}
+              "MAX_CONTACT_POINTS": "test_a_spacing_that_makes_too_many_contact_points_..."}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",

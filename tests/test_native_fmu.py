@@ -12,9 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from contact_points_reference import zone_length_rounding_to_node
 from fmpy.fmi1 import FMICallException
 from native_support import (
     OUTPUTS,
+    H,
     Instance,
     Opened,
     relative_errors,
@@ -168,12 +170,63 @@ def test_matches_the_python_fmu_through_loss_of_contact(native, python, load, sp
      "sidewall_pressure_exponent": 1.0, "inflation_pressure": 6e5, "load": 20000.0},
     # the sidewall tied to the tread above order 8 (GL073A_tied), rolling on a fine mesh
     {"n_elements": 200, "sidewall_max_order": 8.0, "speed": 20.0, "f_max": 400.0},
+    # a zone whose limit/δθ rounds up to a node beyond it: the Python FMU took that node in
+    # (its zone front, where road_z is read, was 4 cm ahead of the native FMU's)
+    {"contact_zone_length": zone_length_rounding_to_node(100, 0.65, 7), "speed": 10.0},
 ])
 def test_other_settings_match_the_python_fmu(native, python, parameters):
     reference = run(python, parameters, road_drop, steps=900)
     native_run = run(native, parameters, road_drop, steps=900)
     errors = relative_errors(reference, native_run)
     assert errors.max() < 1e-9, dict(zip(OUTPUTS, errors))
+
+
+#: The mesh of the cleat runs: coarse, so that 41 points per node stay a fast run.
+CLEAT_ELEMENTS = 40
+
+
+@pytest.mark.parametrize("per_node", [1, 3, 41])
+def test_over_a_cleat_at_several_points_per_node_match_the_python_fmu(native, python, per_node):
+    """Issue 21: a 20 mm x 20 mm cleat at 10 m/s, rim held, crossing the whole contact zone,
+    with 1 (the node model), 3 and 41 contact points per node arc: rim_Fz and contact_Fz of
+    the two FMUs agree to 1e-9 of the load. The road is the cleat's profile at the zone front
+    (road_z, road_vz = V dz/ds), sampled as the cleat study samples it."""
+    from tire_fmu.core.contact import points_per_node
+    from tire_fmu.core.contact_dynamics import build_contact_model
+    from tire_fmu.core.obstacles import cleat
+    from tire_fmu.core.parameters import DEFAULT_LOAD_N
+
+    speed, tire = 10.0, TireParameters()
+    arc = Grid(CLEAT_ELEMENTS, tire.R).node_arc_m
+    # m points are at most arc/m apart: a spacing between arc/m and arc/(m - 2) makes m
+    spacing = 1.0 if per_node == 1 else arc / (per_node - 0.5)
+    assert points_per_node(arc, spacing) == per_node
+    op = OperatingPoint(n_elements=CLEAT_ELEMENTS, speed_m_s=speed,
+                        contact_point_spacing_m=spacing)
+    front = build_contact_model(tire, op).windows.front_m
+    # the cleat's first edge starts 1 cm ahead of the zone front and its last leaves the rear
+    lead, obstacle = front + 0.01, cleat(0.02, 0.02)
+    steps = int(math.ceil((lead + obstacle.length_m + front) / (speed * H)))
+    height, slope = obstacle.road_samples(front - lead + speed * H * np.arange(steps),
+                                          speed * H)
+    runs = []
+    for fmu in (python, native):
+        instance = Instance(fmu, logging_on=False)
+        assert instance.initialise(n_elements=CLEAT_ELEMENTS, speed=speed,
+                                   contact_point_spacing=spacing) == 0, instance.errors()
+        rows = [instance.outputs_now()]
+        for k in range(steps):
+            instance.slave.setReal(instance.inputs,
+                                   [0.0, 0.0, float(height[k]), float(speed * slope[k])])
+            instance.slave.doStep(k * H, H)
+            rows.append(instance.outputs_now())
+        instance.free()
+        runs.append(np.array(rows))
+    reference, native_run = runs
+    assert reference[:, 0].max() > DEFAULT_LOAD_N + 5e3, "the cleat must load the rim"
+    forces = [OUTPUTS.index("rim_Fz"), OUTPUTS.index("contact_Fz")]
+    errors = np.abs(native_run[:, forces] - reference[:, forces]).max(axis=0) / DEFAULT_LOAD_N
+    assert errors.max() < 1e-9, dict(zip(("rim_Fz", "contact_Fz"), errors))
 
 
 def _random_parameters(seed: int) -> dict:

@@ -73,8 +73,9 @@ from .parameters import (
 #: Default length of road under the contact zone (m): wide enough for the largest credible
 #: footprint and for a 40 mm cleat to be met before it reaches the footprint.
 DEFAULT_ZONE_LENGTH_M = 0.6
-#: Default largest distance between contact points along the tread (m), and its range: the
-#: operating point's (parameters.DEFAULT_POINT_SPACING_M), under the contact's own name.
+#: Default largest distance between contact points along the tread (m): the operating
+#: point's (parameters.DEFAULT_POINT_SPACING_M, which says what error it leaves over a cleat),
+#: under the contact's own name.
 DEFAULT_CONTACT_POINT_SPACING_M = DEFAULT_POINT_SPACING_M
 #: The zone may reach at most this far around the ring (|θ| < 60°): beyond, the flat-road
 #: ray geometry and the small-deflection ring stop being credible.
@@ -202,6 +203,23 @@ class ContactZone:
                 -height * np.tan(self.point_theta - half))
 
 
+def carrying_half_count(grid: Grid, zone_length_m: float) -> int:
+    """h: the carrying nodes are j = -h..h, those whose angle |j|·δθ is at most the zone's
+    half angle (1 + ZONE_ANGLE_SLACK). The one count of the zone, its point limit and the
+    native FMU's contact.c (zone_half_count, the same lines): floor(limit/δθ) alone can round
+    to a node whose own angle j·δθ lies just beyond the limit, and a node must belong to the
+    zone by its angle, the number each runtime computes for it."""
+    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
+    limit = half_angle * (1 + ZONE_ANGLE_SLACK)
+    dtheta = grid.dtheta
+    half = int(math.floor(limit / dtheta))
+    while half > 0 and half * dtheta > limit:
+        half -= 1
+    while (half + 1) * dtheta <= limit and 2 * (half + 1) <= grid.n_elements:
+        half += 1
+    return half
+
+
 def lagrange_weights(s: np.ndarray) -> np.ndarray:
     """Cubic Lagrange weights (.., 4) on nodes -1, 0, 1, 2 for a point at s in [0, 1)."""
     s = np.asarray(s, dtype=float)[..., None]
@@ -221,8 +239,7 @@ def contact_zone(grid: Grid, k_cw: float, beta: float,
     the mesh's own order, and it reproduces a rigid motion of the tread exactly. The zone
     nodes are the carrying nodes and, for m > 1, the two beyond each end the stencils reach.
     """
-    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
-    half = int(math.floor(half_angle * (1 + ZONE_ANGLE_SLACK) / grid.dtheta))
+    half = carrying_half_count(grid, zone_length_m)
     m = points_per_node(grid.node_arc_m, point_spacing_m)
     reach = 0 if m == 1 else 2
     offsets = np.arange(-half - reach, half + reach + 1)
@@ -305,8 +322,7 @@ def _round_up(value: float, digits: int = 4) -> float:
 def point_spacing_problems(grid: Grid, zone_length_m: float, spacing_m: float) -> list[Problem]:
     """Why a contact point spacing (in range: parameters.point_spacing_range_problems) makes
     more points than MAX_CONTACT_POINTS on this mesh and zone (empty when it does not)."""
-    half_angle = min(math.atan(0.5 * zone_length_m / grid.radius_m), MAX_ZONE_HALF_ANGLE)
-    carrying = int(np.count_nonzero(np.abs(grid.theta) <= half_angle * (1 + ZONE_ANGLE_SLACK)))
+    carrying = 2 * carrying_half_count(grid, zone_length_m) + 1
     m = points_per_node(grid.node_arc_m, spacing_m)
     if carrying * m <= MAX_CONTACT_POINTS:
         return []

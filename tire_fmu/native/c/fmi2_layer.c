@@ -670,6 +670,16 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 
 /* -- stepping ------------------------------------------------------------------------------------- */
 
+/* a step that failed: its message is written only then (the shortest round-trip text of t
+ * takes several printf and strtod calls, a few microseconds of every step if made ahead) */
+static fmi2Status step_failed(Instance* inst, double t, const char* why)
+{
+    char text[40], call[128];
+    number(text, t);
+    snprintf(call, sizeof call, SPEC_MSG_STEP_FAILED, text);
+    return fail(inst, call, why);
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
@@ -723,12 +733,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     /* the model's own clock goes on: the host's t, within rounding of it, would bring its
      * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);
-    number(t, currentCommunicationPoint);
-    snprintf(call, sizeof call, SPEC_MSG_STEP_FAILED, t);
-    if (status == MODEL_ERROR) return fail(inst, call, SPEC_MSG_OUT_OF_MEMORY);
+    if (status == MODEL_ERROR) {
+        return step_failed(inst, currentCommunicationPoint, SPEC_MSG_OUT_OF_MEMORY);
+    }
     for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) {
         if (!isfinite(inst->values[SPEC_BLOCK_OUTPUTS_FIRST + i])) {
-            return fail(inst, call, SPEC_MSG_NOT_FINITE_OUTPUTS);
+            return step_failed(inst, currentCommunicationPoint, SPEC_MSG_NOT_FINITE_OUTPUTS);
         }
     }
     inst->stale = 0;
