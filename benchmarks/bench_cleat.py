@@ -4,8 +4,9 @@ matrix of issue 21 (tire_fmu.core.studies.cleat_convergence on each case).
 Cases: a 20 mm x 20 mm cleat at 10 and 20 m/s, 10 x 10 mm and 50 x 50 mm cleats and a 50 mm
 deep, 0.3 m long pothole at 10 m/s, all with the contact points at their default spacing; the
 20 mm cleat at 10 m/s with one point per node (the node contact, for comparison); and the
-20 mm cleat at 10 and 20 m/s on the shipped GL073A_shear tire, whose sidewall shear lets the
-finest meshes run at these speeds (with --tire-file, the tire of every case but these). Meshes
+20 mm cleat at 10 and 20 m/s on the shipped GL073A_shear tire, whose sidewall shear let the
+finest meshes run at these speeds before the default tire's sidewall was tied (kept for
+comparison; with --tire-file, the tire of every case but these). Meshes
 at or above their critical (standing-wave) speed for a case are not run: the record names them
 with that speed. Prints each case's convergence table (the one ``tire-fmu cleat`` prints).
 Then, at N = 200, the 10 mm and 20 mm cleats at finer point spacings (the spacing's own
@@ -14,7 +15,7 @@ step's: the rim load's peak, and the mean rim and contact force while the cleat 
 tire, which agree once the step resolves the points' entry at the cleat's edges).
 
 Run:  python3 benchmarks/bench_cleat.py [--meshes 100 200 400 800] [--step 2.5e-5]
-      [--tire-file GL073A] [--record docs/measured/cleat_convergence.json]
+      [--tire-file GL073A_tied] [--record docs/measured/cleat_convergence.json]
 (docs/theory.md, "Contact points: convergence over cleats", renders the record).
 """
 
@@ -78,7 +79,8 @@ def main() -> None:
     parser.add_argument("--step", type=float, default=None,
                         help="communication step in s (default the study's)")
     parser.add_argument("--tire-file", default=None,
-                        help="a tire file, or a shipped tire by name (default GL073A)")
+                        help="a tire file, or a shipped tire by name (default GL073A_tied, "
+                             "the default tire)")
     parser.add_argument("--record", metavar="JSON",
                         help="also write the results there (docs/theory.md quotes "
                         "docs/measured/cleat_convergence.json)")
@@ -172,7 +174,7 @@ def main() -> None:
               f"mean rim_Fz {rim_mean / 1e3:.2f} kN, mean contact_Fz {contact_mean / 1e3:.2f} "
               "kN", flush=True)
     if args.record:
-        write_record(args.record, {"tire": args.tire_file or "GL073A", "step_s": step,
+        write_record(args.record, {"tire": args.tire_file or "GL073A_tied", "step_s": step,
                                    "meshes": meshes, "cases": results,
                                    "spacing": {"n_elements": SPACING_MESH, "rows": spacing_rows},
                                    "step": {"n_elements": STEP_MESH, "rows": step_rows}},

@@ -394,6 +394,29 @@ def _cleat_spacing_deficit_20() -> str:
     return _spacing_deficit(0.02)
 
 
+@generator("cleat-acceptance")
+def cleat_acceptance_table() -> str:
+    """Issue 21's criteria on the default tire, case by case, from the record."""
+    data, results = _cleat_record()
+    lines = ["| case | N = 100 vs converged | N = 400 vs N = 800 | rim_Fz history rms, N = 100 "
+             "vs finest | min contact_Fz under the tire |", "|---|---|---|---|---|"]
+    for case in results["cases"]:
+        if case["refused"] or "GL073A_shear" in case["name"]:
+            continue
+        rows = {r["n_elements"]: r for r in case["study"]["meshes"]}
+        if not {100, 400, 800} <= set(rows):
+            continue
+        converged = case["study"]["extrapolated_rise_kn"] or rows[max(rows)]["peak_rise_kn"]
+        low = min(r["min_contact_fz_kn"] for r in rows.values())
+        lines.append(
+            f"| {case['name']} | {100 * (rows[100]['peak_rise_kn'] / converged - 1):+.1f} % | "
+            f"{100 * (rows[400]['peak_rise_kn'] / rows[800]['peak_rise_kn'] - 1):+.1f} % | "
+            f"{100 * rows[100]['history_rms_difference']:.1f} % | {low:.1f} kN |")
+    lines += ["", f"Rim held at its static height, tire {results['tire']}. "
+              + _cleat_provenance(data)]
+    return "\n".join(lines)
+
+
 @value("cleat-shear-meshes")
 def _cleat_shear_meshes() -> str:
     """How close N = 400 and 800, and N = 100 and 800, are on the GL073A_shear cases."""
