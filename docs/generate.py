@@ -156,6 +156,27 @@ def contact_footprint_table() -> str:
     return "\n".join(lines)
 
 
+@generator("k-cw-effect")
+def k_cw_effect_table() -> str:
+    from dataclasses import replace
+
+    from tire_fmu.core import OperatingPoint, TireParameters, build_model
+
+    base = TireParameters()
+    lines = ["| k_cw [N/m²] | footprint at 27.7 kN | deflection | secant K_v | tangent K_v |",
+             "|---|---|---|---|---|"]
+    for factor in (0.1, 0.3, 1.0, 3.0, 10.0):
+        tire = replace(base, k_cw=base.k_cw * factor)
+        fp = build_model(tire, OperatingPoint(n_elements=200, load_n=27.7e3)).patch.footprint
+        lines.append(f"| {tire.k_cw:.3g} ({factor:g} x) | {fp.length_m * 100:.2f} cm | "
+                     f"{fp.deflection_m * 1e3:.2f} mm | "
+                     f"{fp.secant_stiffness_n_per_m / 1e6:.3f} MN/m | "
+                     f"{fp.tangent_stiffness_n_per_m / 1e6:.3f} MN/m |")
+    lines += ["", "N = 200, default point spacing; computed by `docs/generate.py` (the same as "
+              "`tire-fmu patch --load 27700 --elements 200 --tire k_cw=VALUE`)."]
+    return "\n".join(lines)
+
+
 @generator("pressure-law")
 def pressure_law_table() -> str:
     from tire_fmu.core import OperatingPoint, TireParameters, build_model

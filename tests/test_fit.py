@@ -163,6 +163,20 @@ def test_static_stiffness_and_footprint_pin_the_scale():
     assert result.fitted_static["fitted_vertical_stiffness_n_per_m"] == pytest.approx(stiffness)
 
 
+def test_a_footprint_and_a_vertical_stiffness_identify_k_cw():
+    """k_cw moves no free-ring frequency; the footprint length and the vertical stiffness at a
+    load pin it (and the ring's scale), on the default, tied tire as on the paper's."""
+    true = replace(TireParameters(), k_cw=2.5e8)
+    stiffness, length = static_contact(true, DEFAULT_LOAD_N, 40)
+    static = StaticMeasurement(DEFAULT_LOAD_N, stiffness, length, n_elements=40)
+    free = ("k_cw", "rhoA", "k_r2")
+    start = replace(true, k_cw=6e8, rhoA=16.0, k_r2=5e6)
+    result = fit_tire(modes_of(true, range(9)), free, start, static=static)
+    assert result.rank == len(free) and not result.undetermined
+    for name in free:
+        assert getattr(result.tire, name) == pytest.approx(getattr(true, name), rel=1e-5)
+
+
 def test_minimax_lowers_the_largest_residual():
     true = TireParameters(sidewall_shear=8e3, sidewall_max_order=0.0)
     target = modes_of(PAPER, [0, 1, 2, 3, 4, 5, 6, 8])
