@@ -20,12 +20,15 @@
  * S nonzero entries a row), so it is kept and applied in node space: O(P S + Z^2) a product
  * where the P x P matrix cost O(P^2). With S = U I^T (U = diag(k) I W_w + diag(c) I W_r), an
  * active set's block inverts through Z x Z (Woodbury): (I - U_A I_A^T)^-1
- * = I + U_A (I_Z - I_A^T U_A)^-1 I_A^T, the same nonzero spectrum, O(a S Z + Z^3) to make. */
+ * = I + U_A (I_Z - I_A^T U_A)^-1 I_A^T, the same nonzero spectrum, O(a S Z + Z^3) to make.
+ * Only the nodes T the active points read have rows of I_A^T U_A, and I_A^T sigma_A lives on
+ * them, so the Z x Z solve is its T x T block (the others' rows are the identity's). */
 typedef struct {
     char* pattern;     /* P */
-    int size;          /* active points */
+    int size;          /* T: the zone nodes the active points read */
     int singular;      /* the block is singular: its forces are kept zero */
-    double* inverse;   /* G = (I_Z - I_A^T U_A)^-1, Z x Z */
+    int* nodes;        /* T of them */
+    double* inverse;   /* G = (I_T - (I_A^T U_A)_TT)^-1, T x T */
 } KernelSolve;
 
 #define SOLVE_CACHE 32  /* per interface; the inverse is recomputed identically when evicted */
@@ -225,6 +228,7 @@ static void interface_free(Interface* k, const Memory* mem)
         for (i = 0; i < k->n_solves; i++) {
             mem_free(mem, k->solves[i].pattern);
             mem_free(mem, k->solves[i].inverse);
+            mem_free(mem, k->solves[i].nodes);
         }
         mem_free(mem, k->solves);
     }
@@ -259,6 +263,19 @@ static void node_product(int Z, const double* w, const double* g, double* out)
         const double* row = w + (size_t)i * Z;
         double sum = 0.0;
         for (l = 0; l < Z; l++) sum += row[l] * g[l];
+        out[i] = sum;
+    }
+}
+
+/* out = W g for g nonzero at nodes[0 .. n) only (values there: g[t], packed) */
+static void node_product_at(int Z, const double* w, const int* nodes, const double* g, int n,
+                            double* out)
+{
+    int i, t;
+    for (i = 0; i < Z; i++) {
+        const double* row = w + (size_t)i * Z;
+        double sum = 0.0;
+        for (t = 0; t < n; t++) sum += row[nodes[t]] * g[t];
         out[i] = sum;
     }
 }
@@ -478,8 +495,22 @@ static int active_solve(TireKernel* kn, Interface* k, const char* active, const 
     }
     if (entry == NULL) {
         double* block = kn->work;
-        double* scratch = block + Z * Z;
+        double* scratch;
         int* pivot = kn->iwork + 3 * P;
+        int* nodes = pivot + Z;
+        int* position = nodes + Z;  /* a node's place in T, or -1 */
+        int t = 0, l;
+        for (l = 0; l < Z; l++) position[l] = -1;
+        for (e = 0; e < a; e++) {
+            for (s = 0; s < S; s++) {
+                int node = kn->support[index[e] * S + s];
+                if (position[node] < 0) {
+                    position[node] = t;
+                    nodes[t++] = node;
+                }
+            }
+        }
+        scratch = block + t * t;
         if (k->n_solves < SOLVE_CACHE) {
             entry = &k->solves[k->n_solves++];
         } else {
@@ -487,54 +518,71 @@ static int active_solve(TireKernel* kn, Interface* k, const char* active, const 
             k->next_solve = (k->next_solve + 1) % SOLVE_CACHE;
             mem_free(&kn->mem, entry->pattern);
             mem_free(&kn->mem, entry->inverse);
+            mem_free(&kn->mem, entry->nodes);
         }
         entry->pattern = (char*)mem_alloc(&kn->mem, (size_t)P, 1);
-        entry->inverse = (double*)mem_alloc(&kn->mem, (size_t)(Z * Z), sizeof(double));
-        entry->size = a;
+        entry->inverse = (double*)mem_alloc(&kn->mem, (size_t)(t * t), sizeof(double));
+        entry->nodes = (int*)mem_alloc(&kn->mem, (size_t)t, sizeof(int));
+        entry->size = t;
         entry->singular = 0;
-        if (!entry->pattern || !entry->inverse) {
+        if (!entry->pattern || !entry->inverse || !entry->nodes) {
             mem_free(&kn->mem, entry->pattern);
             mem_free(&kn->mem, entry->inverse);
+            mem_free(&kn->mem, entry->nodes);
             entry->pattern = NULL;
             entry->inverse = NULL;
+            entry->nodes = NULL;
             k->n_solves--;
             return -1;
         }
         memcpy(entry->pattern, active, (size_t)P);
-        /* block = I_Z - sum over active i of I_i^T U_i, U_i = k_i I_i W_w + c_i I_i W_r */
-        for (i = 0; i < Z * Z; i++) block[i] = 0.0;
-        for (i = 0; i < Z; i++) block[i * Z + i] = 1.0;
+        memcpy(entry->nodes, nodes, sizeof(int) * (size_t)t);
+        /* block = I_T - sum over active p of (I_p^T U_p)_TT, U_p = k_p I_p W_w + c_p I_p W_r */
+        for (i = 0; i < t * t; i++) block[i] = 0.0;
+        for (i = 0; i < t; i++) block[i * t + i] = 1.0;
         for (e = 0; e < a; e++) {
-            int p = index[e], l;
-            double* u = uw;  /* U_p, Z */
-            for (l = 0; l < Z; l++) u[l] = 0.0;
+            int p = index[e];
+            double* u = uw;  /* U_p on T, t */
+            for (l = 0; l < t; l++) u[l] = 0.0;
             for (s = 0; s < S; s++) {
                 const double* rw = w_w + (size_t)kn->support[p * S + s] * Z;
                 const double* rr = w_r + (size_t)kn->support[p * S + s] * Z;
                 double kw = kn->k[p] * kn->weight[p * S + s];
                 double cw = kn->c[p] * kn->weight[p * S + s];
-                for (l = 0; l < Z; l++) u[l] += kw * rw[l] + cw * rr[l];
+                for (l = 0; l < t; l++) u[l] += kw * rw[nodes[l]] + cw * rr[nodes[l]];
             }
             for (s = 0; s < S; s++) {
-                double* row = block + (size_t)kn->support[p * S + s] * Z;
+                double* row = block + (size_t)position[kn->support[p * S + s]] * t;
                 double wt = kn->weight[p * S + s];
-                for (l = 0; l < Z; l++) row[l] -= wt * u[l];
+                for (l = 0; l < t; l++) row[l] -= wt * u[l];
             }
         }
-        if (invert(block, Z, entry->inverse, scratch, pivot) != 0) {
+        if (invert(block, t, entry->inverse, scratch, pivot) != 0) {
             /* a singular block: keep the entry usable (zero forces) rather than fail the step */
             entry->singular = 1;
         }
     }
     if (entry->singular) return 0;
-    for (j = 0; j < Z; j++) g[j] = 0.0;
-    for (e = 0; e < a; e++) {
-        int p = index[e];
-        for (s = 0; s < S; s++) g[kn->support[p * S + s]] += kn->weight[p * S + s] * sigma0[p];
+    {
+        int t = entry->size, l;
+        int* position = kn->iwork + 3 * P + 2 * Z;
+        for (l = 0; l < t; l++) position[entry->nodes[l]] = l;
+        for (l = 0; l < t; l++) g[l] = 0.0;
+        for (e = 0; e < a; e++) {
+            int p = index[e];
+            for (s = 0; s < S; s++) {
+                g[position[kn->support[p * S + s]]] += kn->weight[p * S + s] * sigma0[p];
+            }
+        }
+        for (j = 0; j < t; j++) {
+            const double* row = entry->inverse + (size_t)j * t;
+            double sum = 0.0;
+            for (l = 0; l < t; l++) sum += row[l] * g[l];
+            y[j] = sum;
+        }
+        node_product_at(Z, w_w, entry->nodes, y, t, uw);
+        node_product_at(Z, w_r, entry->nodes, y, t, ur);
     }
-    node_product(Z, entry->inverse, g, y);
-    node_product(Z, w_w, y, uw);
-    node_product(Z, w_r, y, ur);
     for (e = 0; e < a; e++) {
         int p = index[e];
         f[p] = sigma0[p] + kn->k[p] * point_read(kn, p, uw) + kn->c[p] * point_read(kn, p, ur);
@@ -560,8 +608,21 @@ static void combine(const TireKernel* kn, const Interface* k, const double* base
         return;
     }
     to_nodes(kn, f, g);
-    if (first < 2 * P) node_product(Z, k->w, g, uw);
-    if (first < P || last > 2 * P) node_product(Z, k->w + (size_t)Z * Z, g, ur);
+    {
+        int* nodes = kn->iwork + 3 * P + Z;
+        double* packed = ur + Z;
+        int n = 0;
+        for (l = 0; l < Z; l++) {
+            if (g[l] != 0.0) {
+                nodes[n] = l;
+                packed[n++] = g[l];
+            }
+        }
+        if (first < 2 * P) node_product_at(Z, k->w, nodes, packed, n, uw);
+        if (first < P || last > 2 * P) {
+            node_product_at(Z, k->w + (size_t)Z * Z, nodes, packed, n, ur);
+        }
+    }
     for (r = first; r < last; r++) {
         int block = r / P, i = r - block * P;
         double value;
@@ -1329,7 +1390,7 @@ int kernel_create(const TireContract* c, const Memory* mem, double start_time,
         ALLOC(penetration, P, double) || ALLOC(rate, P, double) ||
         ALLOC(seen_heights, P, double) || ALLOC(seen_slopes, P, double) ||
         ALLOC(kernels, SPEC_KERNEL_CACHE_SIZE, Interface) || ALLOC(dft, kn->n_orders, cx) ||
-        ALLOC(work, work, double) || ALLOC(iwork, 3 * P + Z, int) || ALLOC(cwork, 2 * P, char) ||
+        ALLOC(work, work, double) || ALLOC(iwork, 3 * P + 3 * Z, int) || ALLOC(cwork, 2 * P, char) ||
         ALLOC(orders_a, kn->n_orders, cx) || ALLOC(orders_b, kn->n_orders, cx) ||
         ALLOC(heights, P, double) || ALLOC(slopes, P, double) || ALLOC(node_a, Z, double) ||
         ALLOC(node_b, Z, double) || ALLOC(node_c, 4 * Z, double)) {
