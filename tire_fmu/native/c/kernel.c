@@ -623,15 +623,15 @@ static void combine(const TireKernel* kn, const Interface* k, const double* base
             node_product_at(Z, k->w + (size_t)Z * Z, nodes, packed, n, ur);
         }
     }
-    for (r = first; r < last; r++) {
-        int block = r / P, i = r - block * P;
-        double value;
-        if (block == 0) {
-            value = kn->k[i] * point_read(kn, i, uw) + kn->c[i] * point_read(kn, i, ur);
-        } else {
-            value = point_read(kn, i, block == 1 ? uw : ur);
-        }
-        combined[r] = base[r] + value;
+    /* each point's reads once for the rows asked (the S row needs both) */
+    for (r = 0; r < P; r++) {
+        int want_s = first <= r && r < last, want_p = first <= P + r && P + r < last,
+            want_r = first <= 2 * P + r && 2 * P + r < last;
+        double wp = (want_s || want_p) ? point_read(kn, r, uw) : 0.0;
+        double wr = (want_s || want_r) ? point_read(kn, r, ur) : 0.0;
+        if (want_s) combined[r] = base[r] + kn->k[r] * wp + kn->c[r] * wr;
+        if (want_p) combined[P + r] = base[P + r] + wp;
+        if (want_r) combined[2 * P + r] = base[2 * P + r] + wr;
     }
 }
 
@@ -700,7 +700,8 @@ static int solve(TireKernel* kn, Interface* k, const double* base, double* f, do
     for (iteration = 0; iteration < limit; iteration++) {
         int same = 1;
         if (active_solve(kn, k, active, base, f) != 0) return -1;
-        combine(kn, k, base, f, combined, 0, 2 * P);
+        /* all three rows at once: S's rows read W_r g already, so the rates cost P S more */
+        combine(kn, k, base, f, combined, 0, 3 * P);
         for (j = 0; j < P; j++) {
             char now = (char)(combined[P + j] > 0.0 && combined[j] > 0.0);
             if (now != active[j]) same = 0;
@@ -708,7 +709,6 @@ static int solve(TireKernel* kn, Interface* k, const double* base, double* f, do
         }
         if (same) {
             memcpy(kn->active, active, (size_t)P);
-            combine(kn, k, base, f, combined, 2 * P, 3 * P);
             for (j = 0; j < P; j++) f[j] = fmax(f[j], 0.0);
             return 0;
         }
