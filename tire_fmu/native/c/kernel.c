@@ -596,7 +596,7 @@ static int active_solve(TireKernel* kn, Interface* k, const char* active, const 
 static void combine(const TireKernel* kn, const Interface* k, const double* base,
                     const double* f, double* combined, int first, int last)
 {
-    int P = kn->P, Z = kn->Z, r, l, any = 0;
+    int P = kn->P, Z = kn->Z, S = kn->S, r, l, any = 0;
     double* g = kn->node_c;
     double* uw = g + Z;
     double* ur = uw + Z;
@@ -627,8 +627,20 @@ static void combine(const TireKernel* kn, const Interface* k, const double* base
     for (r = 0; r < P; r++) {
         int want_s = first <= r && r < last, want_p = first <= P + r && P + r < last,
             want_r = first <= 2 * P + r && 2 * P + r < last;
-        double wp = (want_s || want_p) ? point_read(kn, r, uw) : 0.0;
-        double wr = (want_s || want_r) ? point_read(kn, r, ur) : 0.0;
+        double wp = 0.0, wr = 0.0;
+        if (want_s || (want_p && want_r)) {
+            const int* support = kn->support + r * S;
+            const double* weight = kn->weight + r * S;
+            int t;
+            for (t = 0; t < S; t++) {  /* both reads share the supports' loads */
+                wp += weight[t] * uw[support[t]];
+                wr += weight[t] * ur[support[t]];
+            }
+        } else if (want_p) {
+            wp = point_read(kn, r, uw);
+        } else if (want_r) {
+            wr = point_read(kn, r, ur);
+        }
         if (want_s) combined[r] = base[r] + kn->k[r] * wp + kn->c[r] * wr;
         if (want_p) combined[P + r] = base[P + r] + wp;
         if (want_r) combined[2 * P + r] = base[2 * P + r] + wr;
