@@ -175,3 +175,46 @@ def test_a_ring_truncated_with_static_correction_refuses_the_steps_its_rate_term
         other.step(1e-4, 1e-3, 0.0, 0.0, 0.0)
         # the shortest step the clock resolves at t = 1e-4 s (shorter ones it refuses)
         assert np.all(np.isfinite(other.step(1e-15, 1e-3, 0.0, 0.0, 0.0)))
+
+
+def test_the_node_space_interface_is_the_points_matrix_written_out(models):
+    """The kernels apply M = [S; W_p; W_r] through the zone nodes (I W Iᵀ) and solve an active
+    set's block through the nodes it reads (Woodbury): on a tire rolling over a road at the
+    default spacing (more points than zone nodes), base + M f, (I - S_AA)⁻¹ σ_A and the
+    projected Gauss-Seidel fallback are what the dense points' matrix gives, the fallback
+    the same forces as the active-set iteration."""
+    model = models[15.0]
+    sim = ContactSimulator(model, backend="numpy")
+    kernel = sim.kernel
+    for i in range(300):  # the road reaches the footprint after 20 ms; the rim pressed down
+        sim.step(1e-4, -2e-3, 0.0, *_road(i * 1e-4))
+    interface = kernel.last
+    p, z = kernel.contract.n_points, kernel.contract.n_zone
+    assert p > 2 * z
+    m = interface.m
+    rng = np.random.default_rng(7)
+    f = np.where(rng.random(p) < 0.4, rng.normal(size=p), 0.0) * model.patch.load_n / p
+    base = rng.normal(size=3 * p)
+    np.testing.assert_allclose(interface.combine(base, f), base + m @ f, rtol=0,
+                               atol=1e-12 * np.abs(base + m @ f).max())
+    for share in (0.1, 0.5, 1.0):
+        active = rng.random(p) < share
+        sigma = rng.normal(size=p)
+        expected = np.zeros(p)
+        expected[active] = np.linalg.solve(np.eye(active.sum()) - m[:p][np.ix_(active, active)],
+                                           sigma[active])
+        np.testing.assert_allclose(interface.active_forces(active, sigma), expected, rtol=0,
+                                   atol=1e-10 * np.abs(expected).max())
+    np.testing.assert_allclose(interface.s_diag, np.diag(m[:p]), rtol=1e-12)
+    # the end of the last substep again: a well-posed contact problem, both solvers' forces
+    f_now = kernel.forces
+    pen, rate = kernel.penetration, kernel.rate
+    base = interface.combine(np.concatenate([kernel.k * pen + kernel.c * rate, pen, rate]),
+                             -f_now)
+    f_active, _ = kernel._solve(interface, base)
+    assert np.count_nonzero(f_active) > z
+    kernel.df = np.zeros(p)  # Gauss-Seidel from the static forces, not from the answer
+    f_pgs = kernel._fallback(interface, base)
+    assert np.abs(kernel.f_static - f_active).max() > 1e-3 * np.abs(f_active).max()
+    np.testing.assert_allclose(f_pgs, f_active, rtol=0, atol=1e-9 * model.patch.load_n)
+    np.testing.assert_allclose(f_active, f_now, rtol=0, atol=1e-9 * model.patch.load_n)

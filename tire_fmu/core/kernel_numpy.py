@@ -52,7 +52,12 @@ KERNEL_CACHE_SIZE = 32
 
 class _Interface:
     """One substep length h: the modal step coefficients and the contact interface
-    [σ; p; ṗ] = base + M f on the total end forces f (M = [S; W_p; W_r])."""
+    [σ; p; ṗ] = base + M f on the total end forces f (M = [S; W_p; W_r]).
+
+    The points' flexibilities are the zone nodes' read through the interpolation I (P x Z),
+    W_p = I W_w Iᵀ, W_r = I W_r Iᵀ, S = diag(k) W_p + diag(c) W_r, so the kernel keeps the
+    Z x Z node blocks and applies M in node space, O(P S + Z²) a product for O(P²); only S's
+    diagonal is formed at the points (for the projected Gauss-Seidel). ``m`` writes M out."""
 
     def __init__(self, kernel: NumpyKernel, h: float, instant: bool = False):
         self.h = h
@@ -71,12 +76,41 @@ class _Interface:
             per_force = np.real(k.c_ring @ self.g_end) + k.d_f + k.e_f / h  # rows x Z
             w_nodes, r_nodes, out_nodes = per_force[k.w_rows], per_force[k.r_rows], per_force[:3]
         interp = k.interp
-        w_p = interp @ w_nodes @ interp.T
-        w_r = interp @ r_nodes @ interp.T
+        self.interp, self.k, self.c = interp, k.k, k.c
+        self.w_nodes, self.r_nodes = np.array(w_nodes), np.array(r_nodes)
+        self.s_diag = (k.k * np.einsum("pa,ab,pb->p", interp, w_nodes, interp)
+                       + k.c * np.einsum("pa,ab,pb->p", interp, r_nodes, interp))
         self.out_f = out_nodes @ interp.T  # ring outputs per unit end force at the points
-        self.m = np.vstack([k.k[:, None] * w_p + k.c[:, None] * w_r, w_p, w_r])
-        self.pen_const = k.contract.pen_static - w_p @ k.f_static
-        self.rate_const = -w_r @ k.f_static
+        g = interp.T @ k.f_static
+        self.pen_const = k.contract.pen_static - interp @ (self.w_nodes @ g)
+        self.rate_const = -(interp @ (self.r_nodes @ g))
+
+    @property
+    def m(self) -> np.ndarray:
+        """M = [S; W_p; W_r] (3P x P) written out at the points (the step never forms it)."""
+        w_p = self.interp @ self.w_nodes @ self.interp.T
+        w_r = self.interp @ self.r_nodes @ self.interp.T
+        return np.vstack([self.k[:, None] * w_p + self.c[:, None] * w_r, w_p, w_r])
+
+    def combine(self, base: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """base + M f, through the zone nodes."""
+        g = self.interp.T @ f
+        wp, wr = self.interp @ (self.w_nodes @ g), self.interp @ (self.r_nodes @ g)
+        return base + np.concatenate([self.k * wp + self.c * wr, wp, wr])
+
+    def active_forces(self, active: np.ndarray, sigma0: np.ndarray) -> np.ndarray:
+        """f_A = (I - S_AA)⁻¹ σ0_A, zeros elsewhere. S_AA = U_A I_Aᵀ with U = diag(k) I W_w
+        + diag(c) I W_r has rank at most Z: (I - U_A I_Aᵀ)⁻¹ = I + U_A (I_Z - I_Aᵀ U_A)⁻¹ I_Aᵀ
+        (Woodbury; the same nonzero spectrum), a Z x Z solve for an a x a one."""
+        f = np.zeros(sigma0.size)
+        if active.any():
+            i_a, k_a, c_a = self.interp[active], self.k[active], self.c[active]
+            u_a = k_a[:, None] * (i_a @ self.w_nodes) + c_a[:, None] * (i_a @ self.r_nodes)
+            sigma_a = sigma0[active]
+            y = np.linalg.solve(np.eye(self.w_nodes.shape[0]) - i_a.T @ u_a, i_a.T @ sigma_a)
+            f[active] = (sigma_a + k_a * (i_a @ (self.w_nodes @ y))
+                         + c_a * (i_a @ (self.r_nodes @ y)))
+        return f
 
 
 class NumpyKernel:
@@ -247,7 +281,8 @@ class NumpyKernel:
             self._instant if not self.linear else None)
         if interface is not None:
             f_old = self.f_static + self.df
-            base = np.concatenate([self.k * pen + self.c * rate, pen, rate]) - interface.m @ f_old
+            base = interface.combine(np.concatenate([self.k * pen + self.c * rate, pen, rate]),
+                                     -f_old)
             f, combined = self._solve(interface, base)
             change = f - f_old
             if self.last is not None:
@@ -292,42 +327,38 @@ class NumpyKernel:
         """Total end forces with [σ; p; ṗ] = base + M f and the law (two-sided springs on the
         static footprint's points for the linear law), and base + M f."""
         p = self.contract.n_points
-        s = k.m[:p]
         if self.linear:
-            f = self._active_forces(s, self.static_active, base[:p])
-            return f, base + k.m @ f
+            f = k.active_forces(self.static_active, base[:p])
+            return f, k.combine(base, f)
         active = self.active
         for _ in range(ACTIVE_SET_PER_NODE * p + ACTIVE_SET_EXTRA):
-            f = self._active_forces(s, active, base[:p])
-            combined = base + k.m @ f
+            f = k.active_forces(active, base[:p])
+            combined = k.combine(base, f)
             new = (combined[p:2 * p] > 0.0) & (combined[:p] > 0.0)
             if np.array_equal(new, active):
                 self.active = active
                 return np.maximum(f, 0.0), combined
             active = new
         f = self._fallback(k, base)
-        return f, base + k.m @ f
-
-    @staticmethod
-    def _active_forces(s: np.ndarray, active: np.ndarray, sigma0: np.ndarray) -> np.ndarray:
-        f = np.zeros(sigma0.size)
-        if active.any():
-            block = np.eye(int(active.sum())) - s[np.ix_(active, active)]
-            f[active] = np.linalg.solve(block, sigma0[active])
-        return f
+        return f, k.combine(base, f)
 
     def _fallback(self, k: _Interface, base: np.ndarray) -> np.ndarray:
-        """Projected Gauss-Seidel on the same law, for an active set that cycles."""
+        """Projected Gauss-Seidel on the same law, for an active set that cycles; the rows of
+        point j read in node space (g = Iᵀ f kept current as each f_j changes)."""
         self.solver_fallbacks += 1
         p = self.contract.n_points
-        s, w_p = k.m[:p], k.m[p:2 * p]
+        read_w, read_r = self.interp @ k.w_nodes, self.interp @ k.r_nodes  # I W (P x Z)
         f = np.maximum(self.f_static + self.df, 0.0)
+        g = self.interp.T @ f
         for _ in range(PGS_SWEEPS):
             previous = f.copy()
             for j in range(p):
-                pen_j = base[p + j] + w_p[j] @ f
-                rest = base[j] + s[j] @ f - s[j, j] * f[j]
-                f[j] = max(0.0, rest / (1.0 - s[j, j])) if pen_j > 0.0 else 0.0
+                wp, wr = read_w[j] @ g, read_r[j] @ g
+                pen_j = base[p + j] + wp
+                rest = base[j] + self.k[j] * wp + self.c[j] * wr - k.s_diag[j] * f[j]
+                now = max(0.0, rest / (1.0 - k.s_diag[j])) if pen_j > 0.0 else 0.0
+                g = g + self.interp[j] * (now - f[j])
+                f[j] = now
             if np.max(np.abs(f - previous)) <= PGS_TOLERANCE * max(1.0, float(np.max(np.abs(f)))):
                 break
         self.active = f > 0.0

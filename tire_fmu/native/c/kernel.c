@@ -16,10 +16,19 @@
 #include "kernel.h"
 #include "spec.h"
 
+/* The points' interface is I W I^T of the zone nodes' W (I: the points' interpolation, P x Z,
+ * S nonzero entries a row), so it is kept and applied in node space: O(P S + Z^2) a product
+ * where the P x P matrix cost O(P^2). With S = U I^T (U = diag(k) I W_w + diag(c) I W_r), an
+ * active set's block inverts through Z x Z (Woodbury): (I - U_A I_A^T)^-1
+ * = I + U_A (I_Z - I_A^T U_A)^-1 I_A^T, the same nonzero spectrum, O(a S Z + Z^3) to make.
+ * Only the nodes T the active points read have rows of I_A^T U_A, and I_A^T sigma_A lives on
+ * them, so the Z x Z solve is its T x T block (the others' rows are the identity's). */
 typedef struct {
     char* pattern;     /* P */
-    int size;
-    double* inverse;   /* (I - S_AA)^-1, size x size */
+    int size;          /* T: the zone nodes the active points read */
+    int singular;      /* the block is singular: its forces are kept zero */
+    int* nodes;        /* T of them */
+    double* inverse;   /* G = (I_T - (I_A^T U_A)_TT)^-1, T x T */
 } KernelSolve;
 
 #define SOLVE_CACHE 32  /* per interface; the inverse is recomputed identically when evicted */
@@ -34,7 +43,8 @@ typedef struct {
     cx* fused;        /* K: decay beta_d + beta_c: a pending end-force ramp into the next */
     cx* rim_z;        /* per rim mode: h phi1 b_rim */
     cx* rim_vz;       /* per rim mode: h^2 phi2 b_rim */
-    double* m;        /* (3P x P): [S; W_p; W_r] */
+    double* w;        /* 2 Z x Z: W_w then W_r, the zone nodes' [p; p'] per unit end node force */
+    double* s_diag;   /* P: S[j, j], the diagonal of the points' S = diag(k) W_p + diag(c) W_r */
     double* out_f;    /* 3 x P: ring outputs per unit end force */
     double* pen_const;  /* P: pen_static - W_p f_static */
     double* rate_const; /* P: -W_r f_static */
@@ -105,6 +115,7 @@ struct TireKernel {
     double* slopes;
     double* node_a;    /* Z */
     double* node_b;    /* Z */
+    double* node_c;    /* 4 Z: the node-space products of the contact solve */
 };
 
 #define D_AT(kn, row, col) (kn)->d[(size_t)(row) * (size_t)(kn)->cols + (size_t)(col)]
@@ -208,7 +219,8 @@ static void interface_free(Interface* k, const Memory* mem)
     mem_free(mem, k->fused);
     mem_free(mem, k->rim_z);
     mem_free(mem, k->rim_vz);
-    mem_free(mem, k->m);
+    mem_free(mem, k->w);
+    mem_free(mem, k->s_diag);
     mem_free(mem, k->out_f);
     mem_free(mem, k->pen_const);
     mem_free(mem, k->rate_const);
@@ -216,59 +228,93 @@ static void interface_free(Interface* k, const Memory* mem)
         for (i = 0; i < k->n_solves; i++) {
             mem_free(mem, k->solves[i].pattern);
             mem_free(mem, k->solves[i].inverse);
+            mem_free(mem, k->solves[i].nodes);
         }
         mem_free(mem, k->solves);
     }
     memset(k, 0, sizeof *k);
 }
 
-static int interface_alloc(Interface* k, const Memory* mem, int P)
+static int interface_alloc(Interface* k, const Memory* mem, int P, int Z)
 {
-    k->m = (double*)mem_alloc(mem, (size_t)(3 * P) * (size_t)P, sizeof(double));
+    k->w = (double*)mem_alloc(mem, (size_t)(2 * Z) * (size_t)Z, sizeof(double));
+    k->s_diag = (double*)mem_alloc(mem, (size_t)P, sizeof(double));
     k->out_f = (double*)mem_alloc(mem, (size_t)(3 * P), sizeof(double));
     k->pen_const = (double*)mem_alloc(mem, (size_t)P, sizeof(double));
     k->rate_const = (double*)mem_alloc(mem, (size_t)P, sizeof(double));
     k->solves = (KernelSolve*)mem_alloc(mem, SOLVE_CACHE, sizeof(KernelSolve));
-    return (k->m && k->out_f && k->pen_const && k->rate_const && k->solves) ? 0 : -1;
+    return (k->w && k->s_diag && k->out_f && k->pen_const && k->rate_const && k->solves) ? 0 : -1;
 }
 
-/* rows [S; W_p; W_r] of the interface at the points from the node flexibilities (Z x Z) and
- * the ring outputs per unit node force (3 x Z) */
+/* y_p = sum_s weight[p, s] x[support[p, s]] at one point */
+static double point_read(const TireKernel* kn, int p, const double* node)
+{
+    int s, S = kn->S;
+    double sum = 0.0;
+    for (s = 0; s < S; s++) sum += kn->weight[p * S + s] * node[kn->support[p * S + s]];
+    return sum;
+}
+
+/* out = W g for a Z x Z block W */
+static void node_product(int Z, const double* w, const double* g, double* out)
+{
+    int i, l;
+    for (i = 0; i < Z; i++) {
+        const double* row = w + (size_t)i * Z;
+        double sum = 0.0;
+        for (l = 0; l < Z; l++) sum += row[l] * g[l];
+        out[i] = sum;
+    }
+}
+
+/* out = W g for g nonzero at nodes[0 .. n) only (values there: g[t], packed) */
+static void node_product_at(int Z, const double* w, const int* nodes, const double* g, int n,
+                            double* out)
+{
+    int i, t;
+    for (i = 0; i < Z; i++) {
+        const double* row = w + (size_t)i * Z;
+        double sum = 0.0;
+        for (t = 0; t < n; t++) sum += row[nodes[t]] * g[t];
+        out[i] = sum;
+    }
+}
+
+/* the interface from the node flexibilities (Z x Z) and the ring outputs per unit node force
+ * (3 x Z): the node blocks kept, what the points need of them once (S's diagonal for the
+ * fallback, the static forces' share, the outputs per unit point force) */
 static void interface_rows(const TireKernel* kn, Interface* k, const double* w_w,
                            const double* w_r, const double* out_nodes)
 {
-    int P = kn->P, S = kn->S, Z = kn->Z, i, l, s, t, r;
+    int P = kn->P, S = kn->S, Z = kn->Z, i, s, t, r;
+    double* g = kn->node_c;
+    double* uw = g + Z;
+    double* ur = uw + Z;
+    memcpy(k->w, w_w, sizeof(double) * (size_t)Z * (size_t)Z);
+    memcpy(k->w + (size_t)Z * Z, w_r, sizeof(double) * (size_t)Z * (size_t)Z);
     for (i = 0; i < P; i++) {
-        double pc = kn->pen_static[i], rc = 0.0;
-        for (l = 0; l < P; l++) {
-            double wp = 0.0, wr = 0.0;
-            for (s = 0; s < S; s++) {
-                int a = kn->support[i * S + s];
-                double wa = kn->weight[i * S + s];
-                for (t = 0; t < S; t++) {
-                    int b = kn->support[l * S + t];
-                    double wb = wa * kn->weight[l * S + t];
-                    wp += wb * w_w[a * Z + b];
-                    wr += wb * w_r[a * Z + b];
-                }
+        double wp = 0.0, wr = 0.0;
+        for (s = 0; s < S; s++) {
+            int a = kn->support[i * S + s];
+            double wa = kn->weight[i * S + s];
+            for (t = 0; t < S; t++) {
+                int b = kn->support[i * S + t];
+                double wb = wa * kn->weight[i * S + t];
+                wp += wb * w_w[a * Z + b];
+                wr += wb * w_r[a * Z + b];
             }
-            k->m[(size_t)i * P + l] = kn->k[i] * wp + kn->c[i] * wr;
-            k->m[(size_t)(P + i) * P + l] = wp;
-            k->m[(size_t)(2 * P + i) * P + l] = wr;
-            pc -= wp * kn->f_static[l];
-            rc -= wr * kn->f_static[l];
         }
-        k->pen_const[i] = pc;
-        k->rate_const[i] = rc;
+        k->s_diag[i] = kn->k[i] * wp + kn->c[i] * wr;
+    }
+    to_nodes(kn, kn->f_static, g);
+    node_product(Z, w_w, g, uw);
+    node_product(Z, w_r, g, ur);
+    for (i = 0; i < P; i++) {
+        k->pen_const[i] = kn->pen_static[i] - point_read(kn, i, uw);
+        k->rate_const[i] = -point_read(kn, i, ur);
     }
     for (r = 0; r < 3; r++) {
-        for (l = 0; l < P; l++) {
-            double sum = 0.0;
-            for (t = 0; t < S; t++) {
-                sum += kn->weight[l * S + t] * out_nodes[r * Z + kn->support[l * S + t]];
-            }
-            k->out_f[r * P + l] = sum;
-        }
+        for (i = 0; i < P; i++) k->out_f[r * P + i] = point_read(kn, i, out_nodes + r * Z);
     }
 }
 
@@ -295,7 +341,7 @@ static int make_interface(TireKernel* kn, Interface* k, double h)
     k->rim_z = (cx*)mem_alloc(mem, (size_t)kn->n_rim, sizeof(cx));
     k->rim_vz = (cx*)mem_alloc(mem, (size_t)kn->n_rim, sizeof(cx));
     if (!k->decay || !k->beta_c || !k->beta_d || !k->fused || !k->rim_z || !k->rim_vz ||
-        interface_alloc(k, mem, kn->P) != 0) {
+        interface_alloc(k, mem, kn->P, kn->Z) != 0) {
         interface_free(k, mem);
         return -1;
     }
@@ -359,7 +405,7 @@ static int instant_interface(TireKernel* kn, Interface* k)
     double* w_r = w_w + Z * Z;
     double* out = w_r + Z * Z;
     memset(k, 0, sizeof *k);
-    if (interface_alloc(k, &kn->mem, kn->P) != 0) {
+    if (interface_alloc(k, &kn->mem, kn->P, kn->Z) != 0) {
         interface_free(k, &kn->mem);
         return -1;
     }
@@ -412,15 +458,29 @@ static Interface* step_interface(TireKernel* kn, double h)
 
 /* -- the contact solve ---------------------------------------------------------------------- */
 
-/* scratch of the solve: [0, 2P^2 + 4P) */
-#define SOLVE_WORK(kn) ((size_t)(2 * (kn)->P * (kn)->P + 4 * (kn)->P))
+/* scratch of the solve: [0, SOLVE_BLOCK) for a Z x Z block and its inversion (or the
+ * fallback's previous forces), then combined (3P) */
+#define SOLVE_BLOCK(kn)                                                                        \
+    ((size_t)(2 * (kn)->Z * (kn)->Z + (kn)->Z) > (size_t)(kn)->P                               \
+         ? (size_t)(2 * (kn)->Z * (kn)->Z + (kn)->Z)                                           \
+         : (size_t)(kn)->P)
+#define SOLVE_WORK(kn) (SOLVE_BLOCK(kn) + (size_t)(3 * (kn)->P))
+#define SOLVE_COMBINED(kn) ((kn)->work + SOLVE_BLOCK(kn))
 
-/* f_A = (I - S_AA)^-1 sigma0_A into f (zeros elsewhere); -1 out of memory */
+/* f_A = (I - S_AA)^-1 sigma0_A into f (zeros elsewhere), through node space:
+ * f_A = sigma0_A + U_A G I_A^T sigma0_A with G the pattern's, made once and cached; -1 out
+ * of memory */
 static int active_solve(TireKernel* kn, Interface* k, const char* active, const double* sigma0,
                         double* f)
 {
-    int P = kn->P, a = 0, i, j, e;
+    int P = kn->P, Z = kn->Z, S = kn->S, a = 0, i, j, e, s;
     int* index = kn->iwork;
+    const double* w_w = k->w;
+    const double* w_r = k->w + (size_t)Z * Z;
+    double* g = kn->node_c;
+    double* y = g + Z;
+    double* uw = y + Z;
+    double* ur = uw + Z;
     KernelSolve* entry = NULL;
     for (i = 0; i < P; i++) {
         f[i] = 0.0;
@@ -435,8 +495,22 @@ static int active_solve(TireKernel* kn, Interface* k, const char* active, const 
     }
     if (entry == NULL) {
         double* block = kn->work;
-        double* scratch = block + P * P;
-        int* pivot = kn->iwork + P;
+        double* scratch;
+        int* pivot = kn->iwork + 3 * P;
+        int* nodes = pivot + Z;
+        int* position = nodes + Z;  /* a node's place in T, or -1 */
+        int t = 0, l;
+        for (l = 0; l < Z; l++) position[l] = -1;
+        for (e = 0; e < a; e++) {
+            for (s = 0; s < S; s++) {
+                int node = kn->support[index[e] * S + s];
+                if (position[node] < 0) {
+                    position[node] = t;
+                    nodes[t++] = node;
+                }
+            }
+        }
+        scratch = block + t * t;
         if (k->n_solves < SOLVE_CACHE) {
             entry = &k->solves[k->n_solves++];
         } else {
@@ -444,77 +518,175 @@ static int active_solve(TireKernel* kn, Interface* k, const char* active, const 
             k->next_solve = (k->next_solve + 1) % SOLVE_CACHE;
             mem_free(&kn->mem, entry->pattern);
             mem_free(&kn->mem, entry->inverse);
+            mem_free(&kn->mem, entry->nodes);
         }
         entry->pattern = (char*)mem_alloc(&kn->mem, (size_t)P, 1);
-        entry->inverse = (double*)mem_alloc(&kn->mem, (size_t)(a * a), sizeof(double));
-        entry->size = a;
-        if (!entry->pattern || !entry->inverse) {
+        entry->inverse = (double*)mem_alloc(&kn->mem, (size_t)(t * t), sizeof(double));
+        entry->nodes = (int*)mem_alloc(&kn->mem, (size_t)t, sizeof(int));
+        entry->size = t;
+        entry->singular = 0;
+        if (!entry->pattern || !entry->inverse || !entry->nodes) {
             mem_free(&kn->mem, entry->pattern);
             mem_free(&kn->mem, entry->inverse);
+            mem_free(&kn->mem, entry->nodes);
             entry->pattern = NULL;
             entry->inverse = NULL;
+            entry->nodes = NULL;
             k->n_solves--;
             return -1;
         }
         memcpy(entry->pattern, active, (size_t)P);
-        for (i = 0; i < a; i++) {
-            for (j = 0; j < a; j++) {
-                block[i * a + j] = (i == j ? 1.0 : 0.0) - k->m[(size_t)index[i] * P + index[j]];
+        memcpy(entry->nodes, nodes, sizeof(int) * (size_t)t);
+        /* block = I_T - sum over active p of (I_p^T U_p)_TT, U_p = k_p I_p W_w + c_p I_p W_r */
+        for (i = 0; i < t * t; i++) block[i] = 0.0;
+        for (i = 0; i < t; i++) block[i * t + i] = 1.0;
+        for (e = 0; e < a; e++) {
+            int p = index[e];
+            double* u = uw;  /* U_p on T, t */
+            for (l = 0; l < t; l++) u[l] = 0.0;
+            for (s = 0; s < S; s++) {
+                const double* rw = w_w + (size_t)kn->support[p * S + s] * Z;
+                const double* rr = w_r + (size_t)kn->support[p * S + s] * Z;
+                double kw = kn->k[p] * kn->weight[p * S + s];
+                double cw = kn->c[p] * kn->weight[p * S + s];
+                for (l = 0; l < t; l++) u[l] += kw * rw[nodes[l]] + cw * rr[nodes[l]];
+            }
+            for (s = 0; s < S; s++) {
+                double* row = block + (size_t)position[kn->support[p * S + s]] * t;
+                double wt = kn->weight[p * S + s];
+                for (l = 0; l < t; l++) row[l] -= wt * u[l];
             }
         }
-        if (invert(block, a, entry->inverse, scratch, pivot) != 0) {
-            /* a singular block: keep the entry usable (zeros) rather than fail the step */
-            memset(entry->inverse, 0, sizeof(double) * (size_t)(a * a));
+        if (invert(block, t, entry->inverse, scratch, pivot) != 0) {
+            /* a singular block: keep the entry usable (zero forces) rather than fail the step */
+            entry->singular = 1;
         }
     }
-    for (i = 0; i < a; i++) {
-        double sum = 0.0;
-        for (j = 0; j < a; j++) sum += entry->inverse[i * a + j] * sigma0[index[j]];
-        f[index[i]] = sum;
+    if (entry->singular) return 0;
+    {
+        int t = entry->size, l;
+        int* position = kn->iwork + 3 * P + 2 * Z;
+        for (l = 0; l < t; l++) position[entry->nodes[l]] = l;
+        for (l = 0; l < t; l++) g[l] = 0.0;
+        for (e = 0; e < a; e++) {
+            int p = index[e];
+            for (s = 0; s < S; s++) {
+                g[position[kn->support[p * S + s]]] += kn->weight[p * S + s] * sigma0[p];
+            }
+        }
+        for (j = 0; j < t; j++) {
+            const double* row = entry->inverse + (size_t)j * t;
+            double sum = 0.0;
+            for (l = 0; l < t; l++) sum += row[l] * g[l];
+            y[j] = sum;
+        }
+        node_product_at(Z, w_w, entry->nodes, y, t, uw);
+        node_product_at(Z, w_r, entry->nodes, y, t, ur);
+    }
+    for (e = 0; e < a; e++) {
+        int p = index[e];
+        f[p] = sigma0[p] + kn->k[p] * point_read(kn, p, uw) + kn->c[p] * point_read(kn, p, ur);
     }
     return 0;
 }
 
-/* rows [first, last) of combined = base + M f, over the nonzero entries of f only (the
- * contact forces are zero off the few pushing points) */
+/* rows [first, last) of combined = base + M f in node space: g = I^T f over the nonzero
+ * entries of f (the contact forces are zero off the few pushing points), W_w g and W_r g,
+ * read at the points; combined may be base */
 static void combine(const TireKernel* kn, const Interface* k, const double* base,
                     const double* f, double* combined, int first, int last)
 {
-    int P = kn->P, r, l, n = 0;
-    int* nonzero = kn->iwork + 2 * P;
-    for (l = 0; l < P; l++) {
-        if (f[l] != 0.0) nonzero[n++] = l;
+    int P = kn->P, Z = kn->Z, S = kn->S, r, l, any = 0;
+    double* g = kn->node_c;
+    double* uw = g + Z;
+    double* ur = uw + Z;
+    for (l = 0; l < P && !any; l++) any = f[l] != 0.0;
+    if (!any) {
+        if (combined != base) {
+            memcpy(combined + first, base + first, sizeof(double) * (size_t)(last - first));
+        }
+        return;
     }
-    for (r = first; r < last; r++) {
-        const double* row = k->m + (size_t)r * P;
-        double sum = 0.0;
-        for (l = 0; l < n; l++) sum += row[nonzero[l]] * f[nonzero[l]];
-        combined[r] = base[r] + sum;
+    to_nodes(kn, f, g);
+    {
+        int* nodes = kn->iwork + 3 * P + Z;
+        double* packed = ur + Z;
+        int n = 0;
+        for (l = 0; l < Z; l++) {
+            if (g[l] != 0.0) {
+                nodes[n] = l;
+                packed[n++] = g[l];
+            }
+        }
+        if (first < 2 * P) node_product_at(Z, k->w, nodes, packed, n, uw);
+        if (first < P || last > 2 * P) {
+            node_product_at(Z, k->w + (size_t)Z * Z, nodes, packed, n, ur);
+        }
+    }
+    /* each point's reads once for the rows asked (the S row needs both) */
+    for (r = 0; r < P; r++) {
+        int want_s = first <= r && r < last, want_p = first <= P + r && P + r < last,
+            want_r = first <= 2 * P + r && 2 * P + r < last;
+        double wp = 0.0, wr = 0.0;
+        if (want_s || (want_p && want_r)) {
+            const int* support = kn->support + r * S;
+            const double* weight = kn->weight + r * S;
+            int t;
+            for (t = 0; t < S; t++) {  /* both reads share the supports' loads */
+                wp += weight[t] * uw[support[t]];
+                wr += weight[t] * ur[support[t]];
+            }
+        } else if (want_p) {
+            wp = point_read(kn, r, uw);
+        } else if (want_r) {
+            wr = point_read(kn, r, ur);
+        }
+        if (want_s) combined[r] = base[r] + kn->k[r] * wp + kn->c[r] * wr;
+        if (want_p) combined[P + r] = base[P + r] + wp;
+        if (want_r) combined[2 * P + r] = base[2 * P + r] + wr;
     }
 }
 
+/* projected Gauss-Seidel in node space: g = I^T f kept current as each f_j changes, the
+ * rows of point j read through its S supports (O(S Z) a point) */
 static void fallback(TireKernel* kn, const Interface* k, const double* base, double* f)
 {
-    int P = kn->P, sweep, j, l;
-    const double* s = k->m;
-    const double* w_p = k->m + (size_t)P * P;
+    int P = kn->P, Z = kn->Z, S = kn->S, sweep, j, l, s;
+    const double* w_w = k->w;
+    const double* w_r = k->w + (size_t)Z * Z;
     double* previous = kn->work;
+    double* g = kn->node_c;
     kn->solver_fallbacks++;
     for (j = 0; j < P; j++) {
         double total = kn->f_static[j] + kn->df[j];
         f[j] = total > 0.0 ? total : 0.0;
     }
+    to_nodes(kn, f, g);
     for (sweep = 0; sweep < SPEC_PGS_SWEEPS; sweep++) {
         double change = 0.0, biggest = 0.0;
         memcpy(previous, f, sizeof(double) * (size_t)P);
         for (j = 0; j < P; j++) {
-            double pen = base[P + j], rest = base[j];
-            for (l = 0; l < P; l++) {
-                pen += w_p[(size_t)j * P + l] * f[l];
-                rest += s[(size_t)j * P + l] * f[l];
+            double wp = 0.0, wr = 0.0, pen, rest, now;
+            for (s = 0; s < S; s++) {
+                const double* rw = w_w + (size_t)kn->support[j * S + s] * Z;
+                const double* rr = w_r + (size_t)kn->support[j * S + s] * Z;
+                double sw = 0.0, sr = 0.0;
+                for (l = 0; l < Z; l++) {
+                    sw += rw[l] * g[l];
+                    sr += rr[l] * g[l];
+                }
+                wp += kn->weight[j * S + s] * sw;
+                wr += kn->weight[j * S + s] * sr;
             }
-            rest -= s[(size_t)j * P + j] * f[j];
-            f[j] = pen > 0.0 ? fmax(0.0, rest / (1.0 - s[(size_t)j * P + j])) : 0.0;
+            pen = base[P + j] + wp;
+            rest = base[j] + kn->k[j] * wp + kn->c[j] * wr - k->s_diag[j] * f[j];
+            now = pen > 0.0 ? fmax(0.0, rest / (1.0 - k->s_diag[j])) : 0.0;
+            if (now != f[j]) {
+                for (s = 0; s < S; s++) {
+                    g[kn->support[j * S + s]] += kn->weight[j * S + s] * (now - f[j]);
+                }
+                f[j] = now;
+            }
         }
         for (j = 0; j < P; j++) {
             if (fabs(f[j] - previous[j]) > change) change = fabs(f[j] - previous[j]);
@@ -540,7 +712,8 @@ static int solve(TireKernel* kn, Interface* k, const double* base, double* f, do
     for (iteration = 0; iteration < limit; iteration++) {
         int same = 1;
         if (active_solve(kn, k, active, base, f) != 0) return -1;
-        combine(kn, k, base, f, combined, 0, 2 * P);
+        /* all three rows at once: S's rows read W_r g already, so the rates cost P S more */
+        combine(kn, k, base, f, combined, 0, 3 * P);
         for (j = 0; j < P; j++) {
             char now = (char)(combined[P + j] > 0.0 && combined[j] > 0.0);
             if (now != active[j]) same = 0;
@@ -548,7 +721,6 @@ static int solve(TireKernel* kn, Interface* k, const double* base, double* f, do
         }
         if (same) {
             memcpy(kn->active, active, (size_t)P);
-            combine(kn, k, base, f, combined, 2 * P, 3 * P);
             for (j = 0; j < P; j++) f[j] = fmax(f[j], 0.0);
             return 0;
         }
@@ -605,7 +777,7 @@ static int start(TireKernel* kn, double z, double vz, const double* heights,
     if (kn->has_last) k = kn->last;
     else if (!kn->linear && kn->has_instant) k = &kn->instant;
     if (k != NULL) {
-        double* combined = kn->work + 2 * P * P + P;  /* the solve's own, free after it */
+        double* combined = SOLVE_COMBINED(kn);  /* the solve's own, free after it */
         for (j = 0; j < P; j++) {
             change[j] = kn->f_static[j] + kn->df[j];  /* f_old for now */
             base[j] = kn->k[j] * pen[j] + kn->c[j] * rate[j];
@@ -679,7 +851,7 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz)
     double* y = df_end + P;          /* ring rows at the nodes: rows */
     double* w_pt = y + rows;         /* P */
     double* r_pt = w_pt + P;         /* P */
-    double* combined = kn->work + 2 * P * P + P;
+    double* combined = SOLVE_COMBINED(kn);
     cx* A = kn->orders_a;
     cx* B = kn->orders_b;
     cx* F = kn->dft;
@@ -1097,6 +1269,7 @@ void kernel_destroy(TireKernel* kn)
     mem_free(&mem, kn->dft);
     mem_free(&mem, kn->work);
     mem_free(&mem, kn->iwork);
+    mem_free(&mem, kn->node_c);
     mem_free(&mem, kn->cwork);
     mem_free(&mem, kn->orders_a);
     mem_free(&mem, kn->orders_b);
@@ -1229,10 +1402,10 @@ int kernel_create(const TireContract* c, const Memory* mem, double start_time,
         ALLOC(penetration, P, double) || ALLOC(rate, P, double) ||
         ALLOC(seen_heights, P, double) || ALLOC(seen_slopes, P, double) ||
         ALLOC(kernels, SPEC_KERNEL_CACHE_SIZE, Interface) || ALLOC(dft, kn->n_orders, cx) ||
-        ALLOC(work, work, double) || ALLOC(iwork, 3 * P, int) || ALLOC(cwork, 2 * P, char) ||
+        ALLOC(work, work, double) || ALLOC(iwork, 3 * P + 3 * Z, int) || ALLOC(cwork, 2 * P, char) ||
         ALLOC(orders_a, kn->n_orders, cx) || ALLOC(orders_b, kn->n_orders, cx) ||
         ALLOC(heights, P, double) || ALLOC(slopes, P, double) || ALLOC(node_a, Z, double) ||
-        ALLOC(node_b, Z, double)) {
+        ALLOC(node_b, Z, double) || ALLOC(node_c, 4 * Z, double)) {
         goto memory;
     }
 #undef ALLOC
