@@ -556,7 +556,11 @@ def test_stdout_that_cannot_take_the_output_is_one_line_and_a_failure(tmp_path):
 
 
 #: Ctrl-C, as the terminal sends it, at the point named: SIGINT to the process itself.
+# A user's Ctrl-C comes from a terminal, where SIGINT has Python's handler; a process started
+# in the background of a non-interactive shell inherits SIGINT ignored, and Python then installs
+# none, so the child restores it first (the suite failed so when run by a shell script's `&`).
 CTRL_C = ("import os, signal, time\n"
+          "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
           "def ctrl_c(*_, **__):\n"
           "    os.kill(os.getpid(), signal.SIGINT)\n"
           "    time.sleep(30)\n")
