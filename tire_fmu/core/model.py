@@ -23,7 +23,8 @@ p_j = w_j + (z_road,j - z_rim)/cos θ_j (+ const), or the paper's prescribed pat
 stepping with the unilateral law itself is :mod:`.contact_dynamics`.
 
 Node quantities are line quantities times R·δθ, so matrices are in kg, N·s/m and N/m.
-Damping: material C = αM + βK₀ (K₀ the structure at rest, contact excluded) acting on the
+Damping: material C = αM + βK₀ (K₀ the structure at rest, contact and sidewall tie excluded)
+acting on the
 material rate of w; the contact damper c_j = β·k_j acts on the ground-frame rate of p_j.
 
 :func:`build_model` finds the grid, the static footprint and the critical speed; the sparse
