@@ -1,0 +1,221 @@
+"""The in-plane ring (radial and tangential motion, the rim's rotation) against closed forms.
+
+References written apart from the FDM code: the per-order continuum forms of
+core/inplane_analytic.py, the two-inertia torsion of order 0 written here, Huang & Soedel's
+split of an inextensible ring, and exact rigid-body motions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+import scipy.linalg
+
+from tire_fmu.core.inplane import InPlaneRing, InPlaneTire, TangentialParameters
+from tire_fmu.core.inplane_analytic import inextensible_split_factor, inplane_analytic_modes
+from tire_fmu.core.inplane_modes import (
+    order_frequencies_at_rest_hz,
+    order_frequencies_hz,
+    order_matrices,
+    quadratic_eigenvalues,
+    tire_modes,
+)
+from tire_fmu.core.parameters import DEFAULT_LOAD_N, ParameterError, TireParameters
+
+PAPER = TireParameters(sidewall_max_order=0.0)
+ORDERS = range(11)
+
+
+def classical(**tangential) -> InPlaneTire:
+    """The classical extensible ring on radial and tangential foundations: no pressure, a
+    massless sidewall (springs in series)."""
+    return InPlaneTire(replace(PAPER, inflation_pressure=0.0),
+                       TangentialParameters(**tangential), sidewall_mass=False)
+
+
+MODELS = {
+    "classical": classical(),
+    "tied sidewall": InPlaneTire(),
+    "lumped sidewall": InPlaneTire(sidewall_tangential="lumped"),
+}
+
+
+def max_order_error(model: InPlaneTire, n_elements: int) -> np.ndarray:
+    exact = inplane_analytic_modes(model, ORDERS).frequencies_hz
+    ring = InPlaneRing(model, n_elements)
+    return np.array([np.max(np.abs(order_frequencies_at_rest_hz(ring, n) / exact[n] - 1.0))
+                     for n in ORDERS])
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_every_order_and_branch_within_half_a_percent_at_n400(name):
+    assert max_order_error(MODELS[name], 400).max() < 5e-3
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_frequencies_converge_at_second_order(name):
+    errors = [max_order_error(MODELS[name], n)[1:].max() for n in (100, 200, 400)]
+    rates = [math.log2(errors[i] / errors[i + 1]) for i in range(2)]
+    assert all(1.9 < rate < 2.1 for rate in rates), rates
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_assembled_spectrum_is_the_union_of_the_orders(name):
+    """The per-order Fourier blocks are an exact block-diagonalisation of the assembled ring."""
+    ring = InPlaneRing(MODELS[name], 24)
+    full = np.sqrt(scipy.linalg.eigvalsh(ring.stiffness, ring.mass)) / (2 * np.pi)
+    per_order = np.sort(np.concatenate([order_frequencies_at_rest_hz(ring, n)
+                                        for n in range(-11, 13)]))
+    np.testing.assert_allclose(per_order, full, rtol=1e-9)
+
+
+def test_order_zero_separates_into_breathing_and_torsion():
+    model = classical()
+    k_r, k_t = model.series_foundation()
+    t, ea = model.tire, model.tangential.EA
+    ring = InPlaneRing(model, 100)
+    breathing = math.sqrt((ea / t.R**2 + k_r) / t.rhoA) / (2 * np.pi)
+    torsion = math.sqrt(k_t / t.rhoA) / (2 * np.pi)
+    np.testing.assert_allclose(order_frequencies_at_rest_hz(ring, 0), [torsion, breathing],
+                               rtol=1e-10)
+
+
+def test_translation_of_order_one_rides_on_the_foundation_alone():
+    """With a membrane too stiff to stretch the order-1 translation stores no membrane or
+    bending energy: sqrt((k_r + k_t)/(2ρA))."""
+    model = classical(EA=1e12, k_t1=1.0e6, k_t2=3.0e6)  # k_t != k_r: no accidental symmetry
+    k_r, k_t = model.series_foundation()
+    expected = math.sqrt((k_r + k_t) / (2 * model.tire.rhoA)) / (2 * np.pi)
+    lowest = order_frequencies_at_rest_hz(InPlaneRing(model, 400), 1)[0]
+    assert lowest == pytest.approx(expected, rel=1e-3)
+
+
+# ----- rigid motions -----
+
+@pytest.mark.parametrize("sidewall", ["tied", "lumped"])
+@pytest.mark.parametrize("speed_m_s", [0.0, 20.0])
+def test_rigid_translation_and_rotation_give_no_force(sidewall, speed_m_s):
+    """The whole tire moved with its rim (1 mm, 1 mrad): forces on every DOF and on the rim
+    below 1e-6 of the static load, at rest and rolling; a rigid translation at constant rate
+    meets no damping or gyroscopic force."""
+    model = InPlaneTire(sidewall_tangential=sidewall)
+    ring = InPlaneRing(model, 100, spin_rad_s=speed_m_s / model.tire.R, rim_free=True)
+    bound = 1e-6 * DEFAULT_LOAD_N
+    for motion in [(1e-3, 0, 0), (0, 1e-3, 0), (0, 0, 1e-3)]:
+        q = ring.rigid_motion(*motion)
+        assert np.abs(ring.stiffness @ q).max() < bound
+        assert np.abs(ring.rim_force(q, q)).max() < bound
+    for motion in [(1e-3, 0, 0), (0, 1e-3, 0)]:
+        assert np.abs(ring.damping @ ring.rigid_motion(*motion)).max() < bound
+
+
+def test_spin_up_is_a_uniform_radial_load_with_no_net_force():
+    """A change of spin rate ψ̇ at speed loads the ring through Coriolis as the extra
+    centrifugal force 2Ωψ̇ R ρA per metre, outwards and uniform: no force or moment."""
+    model = InPlaneTire(sidewall_mass=False)
+    spin = 30.0
+    ring = InPlaneRing(model, 64, spin_rad_s=spin, rim_free=True)
+    rate = ring.rigid_motion(psi_rad=1.0)  # ψ̇ = 1 rad/s
+    force = ring.damping @ rate
+    w = force[ring.field_slice("w")]
+    # the discrete L turns a rotation into κ₁ of it (κ₁ = sin δθ/δθ)
+    expected = 2 * spin * model.tire.rhoA * ring.node_arc_m * model.tire.R * ring.kappa1
+    np.testing.assert_allclose(-w, expected, rtol=1e-12)  # M q̈ + C q̇: -C q̇ is outwards
+    np.testing.assert_allclose(ring.rim_patterns.T @ force[: ring.n_ring_dof], 0, atol=1e-9)
+
+
+# ----- rolling -----
+
+@pytest.mark.parametrize("order", [2, 3, 4, 5, 6])
+def test_rolling_split_is_huang_and_soedel_for_a_stiff_membrane(order):
+    model = InPlaneTire(replace(PAPER, alpha=0.0, beta=0.0), TangentialParameters(EA=1e11),
+                        sidewall_mass=False)
+    spin = 2.0
+    f = order_frequencies_hz(InPlaneRing(model, 400, spin_rad_s=spin), order)
+    lowest = np.sort(np.abs(f))[:2]
+    split = (lowest[1] - lowest[0]) * 2 * np.pi
+    expected = 2 * spin * inextensible_split_factor(order)
+    assert split == pytest.approx(expected, rel=0.03)
+
+
+def test_order_one_pair_does_not_split_with_speed():
+    """n(n²-1)/(n²+1) = 0 at n = 1: the translation pair of the default tire stays together
+    (the radial-only ring splits it 47.3 / 67.3 Hz at 40.8 m/s). Left: the membrane's
+    stretch (k_r != k_t, finite EA) makes the mode not quite a translation."""
+    model = InPlaneTire(replace(PAPER, alpha=0.0, beta=0.0))
+    at_rest = order_frequencies_at_rest_hz(InPlaneRing(model, 200), 1)[0]
+    f = order_frequencies_hz(InPlaneRing(model, 200, spin_rad_s=40.8 / model.tire.R), 1)
+    pair = np.sort(np.abs(f))[:2]
+    assert pair[1] - pair[0] < 0.01 * at_rest
+    assert np.abs(pair - at_rest).max() < 0.01 * at_rest
+
+
+def test_rolling_undamped_ring_is_stable_and_real():
+    """Gyroscopic only (K > 0 at every speed for the tread): every root on the imaginary
+    axis at 30 m/s."""
+    model = InPlaneTire(replace(PAPER, alpha=0.0, beta=0.0), sidewall_mass=False)
+    ring = InPlaneRing(model, 64, spin_rad_s=30.0 / model.tire.R)
+    for n in range(6):
+        s = quadratic_eigenvalues(*order_matrices(ring, n))
+        assert np.abs(s.real).max() < 1e-6 * np.abs(s.imag).max()
+
+
+# ----- the rotational mode -----
+
+def torsion_closed_form_hz(model: InPlaneTire) -> tuple[float, float]:
+    """Order 0 tangential with the tied sidewall, written here: the tread turns by φ
+    (v = Rφ), the rim by ψ, the sidewall at v_s = R(rφ + (1 - r)ψ); the series spring k_t on
+    R(φ - ψ). Returns (rim held, rim free) in Hz."""
+    t, tang = model.tire, model.tangential
+    r = model.tangential_share
+    k_t = tang.k_t1 * tang.k_t2 / (tang.k_t1 + tang.k_t2)
+    length = 2 * np.pi * t.R
+    inertia = length * t.R**2
+    mass = np.array([[inertia * (t.rhoA + t.m_s * r**2), inertia * t.m_s * r * (1 - r)],
+                     [inertia * t.m_s * r * (1 - r),
+                      inertia * t.m_s * (1 - r) ** 2 + tang.wheel_inertia_kg_m2]])
+    stiffness = length * k_t * t.R**2 * np.array([[1.0, -1.0], [-1.0, 1.0]])
+    held = math.sqrt(stiffness[0, 0] / mass[0, 0]) / (2 * np.pi)
+    free = math.sqrt(scipy.linalg.eigvalsh(stiffness, mass)[1]) / (2 * np.pi)
+    return held, free
+
+
+def test_rotational_mode_with_rim_held_and_free():
+    model = InPlaneTire()
+    held, free = torsion_closed_form_hz(model)
+    modes_held = tire_modes(InPlaneRing(model, 100), f_max_hz=120)
+    modes_free = tire_modes(InPlaneRing(model, 100, rim_free=True), f_max_hz=120)
+    (rot_held,) = modes_held.select(kind="rotational")
+    (rot_free,) = modes_free.select(kind="rotational")
+    assert rot_held.frequency_hz == pytest.approx(held, rel=1e-9)
+    assert rot_free.frequency_hz == pytest.approx(free, rel=1e-9)
+    assert len(modes_free.select(kind="rigid")) == 3  # x, z and the free spin
+
+
+def test_a_heavier_wheel_lowers_the_free_rotational_mode_towards_the_held_one():
+    def free_hz(inertia):
+        model = InPlaneTire(tangential=TangentialParameters(wheel_inertia_kg_m2=inertia))
+        (mode,) = tire_modes(InPlaneRing(model, 32, rim_free=True), 200).select(
+            kind="rotational")
+        return mode.frequency_hz
+    held, _ = torsion_closed_form_hz(InPlaneTire())
+    values = [free_hz(i) for i in (2.0, 8.0, 1e5)]
+    assert values[0] > values[1] > values[2]
+    assert values[2] == pytest.approx(held, rel=1e-3)  # I_ring/I_w = 4e-4
+
+
+# ----- parameters -----
+
+def test_every_tangential_problem_is_reported_at_once():
+    with pytest.raises(ParameterError) as error:
+        InPlaneTire(tangential=TangentialParameters(EA=-1.0, rim_radius_m=0.9))
+    text = str(error.value)
+    assert "EA = -1" in text and "rim_radius_m = 0.9" in text and "R = 0.65" in text
+
+
+def test_the_tied_radial_sidewall_is_refused_with_the_remedy():
+    with pytest.raises(ParameterError, match="sidewall_max_order = 8.*GL073A"):
+        InPlaneTire(tire=TireParameters())

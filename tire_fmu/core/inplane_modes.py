@@ -1,0 +1,129 @@
+"""Modes of the in-plane ring: per circumferential order, and of the assembled tire.
+
+The free ring with the rim held is circulant, so the Fourier vectors e^{inθ_j} of each field
+block-diagonalise its matrices exactly: :func:`order_matrices` gives the small (2 or 4 field)
+system of order n, from which the ground-frame frequencies follow without any order-matching
+of eigenvectors. :func:`tire_modes` solves the assembled tire (rim held or free) and labels each
+mode by its dominant order, its kind (radial, tangential, rotational for the tangential n = 0)
+and, with a sidewall mass, whether tread and sidewall move in or out of phase.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .inplane import InPlaneRing
+
+
+def _fourier(ring: InPlaneRing, n: int) -> np.ndarray:
+    """(n_ring_dof, fields): the unit Fourier vector of order n in each field."""
+    column = np.exp(1j * n * ring.theta) / np.sqrt(ring.n_elements)
+    return np.kron(np.eye(ring.n_fields), column[:, None])
+
+
+def order_matrices(ring: InPlaneRing, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(M_n, C_n, K_n): the ring's matrices on order n (rim held), complex (fields x fields)."""
+    if ring.rim_free:
+        raise ValueError("rim_free: the rim couples orders 0 and 1; use tire_modes")
+    f = _fourier(ring, n)
+    return tuple(f.conj().T @ a @ f for a in (ring.mass, ring.damping, ring.stiffness))
+
+
+def quadratic_eigenvalues(mass, damping, stiffness) -> np.ndarray:
+    """Eigenvalues s of (s²M + sC + K) q = 0 by the companion form, sorted by |Im s|."""
+    size = mass.shape[0]
+    inv_m = np.linalg.solve(mass, np.eye(size))
+    companion = np.block([[np.zeros((size, size)), np.eye(size)],
+                          [-inv_m @ stiffness, -inv_m @ damping]])
+    s = scipy.linalg.eigvals(companion)
+    return s[np.argsort(np.abs(s.imag), kind="stable")]
+
+
+def order_frequencies_hz(ring: InPlaneRing, n: int) -> np.ndarray:
+    """Signed ground-frame frequencies of order n (Hz), ascending.
+
+    A root s = iω on e^{inθ} is the wave e^{i(nθ + ωt)}: ω > 0 travels against θ, ω < 0 with
+    it; the magnitudes of a pair are the two frequencies a ground-fixed sensor sees for order
+    |n|. At rest each frequency appears with both signs."""
+    m, c, k = order_matrices(ring, n)
+    return np.sort(quadratic_eigenvalues(m, c, k).imag) / (2.0 * np.pi)
+
+
+def order_frequencies_at_rest_hz(ring: InPlaneRing, n: int) -> np.ndarray:
+    """Undamped frequencies of order n at rest (Hz, ascending), from the Hermitian pencil."""
+    m, _, k = order_matrices(ring, n)
+    lam = scipy.linalg.eigvalsh(0.5 * (k + k.conj().T), 0.5 * (m + m.conj().T))
+    return np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi)
+
+
+@dataclass(frozen=True, eq=False)
+class InPlaneMode:
+    frequency_hz: float
+    order: int
+    kind: str  # "radial", "tangential", "rotational" or "rigid" (a free rim's zero modes)
+    phase: str  # "in", "out" (tread and sidewall) or "" (massless sidewall, or rim rigid)
+    tangential_share: float  # share of the ring's kinetic energy in v and v_s
+
+
+@dataclass(frozen=True, eq=False)
+class InPlaneModes:
+    ring: InPlaneRing
+    modes: tuple[InPlaneMode, ...]
+    shapes: np.ndarray  # (n_dof, modes), mass-normalised
+
+    def frequencies_hz(self) -> np.ndarray:
+        return np.array([m.frequency_hz for m in self.modes])
+
+    def select(self, *, kind: str | None = None, order: int | None = None,
+               phase: str | None = None) -> list[InPlaneMode]:
+        return [m for m in self.modes
+                if (kind is None or m.kind == kind) and (order is None or m.order == order)
+                and (phase is None or m.phase == phase)]
+
+    def to_dict(self) -> dict:
+        return {"n_elements": self.ring.n_elements, "rim_free": self.ring.rim_free,
+                "modes": [m.__dict__ for m in self.modes]}
+
+
+#: Frequencies below this (Hz) are the free rim's rigid-body modes.
+RIGID_MODE_HZ = 1e-3
+
+
+def _label(ring: InPlaneRing, shape: np.ndarray, frequency_hz: float) -> InPlaneMode:
+    n = ring.n_elements
+    fields = {name: shape[ring.field_slice(name)]
+              for name in ("w", "v", "w_s", "v_s")[: ring.n_fields]}
+    masses = ring.ring_mass.diagonal()
+    energy = {name: float(np.sum(masses[ring.field_slice(name)] * np.abs(value) ** 2))
+              for name, value in fields.items()}
+    total = sum(energy.values()) or 1.0
+    tangential = (energy["v"] + energy.get("v_s", 0.0)) / total
+    spectrum = sum(np.abs(np.fft.rfft(value)) ** 2 for value in fields.values())
+    order = int(np.argmax(spectrum[: n // 2 + 1]))
+    if frequency_hz < RIGID_MODE_HZ:
+        return InPlaneMode(frequency_hz, order, "rigid", "", tangential)
+    kind = "tangential" if tangential > 0.5 else "radial"
+    if kind == "tangential" and order == 0:
+        kind = "rotational"
+    phase = ""
+    key = ("w", "w_s") if kind == "radial" else ("v", "v_s")
+    if key[1] in fields:  # a tied or massless sidewall has no phase of its own
+        phase = "in" if float(np.real(np.vdot(fields[key[0]], fields[key[1]]))) >= 0 else "out"
+    return InPlaneMode(frequency_hz, order, kind, phase, tangential)
+
+
+def tire_modes(ring: InPlaneRing, f_max_hz: float | None = None) -> InPlaneModes:
+    """Undamped modes of the assembled tire at rest (rim held or free), labelled."""
+    if ring.spin_rad_s != 0.0:
+        raise ValueError("tire_modes is the tire at rest; order_frequencies_hz gives the "
+                         "rolling ring's ground-frame frequencies")
+    k = 0.5 * (ring.stiffness + ring.stiffness.T)
+    lam, vec = scipy.linalg.eigh(k, ring.mass)
+    freq = np.sqrt(np.maximum(lam, 0.0)) / (2.0 * np.pi)
+    keep = slice(None) if f_max_hz is None else freq <= f_max_hz
+    freq, vec = freq[keep], vec[:, keep]
+    return InPlaneModes(ring, tuple(_label(ring, vec[:, i], freq[i]) for i in range(len(freq))),
+                        vec)
