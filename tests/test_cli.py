@@ -64,6 +64,8 @@ FAST_COMMANDS = [
     ["speed-sweep", "--elements", "40", "--steps", "2", "--nmax", "2"],
     ["critical-speed", "--elements", "40"],
     ["cleat", "--elements-list", "20", "--length", "0.01"],
+    ["inplane-modes", "--elements", "40", "--max-frequency", "80"],
+    ["inplane-modes", "--elements", "40", "--speed", "10", "--nmax", "3"],
 ]
 
 

@@ -213,9 +213,39 @@ def test_every_tangential_problem_is_reported_at_once():
     with pytest.raises(ParameterError) as error:
         InPlaneTire(tangential=TangentialParameters(EA=-1.0, rim_radius_m=0.9))
     text = str(error.value)
-    assert "EA = -1" in text and "rim_radius_m = 0.9" in text and "R = 0.65" in text
+    assert "EA = -1 N: must be a number in [1000, 1e+12] N" in text
+    assert "rim_radius_m = 0.9 m: must be below the tread radius R = 0.65 m" in text
 
 
 def test_the_tied_radial_sidewall_is_refused_with_the_remedy():
-    with pytest.raises(ParameterError, match="sidewall_max_order = 8.*GL073A"):
+    with pytest.raises(ParameterError, match="sidewall_max_order = 8: must be 0.*GL073A"):
         InPlaneTire(tire=TireParameters())
+
+
+# ----- the command -----
+
+def test_command_reports_the_modes_the_core_computes(capsys):
+    import json
+
+    from tire_fmu.cli import main
+
+    assert main(["inplane-modes", "--rim-free", "--elements", "40", "--max-frequency", "80",
+                 "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    expected = tire_modes(InPlaneRing(InPlaneTire(), 40, rim_free=True), f_max_hz=80)
+    assert [m["kind"] for m in data["modes"]] == [m.kind for m in expected.modes]
+    np.testing.assert_allclose([m["frequency_hz"] for m in data["modes"]],
+                               expected.frequencies_hz(), rtol=1e-12, atol=1e-9)
+    held, free = torsion_closed_form_hz(InPlaneTire())
+    (rotational,) = [m for m in data["modes"] if m["kind"] == "rotational"]
+    assert rotational["frequency_hz"] == pytest.approx(free, rel=1e-9)
+
+
+def test_command_refuses_bad_tangential_data_in_one_line(capsys):
+    from tire_fmu.cli import main
+
+    assert main(["inplane-modes", "--tangential", "EA=-3", "--tangential", "k_t2=0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "EA = -3 N" in err and "k_t2 = 0 N/m^2" in err
+    assert main(["inplane-modes", "--tangential", "EA"]) == 2
+    assert "expected NAME=VALUE" in capsys.readouterr().err

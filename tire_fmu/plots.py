@@ -497,3 +497,42 @@ def plot_cleat_convergence(result, path: Path) -> Path:
     table_ax.text(0.5, 0.0, note, transform=table_ax.transAxes, ha="center", fontsize=9)
     fig.tight_layout()
     return _save(fig, plt, path)
+
+
+def plot_inplane_modes(result, path: Path, max_modes: int = 12, scale: float = 0.15) -> Path:
+    """Deformed shapes of the in-plane ring: the tread line displaced radially and
+    tangentially (x forward, z up, contact centre at the bottom), with ticks on material
+    points so the tangential motion shows; the rim drawn where it is free."""
+    plt = _pyplot()
+    ring = result.ring
+    count = min(max_modes, len(result.modes))
+    cols = min(4, max(count, 1))
+    rows = max(1, int(np.ceil(count / cols)))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.0 * cols, 3.1 * rows), squeeze=False)
+    th = ring.theta
+    radial = np.stack([-np.sin(th), -np.cos(th)])
+    tangential = np.stack([-np.cos(th), np.sin(th)])
+    for ax in axes.ravel()[count:]:
+        ax.set_visible(False)
+    for i, ax in zip(range(count), axes.ravel()):
+        shape = result.shapes[:, i]
+        w, v = shape[ring.field_slice("w")], shape[ring.field_slice("v")]
+        peak = max(np.max(np.abs(w)), np.max(np.abs(v))) or 1.0
+        xy = radial * (1.0 + w / peak * scale) + tangential * (v / peak * scale)
+        ax.plot(*np.c_[radial, radial[:, :1]], color="0.8", lw=0.8)
+        ax.plot(*np.c_[xy, xy[:, :1]], color="C0", lw=1.5)
+        ticks = slice(None, None, max(1, ring.n_elements // 16))
+        ax.plot(xy[0, ticks], xy[1, ticks], "o", color="C3", ms=2.5)
+        ax.plot(radial[0, ticks], radial[1, ticks], "o", color="0.6", ms=2.0)
+        ax.set_aspect("equal")
+        ax.axis("off")
+        m = result.modes[i]
+        ax.set_title(f"{m.frequency_hz:.1f} Hz  n={m.order} {m.kind} {m.phase}".strip(),
+                     fontsize=9)
+    rim = "free rim" if ring.rim_free else "rim held"
+    fig.suptitle(f"In-plane modes ({rim}, N = {ring.n_elements}; red: material points)",
+                 fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

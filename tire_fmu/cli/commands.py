@@ -9,6 +9,8 @@ from __future__ import annotations
 #: command -> (module in tire_fmu.cli, help line), in the order --help lists them
 COMMANDS: dict[str, tuple[str, str]] = {
     "modes": ("ring", "natural frequencies, damping and labelled mode shapes"),
+    "inplane-modes": ("inplane", "modes of the full in-plane ring: radial, tangential and "
+                      "rotational, rim held or free"),
     "analytic": ("ring", "closed-form frequencies of the undeformed ring (eq. 12)"),
     "patch": ("ring", "static footprint for a load (or a deflection): length, pressure, "
               "stiffness"),

@@ -106,12 +106,12 @@ def tangential_problems(values: TangentialParameters, tread_radius_m: float) -> 
     for name, (low, high, unit) in TANGENTIAL_RANGES.items():
         value = getattr(values, name)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
-            problems.append(Problem(name, value, f"in [{low:g}, {high:g}] {unit}"))
+            problems.append(Problem(name, value, unit, f"a number in [{low:g}, {high:g}] {unit}"))
     rim = values.rim_radius_m
     if isinstance(rim, (int, float)) and math.isfinite(rim) and rim >= tread_radius_m:
-        problems.append(Problem("rim_radius_m", rim,
-                                f"below the tread radius R = {tread_radius_m:g} m (the sidewall "
-                                "spans from the rim to the tread)"))
+        problems.append(Problem("rim_radius_m", rim, "m",
+                                f"below the tread radius R = {tread_radius_m:g} m",
+                                "the sidewall spans from the rim to the tread"))
     return problems
 
 
@@ -138,14 +138,14 @@ class InPlaneTire:
     def __post_init__(self) -> None:
         problems = tangential_problems(self.tangential, self.tire.R)
         if self.sidewall_tangential not in ("tied", "lumped"):
-            problems.append(Problem("sidewall_tangential", self.sidewall_tangential,
+            problems.append(Problem("sidewall_tangential", self.sidewall_tangential, "",
                                     "'tied' or 'lumped'"))
         if self.tire.sidewall_max_order > 0 or self.tire.sidewall_shear > 0:
             problems.append(Problem(
-                "sidewall_max_order", self.tire.sidewall_max_order,
-                "0 with sidewall_shear = 0 for the in-plane ring (it has the paper's lumped "
-                "sidewall; the tie of the radial ring is not carried over yet): use "
-                "--tire-file GL073A"))
+                "sidewall_max_order", self.tire.sidewall_max_order, "",
+                "0 with sidewall_shear = 0 for the in-plane ring",
+                "it has the paper's lumped radial sidewall; the radial ring's tie is not "
+                "carried over yet: use the tire file GL073A"))
         if problems:
             raise ParameterError(problems)
 

@@ -1,0 +1,125 @@
+"""The in-plane ring's command: ``tire-fmu inplane-modes`` (radial, tangential and rotational
+modes of the tire with its rim held or free; ground-frame frequencies per order at speed)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .commands import command_help
+from .common import (
+    CliError,
+    Output,
+    add_output_options,
+    add_tire_options,
+    checked_tire,
+    elements_problem,
+    plot_with,
+    positive_problem,
+    raise_problems,
+    range_problem,
+    table,
+    write_plot,
+)
+
+#: The in-plane ring has the paper's lumped radial sidewall: its default tire is GL073A.
+DEFAULT_TIRE_FILE = "GL073A"
+
+
+def register(subparsers) -> None:
+    from ..core.inplane import TANGENTIAL_RANGES
+
+    names = ", ".join(f"{name} [{unit}]" for name, (_, _, unit) in TANGENTIAL_RANGES.items())
+    p = subparsers.add_parser(
+        "inplane-modes",
+        help=command_help("inplane-modes"),
+        description="Modes of the full in-plane ring (radial and tangential motion of tread and "
+        "sidewall), undeformed, with the rim held or (--rim-free) free to translate and turn "
+        "with the wheel's mass and inertia. Each mode is labelled with its dominant order and "
+        "kind (radial, tangential, rotational: the tangential order 0). With --speed, the "
+        "ground-frame frequencies of each order (rim held) instead. The tire data default to "
+        f"{DEFAULT_TIRE_FILE} (the in-plane ring has its lumped radial sidewall).",
+    )
+    p.add_argument("--elements", metavar="N", type=int, default=100,
+                   help="number of nodes around the ring (default 100)")
+    p.add_argument("--rim-free", action="store_true",
+                   help="let the rim translate and turn (wheel mass and inertia from --tangential)")
+    p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
+                   help="forward speed in m/s: list each order's ground-frame frequencies")
+    p.add_argument("--nmax", metavar="N", type=int, default=8,
+                   help="highest order listed with --speed (default 8)")
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=200.0,
+                   help="highest frequency listed in Hz (default 200)")
+    p.add_argument("--sidewall-tangential", choices=("tied", "lumped"), default="tied",
+                   help="the sidewall's tangential motion: tied to the tread at its static "
+                   "share (default) or lumped masses of its own")
+    p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
+                   help=f"override a tangential parameter (repeatable). Names: {names}")
+    add_tire_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_inplane_modes)
+
+
+def _tangential(items: list[str]):
+    from ..core.inplane import TANGENTIAL_RANGES, TangentialParameters
+
+    values = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or name not in TANGENTIAL_RANGES:
+            raise CliError(f"--tangential {item!r}: expected NAME=VALUE with NAME one of "
+                           f"{', '.join(TANGENTIAL_RANGES)}")
+        try:
+            values[name] = float(text)
+        except ValueError:
+            raise CliError(f"--tangential {item!r}: {text!r} is not a number") from None
+    return TangentialParameters(**values)
+
+
+def run_inplane_modes(args: argparse.Namespace) -> Output:
+    import numpy as np
+
+    from ..core.inplane import InPlaneRing, InPlaneTire
+    from ..core.inplane_modes import order_frequencies_hz, tire_modes
+
+    raise_problems([elements_problem(args.elements),
+                    positive_problem("--max-frequency", args.max_frequency, "Hz"),
+                    range_problem("--speed", args.speed, 0.0, 150.0, "m/s"),
+                    range_problem("--nmax", args.nmax, 0, args.elements // 2, integer=True)])
+    if args.tire_file is None:
+        args.tire_file = DEFAULT_TIRE_FILE
+    model = InPlaneTire(checked_tire(args), _tangential(args.tangential),
+                        sidewall_tangential=args.sidewall_tangential)
+    spin = args.speed / model.tire.R
+    if args.speed > 0:
+        if args.rim_free:
+            raise CliError("--speed with --rim-free: the per-order frequencies are the ring's "
+                           "with the rim held (the free rim couples orders 0 and 1)")
+        ring = InPlaneRing(model, args.elements, spin_rad_s=spin)
+        rows, data = [], []
+        for n in range(args.nmax + 1):
+            f = order_frequencies_hz(ring, n)
+            f = f[np.abs(f) <= args.max_frequency]
+            forward = np.sort(-f[f < 0])  # e^{i(nθ + ωt)} with ω < 0: travels with θ
+            backward = np.sort(f[f > 0])
+            rows.append([n, ", ".join(f"{x:.2f}" for x in backward),
+                         ", ".join(f"{x:.2f}" for x in forward)])
+            data.append({"order": n, "against_rotation_hz": backward.tolist(),
+                         "with_rotation_hz": forward.tolist()})
+        head = (f"ground-frame frequencies per order at {args.speed:g} m/s, rim held, "
+                f"N = {args.elements}")
+        return Output(text=head + "\n" + table(rows, ["n", "waves against θ [Hz]",
+                                                       "waves with θ [Hz]"]),
+                      data={"speed_m_s": args.speed, "orders": data})
+    ring = InPlaneRing(model, args.elements, rim_free=args.rim_free)
+    result = tire_modes(ring, f_max_hz=args.max_frequency)
+    rows = [[i + 1, m.frequency_hz, m.order, m.kind, m.phase, m.tangential_share]
+            for i, m in enumerate(result.modes)]
+    rim = "rim free" if args.rim_free else "rim held"
+    head = (f"{len(result.modes)} in-plane modes up to {args.max_frequency:g} Hz; "
+            f"N = {args.elements}, {rim}, undeformed, at rest")
+    output = Output(text=head + "\n" + table(rows, ["#", "f [Hz]", "order", "kind", "phase",
+                                                    "tangential share"]),
+                    data=result.to_dict() | {"tangential": model.tangential.as_dict()})
+    write_plot(args, output, plot_with("plot_inplane_modes", result))
+    return output
