@@ -196,6 +196,82 @@ def pressure_law_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-closed-form")
+def inplane_closed_form_table() -> str:
+    import numpy as np
+
+    from tire_fmu.core.inplane import InPlaneRing, InPlaneTire
+    from tire_fmu.core.inplane_analytic import inplane_analytic_modes
+    from tire_fmu.core.inplane_modes import order_frequencies_at_rest_hz
+
+    model = InPlaneTire()
+    orders = range(11)
+    exact = inplane_analytic_modes(model, orders).frequencies_hz
+    rings = {n: InPlaneRing(model, n) for n in (100, 400)}
+    lines = ["| n | closed form [Hz] | FDM N = 100 [Hz] | FDM N = 400 [Hz] | largest error, "
+             "N = 100 / 400 |", "|---|---|---|---|---|"]
+    for n in orders:
+        fdm = {m: order_frequencies_at_rest_hz(r, n) for m, r in rings.items()}
+        err = [f"{np.max(np.abs(fdm[m] / exact[n] - 1)) * 100:.3f} %" for m in rings]
+        lines.append(f"| {n} | " + " | ".join(
+            ", ".join(f"{x:.2f}" for x in row) for row in (exact[n], fdm[100], fdm[400]))
+            + f" | {err[0]} / {err[1]} |")
+    lines += ["", "Every branch of each order (tread radial and tangential, sidewall radial) of the "
+              "default in-plane tire (GL073A with the default tangential data), undeformed, rim "
+              "held; computed by `docs/generate.py` (the same as `tire-fmu inplane-modes "
+              "--elements N`; closed form: core/inplane_analytic.py)."]
+    return "\n".join(lines)
+
+
+@generator("inplane-rolling")
+def inplane_rolling_table() -> str:
+    import numpy as np
+
+    from tire_fmu.core.inplane import InPlaneRing, InPlaneTire
+    from tire_fmu.core.inplane_analytic import inextensible_split_factor
+    from tire_fmu.core.inplane_modes import order_frequencies_hz
+
+    model = InPlaneTire()
+    lines = ["| V [m/s] | n | pair [Hz] | split [Hz] | 2nΩ(n²−1)/(n²+1) [Hz] | radial-only "
+             "ring 2nΩ [Hz] |", "|---|---|---|---|---|---|"]
+    for speed in (10.0, 40.8):
+        spin = speed / model.tire.R
+        ring = InPlaneRing(model, 200, spin_rad_s=spin)
+        for n in range(1, 7 if speed < 20 else 5):
+            pair = np.sort(np.abs(order_frequencies_hz(ring, n)))[:2]
+            lines.append(f"| {speed:g} | {n} | {pair[0]:.2f} / {pair[1]:.2f} | "
+                         f"{pair[1] - pair[0]:.2f} | "
+                         f"{2 * spin * inextensible_split_factor(n) / (2 * np.pi):.2f} | "
+                         f"{2 * n * spin / (2 * np.pi):.2f} |")
+    lines += ["", "The lowest pair of each order seen from the ground (N = 200, rim held, the "
+              "default in-plane tire with its damping); at 40.8 m/s the slow wave of orders above 4 "
+              "meets the sidewall's radial branch, so the lowest two are no longer one pair; "
+              "computed by `docs/generate.py` (the "
+              "same as `tire-fmu inplane-modes --speed V --elements 200`)."]
+    return "\n".join(lines)
+
+
+@generator("inplane-rotational")
+def inplane_rotational_table() -> str:
+    from tire_fmu.core.inplane import InPlaneRing, InPlaneTire
+    from tire_fmu.core.inplane_modes import tire_modes
+
+    model = InPlaneTire()
+    tang = model.tangential
+    lines = ["| rim | rotational mode [Hz] | first modes [Hz] (kind, order) |", "|---|---|---|"]
+    for free in (False, True):
+        result = tire_modes(InPlaneRing(model, 100, rim_free=free), f_max_hz=80)
+        (rot,) = result.select(kind="rotational")
+        first = [m for m in result.modes if m.kind != "rigid"][:6]
+        lines.append(f"| {'free' if free else 'held'} | {rot.frequency_hz:.2f} | "
+                     + ", ".join(f"{m.frequency_hz:.1f} ({m.kind}, {m.order})" for m in first)
+                     + " |")
+    lines += ["", f"N = 100, undeformed, at rest; wheel {tang.wheel_mass_kg:g} kg and "
+              f"{tang.wheel_inertia_kg_m2:g} kg m² when free; computed by `docs/generate.py` "
+              "(the same as `tire-fmu inplane-modes [--rim-free]`)."]
+    return "\n".join(lines)
+
+
 @generator("tied-sidewall")
 def tied_sidewall_table() -> str:
     import numpy as np
