@@ -216,7 +216,8 @@ def inplane_closed_form_table() -> str:
         lines.append(f"| {n} | " + " | ".join(
             ", ".join(f"{x:.2f}" for x in row) for row in (exact[n], fdm[100], fdm[400]))
             + f" | {err[0]} / {err[1]} |")
-    lines += ["", "Every branch of each order (tread radial and tangential, sidewall radial) of the "
+    lines += ["", "Every branch of each order (tread radial and tangential, sidewall radial) of "
+              "the "
               "default in-plane tire (GL073A with the default tangential data), undeformed, rim "
               "held; computed by `docs/generate.py` (the same as `tire-fmu inplane-modes "
               "--elements N`; closed form: core/inplane_analytic.py)."]
@@ -244,7 +245,8 @@ def inplane_rolling_table() -> str:
                          f"{2 * spin * inextensible_split_factor(n) / (2 * np.pi):.2f} | "
                          f"{2 * n * spin / (2 * np.pi):.2f} |")
     lines += ["", "The lowest pair of each order seen from the ground (N = 200, rim held, the "
-              "default in-plane tire with its damping); at 40.8 m/s the slow wave of orders above 4 "
+              "default in-plane tire with its damping); at 40.8 m/s the slow wave of orders "
+              "above 4 "
               "meets the sidewall's radial branch, so the lowest two are no longer one pair; "
               "computed by `docs/generate.py` (the "
               "same as `tire-fmu inplane-modes --speed V --elements 200`)."]
