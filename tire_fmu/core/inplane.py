@@ -49,7 +49,7 @@ the axle in the direction of rotation (positive y of ISO 8855 for a tire rolling
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -75,7 +75,12 @@ class TangentialParameters:
       first in-plane rotational mode is reported (a truck tire's is below a car tire's 35-45 Hz);
     - ``rim_radius_m``: where the sidewall meets the rim, the 20 inch seat;
     - ``wheel_mass_kg``, ``wheel_inertia_kg_m2``: the rim and wheel, for the modes with the
-      rim free (a steel 20 inch truck wheel: about 60 kg and 8 kg m²).
+      rim free (a steel 20 inch truck wheel: about 60 kg and 8 kg m²);
+    - ``k_tx``: the tread rubber's fore-aft (shear) stiffness per metre of circumference, the
+      bristle of a brush model, 5e7 N/m²: the brush's longitudinal slip stiffness 2 k a² with
+      a footprint half-length a of 6-9 cm is then 10-25 times a 27.7 kN load, the range of
+      truck tires' C_Fκ/Fz (Pacejka, Tire and Vehicle Dynamics, truck data);
+    - ``friction_coefficient``: μ of the tread on the road, 0.8 (dry asphalt, truck tire).
     """
 
     EA: float = 1.0e7
@@ -84,6 +89,8 @@ class TangentialParameters:
     rim_radius_m: float = GL073A_RIM_RADIUS_M
     wheel_mass_kg: float = 60.0
     wheel_inertia_kg_m2: float = 8.0
+    k_tx: float = 5.0e7
+    friction_coefficient: float = 0.8
 
     def as_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -97,6 +104,8 @@ TANGENTIAL_RANGES = {
     "rim_radius_m": (1e-3, 10.0, "m"),
     "wheel_mass_kg": (1e-3, 1e5, "kg"),
     "wheel_inertia_kg_m2": (1e-6, 1e5, "kg*m^2"),
+    "k_tx": (0.0, 1e12, "N/m^2"),
+    "friction_coefficient": (0.0, 3.0, ""),
 }
 
 
@@ -106,7 +115,8 @@ def tangential_problems(values: TangentialParameters, tread_radius_m: float) -> 
     for name, (low, high, unit) in TANGENTIAL_RANGES.items():
         value = getattr(values, name)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
-            problems.append(Problem(name, value, unit, f"a number in [{low:g}, {high:g}] {unit}"))
+            problems.append(Problem(name, value, unit,
+                                    f"a number in [{low:g}, {high:g}] {unit}".rstrip()))
     rim = values.rim_radius_m
     if isinstance(rim, (int, float)) and math.isfinite(rim) and rim >= tread_radius_m:
         problems.append(Problem("rim_radius_m", rim, "m",
@@ -386,20 +396,30 @@ class InPlaneRing:
             return np.concatenate([ring, [x_m, z_m, psi_rad]])
         return ring
 
-    def rim_force(self, q: np.ndarray, qdot: np.ndarray | None = None) -> np.ndarray:
-        """(Fx, Fz, My): force (N) and moment about the axle (N m) the tire puts on the rim:
-        the springs' reaction Pᵀ(K_rel u_rel + C u̇_rel) on the rim-relative motion (the
-        gyroscopic forces are inertia of the ring, not carried by the rim)."""
-        full = self._tie @ q
-        full_rate = None if qdot is None else self._tie @ qdot
-        built = self._n_built * self.n_elements
-        patterns = self._patterns(self._n_built)
-        if self.rim_free:
-            rel = full[:built] - patterns @ full[built:]
-            rel_rate = None if qdot is None else full_rate[:built] - patterns @ full_rate[built:]
-        else:
-            rel, rel_rate = full, full_rate
-        f = (self._built_elastic + self._built_rolling) @ rel
-        if rel_rate is not None:
-            f = f + self._built_damping @ rel_rate
-        return patterns.T @ f
+    @cached_property
+    def _with_free_rim(self) -> InPlaneRing:
+        return self if self.rim_free else replace(self, rim_free=True)
+
+    def rim_force(self, q: np.ndarray, qdot: np.ndarray | None = None,
+                  qddot: np.ndarray | None = None) -> np.ndarray:
+        """(Fx, Fz, My): force (N) and moment about the axle (N m) the tire puts on the rim.
+
+        The rim's rows of the tire's forces K q + C q̇ + M_tire q̈ (the wheel's own inertia
+        excluded), negated: what a held rim must resist. With the rim held (no rim DOFs in q)
+        they are read from the same tire with the rim free and at rest. They include the
+        share of the sidewall's inertia the tie hands to the rim; the gyroscopic forces of
+        the tread are the tread's own inertia and reach the rim through the springs."""
+        twin = self._with_free_rim
+
+        def embed(x):
+            return x if self.rim_free else np.concatenate([x, np.zeros(3)])
+
+        f = twin.stiffness @ embed(q)
+        if qdot is not None:
+            f = f + twin.damping @ embed(qdot)
+        if qddot is not None:
+            tang = self.model.tangential
+            wheel = np.diag([tang.wheel_mass_kg, tang.wheel_mass_kg, tang.wheel_inertia_kg_m2])
+            f = f + twin.mass @ embed(qddot)
+            f[-3:] -= wheel @ embed(qddot)[-3:]
+        return -f[-3:]

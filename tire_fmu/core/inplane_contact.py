@@ -1,0 +1,372 @@
+"""The in-plane ring on the road: normal contact and a brush of tread elements with Coulomb
+friction at the contact points, stepped in time with the unreduced ring.
+
+**Points.** The contact points of :func:`.contact.contact_zone` (ground-fixed, at most
+``point_spacing_m`` apart, each reading the tread by cubic Lagrange interpolation of the
+nearest nodes and loading them by the same weights). Point p at ray angle θ_p reads the
+tread's rim-relative (w_p, v_p); the material there sits at height
+z_p = -(R + w_p) cos θ_p + v_p sin θ_p below the axle and x_p = -(R + w_p) sin θ_p -
+v_p cos θ_p ahead of it.
+
+**Normal law.** The road at height h_p under the point (the obstacle averaged over the
+point's window of road, as in the radial model) is at -(R - δ) + h_p, δ the rim's static
+deflection; the vertical penetration, linearised in the displacements, is
+pen_p = R cos θ_p - (R - δ) + h_p + w_p cos θ_p - v_p sin θ_p, and the road pushes the
+tread up with f_n = max(0, k_p pen + c_p pen_rate) while pen > 0 (k_p = k_cw over the point's
+arc, c_p = β k_p, the radial model's law, now vertical).
+
+**Tread elements and friction.** Each point carries a tread element (a bristle) of fore-aft
+stiffness k_x,p = k_tx over its arc between the belt and the road. Its deflection e (the belt
+end ahead of the road end) is a field fixed in the ground, carried through the footprint by
+the rolling: ∂e/∂t + Ω ∂e/∂θ = s, with s the belt's fore-aft velocity relative to the road,
+
+    s_p = [(∂t + Ω L) u]_x,p - Ω R cos θ_p + V,
+
+the material velocity of the tread at the point (rim-relative L u: a rigid turn of the wheel
+moves no geometry) plus the road's speed V. It is zero when the point leaves the road and
+enters at the front at zero. The element pulls the belt with f_x = -k_x,p e while it sticks,
+|k_x,p e| <= μ f_n; beyond, the element slides and e is held at the limit. The element's
+stiffness is the regularisation of Coulomb's law: stick is elastic, with the tread's own shear
+compliance, and no other parameter enters.
+
+**Forces on the ring.** The contact forces do work on the material's motion: the vertical
+force through -∂pen/∂q and the fore-aft one through ∂x_p/∂q, both including the wheel's
+rotation ψ (a force off the contact centre has a moment about the axle: this is how an
+asymmetric pressure gives a rolling-resistance moment).
+
+**Stepping.** Trapezoidal rule (Newmark, average acceleration) on the ring with the rim's
+translation held and its rotation free (wheel inertia, a torque applied) or held at the
+nominal spin; the contact forces are implicit in the step, solved by an active-set iteration
+on (in contact, sticking). The element's convection is semi-Lagrangian (its state at θ_p - Ωh,
+linearly interpolated, plus the step's slip by the trapezoidal rule).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
+from .discretisation import Grid
+from .inplane import InPlaneRing, InPlaneTire
+from .obstacles import Obstacle
+from .parameters import ParameterError, Problem
+
+#: Most active-set passes one step may take before it is refused.
+MAX_SET_PASSES = 50
+
+
+class ContactSetError(RuntimeError):
+    """The step's contact and stick sets did not settle."""
+
+
+@dataclass(frozen=True)
+class InPlaneRun:
+    """Histories of a run (SI): rim force and moment on the rim, contact totals, wheel spin."""
+
+    time_s: np.ndarray
+    rim_fx_n: np.ndarray
+    rim_fz_n: np.ndarray
+    rim_my_n_m: np.ndarray
+    contact_fz_n: np.ndarray  # road's vertical push on the tread, summed
+    contact_fx_n: np.ndarray  # road's fore-aft force on the tread, summed (+ forward)
+    spin_rad_s: np.ndarray  # the wheel's spin (nominal + ψ̇)
+    sliding_points: np.ndarray  # how many points slide
+
+    def to_dict(self) -> dict:
+        return {k: v.tolist() for k, v in self.__dict__.items()}
+
+
+@dataclass
+class InPlaneSimulator:
+    """Unreduced in-plane tire on a road moving at ``speed_m_s`` under a held axle.
+
+    ``wheel`` is ``"free"`` (ψ a DOF with the wheel inertia; apply ``torque_n_m``) or
+    ``"held"`` (spin fixed at the nominal V/R). ``obstacle`` starts ``obstacle_ahead_m`` in
+    front of the contact centre (road distance)."""
+
+    model: InPlaneTire
+    n_elements: int = 100
+    speed_m_s: float = 10.0
+    deflection_m: float = 0.0
+    step_s: float = 1e-4
+    wheel: str = "free"
+    zone_length_m: float = DEFAULT_ZONE_LENGTH_M
+    point_spacing_m: float = 0.01
+    obstacle: Obstacle | None = None
+    obstacle_ahead_m: float = 0.5
+    torque_n_m: float = 0.0
+    _state: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        problems = []
+        if not (math.isfinite(self.speed_m_s) and 0.0 <= self.speed_m_s <= 150.0):
+            problems.append(Problem("speed_m_s", self.speed_m_s, "m/s", "in [0, 150] m/s"))
+        if not (math.isfinite(self.step_s) and 1e-7 <= self.step_s <= 1e-2):
+            problems.append(Problem("step_s", self.step_s, "s", "in [1e-07, 0.01] s"))
+        if self.wheel not in ("free", "held"):
+            problems.append(Problem("wheel", self.wheel, "", "'free' or 'held'"))
+        if not (math.isfinite(self.deflection_m) and 0.0 <= self.deflection_m < 0.2 *
+                self.model.tire.R):
+            problems.append(Problem("deflection_m", self.deflection_m, "m",
+                                    f"in [0, {0.2 * self.model.tire.R:g}) m"))
+        if problems:
+            raise ParameterError(problems)
+        self._build()
+
+    # ----- set-up -----
+    @property
+    def spin_rad_s(self) -> float:
+        return self.speed_m_s / self.model.tire.R
+
+    def _build(self) -> None:
+        t, tang = self.model.tire, self.model.tangential
+        ring = InPlaneRing(self.model, self.n_elements, spin_rad_s=self.spin_rad_s,
+                           rim_free=True)
+        zone = contact_zone(Grid(self.n_elements, t.R), t.k_cw, t.beta, self.zone_length_m,
+                            self.point_spacing_m)
+        nr, n = ring.n_ring_dof, self.n_elements
+        free_spin = self.wheel == "free"
+        ny = nr + (1 if free_spin else 0)
+        # y = [ring rim-relative, ψ]: ring absolute = ring_rel + P_ψ ψ, the rim's x, z held
+        to_abs = np.zeros((ring.n_dof, ny))
+        to_abs[:nr, :nr] = np.eye(nr)
+        if free_spin:
+            to_abs[:nr, nr] = ring.rim_patterns[:, 2]
+            to_abs[nr + 2, nr] = 1.0
+        mass = to_abs.T @ ring.mass @ to_abs
+        damping = to_abs.T @ ring.damping @ to_abs
+        stiffness = to_abs.T @ ring.stiffness @ to_abs
+
+        interp = np.zeros((zone.n_points, n))
+        interp[:, zone.nodes] = zone.interpolation  # zone nodes -> ring nodes
+        th = zone.point_theta
+        w, v = ring.field_slice("w"), ring.field_slice("v")
+        jn = np.zeros((zone.n_points, ny))  # ∂pen/∂y on the geometry (rim-relative)
+        jn[:, w] = np.cos(th)[:, None] * interp
+        jn[:, v] = -np.sin(th)[:, None] * interp
+        jx = np.zeros((zone.n_points, ny))  # ∂x_p/∂y of the geometry
+        jx[:, w] = -np.sin(th)[:, None] * interp
+        jx[:, v] = -np.cos(th)[:, None] * interp
+        jn_work, jx_work = jn.copy(), jx.copy()  # the material's motion, with the wheel's turn
+        if free_spin:
+            jn_work[:, nr] = -t.R * np.sin(th)
+            jx_work[:, nr] = -t.R * np.cos(th)
+        tread_L = ring._pair_L()
+        jl = np.zeros((zone.n_points, ny))  # x part of L u at the points
+        jl[:, : 2 * n] = jx[:, : 2 * n] @ tread_L
+        arc = zone.point_arc_m
+        self._ring, self._zone, self._to_abs = ring, zone, to_abs
+        self._m, self._c, self._k = mass, damping, stiffness
+        self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
+        self._kn = zone.stiffness_n_per_m
+        self._cn = zone.damping_n_s_per_m
+        self._kx = np.full(zone.n_points, tang.k_tx * arc)
+        self._mu = tang.friction_coefficient
+        self._pen0 = t.R * np.cos(th) - (t.R - self.deflection_m)
+        self._s0 = self.speed_m_s - self.spin_rad_s * t.R * np.cos(th)
+        height = t.R - self.deflection_m
+        self._x_lo, self._x_hi = zone.road_windows_m(self.deflection_m)
+        del height
+        self._ny, self._free_spin = ny, free_spin
+        h = self.step_s
+        a0 = 4.0 / h**2 * mass + 2.0 / h * damping + stiffness
+        self._a0_inv = np.linalg.inv(a0)
+        # e = γ + G y while a point sticks (trapezoidal slip over the step)
+        self._gain = jx_work + 0.5 * h * self.spin_rad_s * jl
+        self._yn = self._a0_inv @ jn_work.T  # ring response to unit point forces
+        self._yx = self._a0_inv @ jx_work.T
+        self._wnn, self._wnx = jn @ self._yn, jn @ self._yx
+        self._gn, self._gx = self._gain @ self._yn, self._gain @ self._yx
+
+    def road(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(height, rate) of the road under each point at ``time_s``: the obstacle moves
+        back at V from ``obstacle_ahead_m`` in front of the contact centre."""
+        zero = np.zeros(self._zone.n_points)
+        if self.obstacle is None:
+            return zero, zero
+        edge = self.obstacle_ahead_m - self.speed_m_s * time_s
+
+        def height(at_edge):
+            return self.obstacle.mean_height(self._x_lo - at_edge, self._x_hi - at_edge)
+
+        # the rate by a central difference of the window means over a hundredth of a step
+        dt = 1e-2 * self.step_s
+        rate = (height(edge - self.speed_m_s * dt) - height(edge + self.speed_m_s * dt)) / (
+            2 * dt)
+        return height(edge), rate
+
+    # ----- static state -----
+    def static_state(self) -> np.ndarray:
+        """The tire pressed onto the flat road at the deflection, frictionless, at rest."""
+        nr = self._ring.n_ring_dof
+        k = self._k[:nr, :nr]
+        jn = self._jn[:, :nr]
+        active = self._pen0 > 0
+        y = np.zeros(nr)
+        for _ in range(MAX_SET_PASSES):
+            a = k + jn[active].T @ (self._kn[active, None] * jn[active])
+            b = -jn[active].T @ (self._kn[active] * self._pen0[active])
+            y = np.linalg.solve(a, b)
+            pen = self._pen0 + jn @ y
+            force = self._kn * pen
+            new = np.where(active, force > 0, pen > 0)
+            if np.array_equal(new, active):
+                break
+            active = new
+        else:
+            raise ContactSetError("the static footprint did not settle")
+        out = np.zeros(self._ny)
+        out[:nr] = y
+        return out
+
+    # ----- stepping -----
+    def run(self, duration_s: float, torque_n_m=None, record_every: int = 1,
+            progress=None) -> InPlaneRun:
+        """Step from the static state (rolling starts at t = 0) for ``duration_s``.
+        ``torque_n_m`` (a constant or a function of time) turns the wheel (+ in the direction
+        of rotation; a brake is negative)."""
+        h, ny = self.step_s, self._ny
+        steps = int(round(duration_s / h))
+        torque = self.torque_n_m if torque_n_m is None else torque_n_m
+        y = self.static_state()
+        yd, ydd = np.zeros(ny), np.zeros(ny)
+        e = np.zeros(self._zone.n_points)
+        ring_forces = self._contact_and_rates(y, yd, e, 0.0)
+        ydd = np.linalg.solve(self._m, self._f_ext(0.0, torque) + ring_forces[0]
+                              - self._c @ yd - self._k @ y)
+        contact, stick, slip_sign = ring_forces[1], ring_forces[2], ring_forces[3]
+        records = {k: [] for k in InPlaneRun.__dataclass_fields__}
+        theta = self._zone.point_theta
+        shift = self.spin_rad_s * h
+        for i in range(1, steps + 1):
+            time = i * h
+            height, rate = self.road(time)
+            s_old = self._slip(y, yd)
+            # the element field carried back by Ωh through the points (zero ahead of them)
+            e_conv = np.interp(theta - shift, theta, e, left=0.0, right=0.0)
+            r = 2.0 / h * y + yd
+            b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
+                  + self._f_ext(time, torque))
+            pen_const = self._pen0 + height
+            a_n = self._kn + 2.0 * self._cn / h
+            beta_n = self._kn * pen_const + self._cn * (rate - self._jn @ r)
+            gamma = e_conv + 0.5 * h * (s_old + self._s0 - self._jxw @ r)
+            # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
+            # so each pass solves for the 2P forces only (module doc: point laws)
+            z0 = self._a0_inv @ b0
+            n_z0, g_z0 = self._jn @ z0, self._gain @ z0
+            for _ in range(MAX_SET_PASSES):
+                f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, gamma,
+                                              n_z0, g_z0)
+                y_new = z0 - self._yn @ f_n + self._yx @ f_x
+                pen = pen_const + self._jn @ y_new
+                f_trial = a_n * (self._jn @ y_new) + beta_n
+                e_trial = gamma + self._gain @ y_new
+                new_contact = (pen > 0) & (f_trial > 0)
+                limit = self._mu * np.maximum(f_trial, 0.0)
+                new_stick = self._kx * np.abs(e_trial) <= limit * (1 + 1e-12)
+                new_sign = np.where(new_stick, slip_sign, np.sign(e_trial))
+                if (np.array_equal(new_contact, contact) and np.array_equal(
+                        new_stick | ~new_contact, stick | ~contact) and np.array_equal(
+                        new_sign[new_contact & ~new_stick], slip_sign[contact & ~stick])):
+                    break
+                contact, stick, slip_sign = new_contact, new_stick, new_sign
+            else:
+                raise ContactSetError(f"step at t = {time:g} s: the contact and stick sets "
+                                      f"did not settle in {MAX_SET_PASSES} passes")
+            f_n = f_trial
+            yd_new = 2.0 / h * (y_new - y) - yd
+            ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
+            y, yd = y_new, yd_new
+            f_n = np.where(contact, f_n, 0.0)
+            e = np.where(contact, np.where(stick, e_trial,
+                                           slip_sign * limit / np.maximum(self._kx, 1e-300)),
+                         0.0)
+            if i % record_every == 0:
+                f_x = -self._kx * e
+                rim = self.rim_force(y, yd, ydd)
+                records["time_s"].append(time)
+                records["rim_fx_n"].append(rim[0])
+                records["rim_fz_n"].append(rim[1])
+                records["rim_my_n_m"].append(rim[2])
+                records["contact_fz_n"].append(f_n.sum())
+                records["contact_fx_n"].append(f_x.sum())
+                records["spin_rad_s"].append(self.spin_rad_s + (yd[-1] if self._free_spin
+                                                               else 0.0))
+                records["sliding_points"].append(int(np.sum(contact & ~stick)))
+            if progress is not None:
+                progress(i, steps)
+        self._state = {"y": y, "yd": yd, "e": e}
+        return InPlaneRun(**{k: np.asarray(v) for k, v in records.items()})
+
+    def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, gamma, n_z0, g_z0):
+        """(f_n, f_x) of the step for given sets: the point laws with y eliminated."""
+        p = contact.size
+        matrix = np.zeros((2 * p, 2 * p))
+        rhs = np.zeros(2 * p)
+        rows = np.arange(p)
+        c, st = contact, contact & stick
+        sl = contact & ~stick
+        # contact: f_n - a_n(jn z0 - Wnn f_n + Wnx f_x) = β_n
+        matrix[rows[c], :p] = a_n[c, None] * self._wnn[c]
+        matrix[rows[c], p:] = -a_n[c, None] * self._wnx[c]
+        rhs[rows[c]] = beta_n[c] + a_n[c] * n_z0[c]
+        # stick: f_x + k_x(γ + G z0 - Gn f_n + Gx f_x) = 0
+        matrix[p + rows[st], :p] = -self._kx[st, None] * self._gn[st]
+        matrix[p + rows[st], p:] = self._kx[st, None] * self._gx[st]
+        rhs[p + rows[st]] = -self._kx[st] * (gamma[st] + g_z0[st])
+        # slip: f_x + μσ f_n = 0
+        matrix[p + rows[sl], rows[sl]] = self._mu * slip_sign[sl]
+        matrix[np.arange(2 * p), np.arange(2 * p)] += 1.0
+        # free points: f = 0 (their rows hold the identity alone)
+        forces = np.linalg.solve(matrix, rhs)
+        return forces[:p], forces[p:]
+
+    def _f_ext(self, time_s, torque) -> np.ndarray:
+        f = np.zeros(self._ny)
+        if self._free_spin:
+            f[-1] = torque(time_s) if callable(torque) else torque
+        return f
+
+    def _slip(self, y, yd) -> np.ndarray:
+        """Fore-aft velocity of the tread at each point relative to the road, less s0."""
+        return self._jxw @ yd + self.spin_rad_s * (self._jl @ y)
+
+    def _contact_and_rates(self, y, yd, e, time_s):
+        height, rate = self.road(time_s)
+        pen = self._pen0 + height + self._jn @ y
+        f_n = np.where(pen > 0, np.maximum(self._kn * pen + self._cn * (self._jn @ yd + rate),
+                                           0.0), 0.0)
+        forces = -self._jnw.T @ f_n - self._jxw.T @ (self._kx * e)
+        contact = f_n > 0
+        return forces, contact, np.ones_like(contact), np.ones(contact.size)
+
+    def rim_force(self, y, yd, ydd=None) -> np.ndarray:
+        """(Fx, Fz, My) the tire puts on the rim (N, N, N m)."""
+        qdd = None if ydd is None else self._to_abs @ ydd
+        return self._ring.rim_force(self._to_abs @ y, self._to_abs @ yd, qdd)
+
+    def static_load_n(self) -> float:
+        """The vertical load the deflection carries at rest (N)."""
+        return float(self.rim_force(self.static_state(), np.zeros(self._ny))[1])
+
+
+def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100,
+                        **options) -> float:
+    """The rim deflection (m) that carries ``load_n`` at rest, by the secant method on the
+    piecewise linear static footprint."""
+    def load(deflection):
+        return InPlaneSimulator(model, n_elements, 0.0, deflection, **options).static_load_n()
+
+    lo, hi = 0.005, 0.04
+    f_lo, f_hi = load(lo), load(hi)
+    for _ in range(40):
+        mid = hi - (f_hi - load_n) * (hi - lo) / (f_hi - f_lo)
+        f_mid = load(mid)
+        if abs(f_mid - load_n) < 1e-9 * load_n:
+            return mid
+        lo, f_lo, hi, f_hi = hi, f_hi, mid, f_mid
+    return mid
