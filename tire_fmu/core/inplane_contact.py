@@ -8,12 +8,15 @@ tread's rim-relative (w_p, v_p); the material there sits at height
 z_p = -(R + w_p) cos θ_p + v_p sin θ_p below the axle and x_p = -(R + w_p) sin θ_p -
 v_p cos θ_p ahead of it.
 
-**Normal law.** The road at height h_p under the point (the obstacle averaged over the
-point's window of road, as in the radial model) is at -(R - δ) + h_p, δ the rim's static
-deflection; the vertical penetration, linearised in the displacements, is
-pen_p = R cos θ_p - (R - δ) + h_p + w_p cos θ_p - v_p sin θ_p, and the road pushes the
-tread up with f_n = max(0, k_p pen + c_p pen_rate) while pen > 0 (k_p = k_cw over the point's
-arc, c_p = β k_p, the radial model's law, now vertical).
+**Normal law.** As in the radial model: the road at height h_p under the point is met along
+the point's ray, where the tread's surface sits at radius R + w_p whatever the tangential
+displacement (which slides material along the surface); the penetration is
+pen_p = R + w_p - (R - δ - h_p)/cos θ_p, δ the rim's static deflection, and the road pushes
+the tread inwards along the ray with f_n = max(0, k_p pen + c_p pen_rate) while pen > 0
+(k_p = k_cw over the point's arc, c_p = β k_p). A push along the ray has no moment about the
+axle. (A vertical push read at the material point instead made a turn of the tread against
+the rim change the penetration, antisymmetrically about the contact centre, and so the
+pressure's moment: a spurious coupling of the rotational modes to the footprint.)
 
 **Tread elements and friction.** Each point carries a tread element (a bristle) of fore-aft
 stiffness k_x,p = k_tx over its arc between the belt and the road. Its deflection e (the belt
@@ -29,10 +32,11 @@ enters at the front at zero. The element pulls the belt with f_x = -k_x,p e whil
 stiffness is the regularisation of Coulomb's law: stick is elastic, with the tread's own shear
 compliance, and no other parameter enters.
 
-**Forces on the ring.** The contact forces do work on the material's motion: the vertical
-force through -∂pen/∂q and the fore-aft one through ∂x_p/∂q, both including the wheel's
-rotation ψ (a force off the contact centre has a moment about the axle: this is how an
-asymmetric pressure gives a rolling-resistance moment).
+**Forces on the ring.** The normal push acts on w (-∂pen/∂q), the fore-aft force on the
+material's fore-aft motion ∂x_p/∂q, which includes the wheel's rotation ψ: the road's drag has
+a moment about the axle. An asymmetric pressure (material damping loads the front of the
+footprint more) has a horizontal resultant, the rolling resistance, that the tread elements
+and the wheel's moment balance carry.
 
 **Stepping.** Trapezoidal rule (Newmark, average acceleration) on the ring with the rim's
 translation held and its rotation free (wheel inertia, a torque applied) or held at the
@@ -56,6 +60,8 @@ from .parameters import ParameterError, Problem
 
 #: Most active-set passes one step may take before it is refused.
 MAX_SET_PASSES = 50
+#: Passes after which the sets may only shrink (see the step).
+SETTLE_PASSES = 12
 
 
 class ContactSetError(RuntimeError):
@@ -145,14 +151,12 @@ class InPlaneSimulator:
         th = zone.point_theta
         w, v = ring.field_slice("w"), ring.field_slice("v")
         jn = np.zeros((zone.n_points, ny))  # ∂pen/∂y on the geometry (rim-relative)
-        jn[:, w] = np.cos(th)[:, None] * interp
-        jn[:, v] = -np.sin(th)[:, None] * interp
+        jn[:, w] = interp  # the gap along the point's ray: the surface's radius R + w_p
         jx = np.zeros((zone.n_points, ny))  # ∂x_p/∂y of the geometry
         jx[:, w] = -np.sin(th)[:, None] * interp
         jx[:, v] = -np.cos(th)[:, None] * interp
         jn_work, jx_work = jn.copy(), jx.copy()  # the material's motion, with the wheel's turn
-        if free_spin:
-            jn_work[:, nr] = -t.R * np.sin(th)
+        if free_spin:  # the radial push has no moment about the axle; the fore-aft one has
             jx_work[:, nr] = -t.R * np.cos(th)
         tread_L = ring._pair_L()
         jl = np.zeros((zone.n_points, ny))  # x part of L u at the points
@@ -165,7 +169,8 @@ class InPlaneSimulator:
         self._cn = zone.damping_n_s_per_m
         self._kx = np.full(zone.n_points, tang.k_tx * arc)
         self._mu = tang.friction_coefficient
-        self._pen0 = t.R * np.cos(th) - (t.R - self.deflection_m)
+        self._pen0 = t.R - (t.R - self.deflection_m) / np.cos(th)
+        self._sec = 1.0 / np.cos(th)
         self._s0 = self.speed_m_s - self.spin_rad_s * t.R * np.cos(th)
         height = t.R - self.deflection_m
         self._x_lo, self._x_hi = zone.road_windows_m(self.deflection_m)
@@ -179,7 +184,12 @@ class InPlaneSimulator:
         self._yn = self._a0_inv @ jn_work.T  # ring response to unit point forces
         self._yx = self._a0_inv @ jx_work.T
         self._wnn, self._wnx = jn @ self._yn, jn @ self._yx
-        self._gn, self._gx = self._gain @ self._yn, self._gain @ self._yx
+        # the tread element's force k_x e + c_x ė (ė = s while it sticks) on y: t = t0 + K_G y
+        self._cx = t.beta * self._kx
+        self._kg = (self._kx[:, None] * self._gain
+                    + self._cx[:, None] * (2.0 / h * jx_work + self.spin_rad_s * jl))
+        self._kgn, self._kgx = self._kg @ self._yn, self._kg @ self._yx
+        self._carry = carry_matrix(zone.point_theta, self.spin_rad_s * h)
 
     def road(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
         """(height, rate) of the road under each point at ``time_s``: the obstacle moves
@@ -239,36 +249,44 @@ class InPlaneSimulator:
                               - self._c @ yd - self._k @ y)
         contact, stick, slip_sign = ring_forces[1], ring_forces[2], ring_forces[3]
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
-        theta = self._zone.point_theta
-        shift = self.spin_rad_s * h
         for i in range(1, steps + 1):
             time = i * h
             height, rate = self.road(time)
             s_old = self._slip(y, yd)
             # the element field carried back by Ωh through the points (zero ahead of them)
-            e_conv = np.interp(theta - shift, theta, e, left=0.0, right=0.0)
+            e_conv = self._carry @ e
             r = 2.0 / h * y + yd
             b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
                   + self._f_ext(time, torque))
-            pen_const = self._pen0 + height
+            pen_const = self._pen0 + height * self._sec
             a_n = self._kn + 2.0 * self._cn / h
-            beta_n = self._kn * pen_const + self._cn * (rate - self._jn @ r)
-            gamma = e_conv + 0.5 * h * (s_old + self._s0 - self._jxw @ r)
+            beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
+            # e = e_conv + h/2 (s_n + s_{n+1}), s = (the ring part) + s0
+            gamma = e_conv + 0.5 * h * (s_old - self._jxw @ r) + h * self._s0
             # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
             # so each pass solves for the 2P forces only (module doc: point laws)
             z0 = self._a0_inv @ b0
-            n_z0, g_z0 = self._jn @ z0, self._gain @ z0
-            for _ in range(MAX_SET_PASSES):
-                f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, gamma,
-                                              n_z0, g_z0)
+            n_z0 = self._jn @ z0
+            t0 = self._kx * gamma + self._cx * (self._s0 - self._jxw @ r)
+            t_z0 = t0 + self._kg @ z0
+            for passes in range(MAX_SET_PASSES):
+                f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, n_z0,
+                                              t_z0)
                 y_new = z0 - self._yn @ f_n + self._yx @ f_x
                 pen = pen_const + self._jn @ y_new
                 f_trial = a_n * (self._jn @ y_new) + beta_n
                 e_trial = gamma + self._gain @ y_new
+                tread = t0 + self._kg @ y_new  # the element's pull on the belt, backwards
                 new_contact = (pen > 0) & (f_trial > 0)
                 limit = self._mu * np.maximum(f_trial, 0.0)
-                new_stick = self._kx * np.abs(e_trial) <= limit * (1 + 1e-12)
-                new_sign = np.where(new_stick, slip_sign, np.sign(e_trial))
+                new_stick = np.abs(tread) <= limit * (1 + 1e-12)
+                new_sign = np.where(new_stick, slip_sign, np.sign(tread))
+                if passes >= SETTLE_PASSES:
+                    # a set that cycles (a point sliding, then sticking at the limit, ...):
+                    # from here a sliding point slides on and a point that let go stays off,
+                    # so the sets can only shrink and the passes end
+                    new_stick &= stick | ~contact
+                    new_contact &= contact
                 if (np.array_equal(new_contact, contact) and np.array_equal(
                         new_stick | ~new_contact, stick | ~contact) and np.array_equal(
                         new_sign[new_contact & ~new_stick], slip_sign[contact & ~stick])):
@@ -302,7 +320,7 @@ class InPlaneSimulator:
         self._state = {"y": y, "yd": yd, "e": e}
         return InPlaneRun(**{k: np.asarray(v) for k, v in records.items()})
 
-    def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, gamma, n_z0, g_z0):
+    def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, n_z0, t_z0):
         """(f_n, f_x) of the step for given sets: the point laws with y eliminated."""
         p = contact.size
         matrix = np.zeros((2 * p, 2 * p))
@@ -314,10 +332,10 @@ class InPlaneSimulator:
         matrix[rows[c], :p] = a_n[c, None] * self._wnn[c]
         matrix[rows[c], p:] = -a_n[c, None] * self._wnx[c]
         rhs[rows[c]] = beta_n[c] + a_n[c] * n_z0[c]
-        # stick: f_x + k_x(γ + G z0 - Gn f_n + Gx f_x) = 0
-        matrix[p + rows[st], :p] = -self._kx[st, None] * self._gn[st]
-        matrix[p + rows[st], p:] = self._kx[st, None] * self._gx[st]
-        rhs[p + rows[st]] = -self._kx[st] * (gamma[st] + g_z0[st])
+        # stick: f_x + t0 + K_G (z0 - Y_n f_n + Y_x f_x) = 0
+        matrix[p + rows[st], :p] = -self._kgn[st]
+        matrix[p + rows[st], p:] = self._kgx[st]
+        rhs[p + rows[st]] = -t_z0[st]
         # slip: f_x + μσ f_n = 0
         matrix[p + rows[sl], rows[sl]] = self._mu * slip_sign[sl]
         matrix[np.arange(2 * p), np.arange(2 * p)] += 1.0
@@ -337,8 +355,9 @@ class InPlaneSimulator:
 
     def _contact_and_rates(self, y, yd, e, time_s):
         height, rate = self.road(time_s)
-        pen = self._pen0 + height + self._jn @ y
-        f_n = np.where(pen > 0, np.maximum(self._kn * pen + self._cn * (self._jn @ yd + rate),
+        pen = self._pen0 + height * self._sec + self._jn @ y
+        f_n = np.where(pen > 0, np.maximum(self._kn * pen + self._cn * (self._jn @ yd
+                                                                        + rate * self._sec),
                                            0.0), 0.0)
         forces = -self._jnw.T @ f_n - self._jxw.T @ (self._kx * e)
         contact = f_n > 0
@@ -352,6 +371,82 @@ class InPlaneSimulator:
     def static_load_n(self) -> float:
         """The vertical load the deflection carries at rest (N)."""
         return float(self.rim_force(self.static_state(), np.zeros(self._ny))[1])
+
+
+@dataclass(frozen=True, eq=False)
+class LoadedModes:
+    """Modes of the pressed tire at rest, linearised about its static footprint: the points in
+    contact as springs k_p on their penetration, the tread elements sticking (k_x on the
+    material's fore-aft displacement), the wheel free to turn or held."""
+
+    frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    kinds: tuple[str, ...]  # "rotational" for the mode the wheel's turn dominates, else ""
+    shapes: np.ndarray  # (ny, modes)
+    points_in_contact: int
+
+
+def loaded_modes(sim: InPlaneSimulator, f_max_hz: float = 200.0) -> LoadedModes:
+    """The loaded tire's modes at rest (``sim.speed_m_s`` must be 0), lowest first.
+
+    The footprint's springs act on the rim-relative geometry and do work on the material's
+    motion (module doc): with the wheel free, the moment of a change of pressure turns it but
+    turning it moves no geometry, so K is not symmetric; the eigenproblem is the general one.
+    The mode whose kinetic energy is most in the wheel's rotation ψ is labelled rotational."""
+    if sim.speed_m_s != 0.0:
+        raise ValueError("loaded_modes: the tire at rest only (speed_m_s = 0)")
+    import scipy.linalg
+
+    y = sim.static_state()
+    pen = sim._pen0 + sim._jn @ y
+    active = pen > 0
+    k = sim._k + sim._jnw[active].T @ (sim._kn[active, None] * sim._jn[active])
+    k = k + sim._jxw[active].T @ (sim._kx[active, None] * sim._jxw[active])
+    c = sim._c + sim._jnw[active].T @ (sim._cn[active, None] * sim._jn[active])
+    c = c + sim._jxw[active].T @ (sim._cx[active, None] * sim._jxw[active])
+    # undamped frequencies from (K, M); each mode's damping from the damping it meets
+    lam, vectors = scipy.linalg.eig(k, sim._m)
+    keep = (lam.real > 0) & (np.sqrt(np.abs(lam)) / (2 * np.pi) <= f_max_hz)
+    lam, vectors = lam[keep].real, np.real(vectors[:, keep])
+    order = np.argsort(lam)
+    lam, vectors = lam[order], vectors[:, order]
+    omega = np.sqrt(lam)
+    modal_mass = np.einsum("ij,ij->j", vectors, sim._m @ vectors)
+    zeta = np.einsum("ij,ij->j", vectors, c @ vectors) / (2 * omega * modal_mass)
+    # the rotational mode: the largest share of its kinetic energy in turning, of the tread
+    # as a whole (its mean tangential displacement) and of the wheel
+    t, tang = sim.model.tire, sim.model.tangential
+    v = sim._ring.field_slice("v")
+    wheel_turn = vectors[-1] if sim._free_spin else np.zeros(lam.size)
+    tread_turn = vectors[v].mean(axis=0) / t.R + wheel_turn
+    tread_inertia = 2 * np.pi * t.R**3 * t.rhoA
+    turning = (tread_inertia * tread_turn**2 + tang.wheel_inertia_kg_m2 * wheel_turn**2) / (
+        modal_mass)
+    kinds = [""] * lam.size
+    kinds[int(np.argmax(turning))] = "rotational"
+    return LoadedModes(omega / (2 * np.pi), zeta, tuple(kinds), vectors, int(active.sum()))
+
+
+def carry_matrix(theta: np.ndarray, shift_rad: float) -> np.ndarray:
+    """B (P x P): the field at the points carried by ``shift_rad`` in the direction of θ,
+    e_new = B e, by cubic Lagrange interpolation at the departure points θ_p - shift (zero
+    from ahead of the first point). Linear interpolation damps a field carried through the
+    footprint by a fraction that grows with the spacing; that numerical damping set the
+    amplitude of the tread's fore-aft ringing, so the fore-aft force did not converge with
+    the spacing."""
+    from .contact import lagrange_weights
+
+    count = theta.size
+    spacing = (theta[-1] - theta[0]) / (count - 1)
+    position = (theta - shift_rad - theta[0]) / spacing
+    base = np.floor(position).astype(int)
+    weights = lagrange_weights(position - base)
+    out = np.zeros((count, count))
+    for k, offset in enumerate(range(-1, 3)):
+        column = base + offset
+        ok = (column >= 0) & (column < count)
+        out[np.flatnonzero(ok), column[ok]] = weights[ok, k]
+    return out
 
 
 def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100,

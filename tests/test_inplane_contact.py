@@ -1,0 +1,177 @@
+"""The in-plane ring on the road: balance of forces, free rolling, braking, a cleat.
+
+References written apart from the stepping: the frictionless steady state solved statically,
+the wheel's moment balance, the time step halved.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tire_fmu.core.inplane import InPlaneTire, TangentialParameters
+from tire_fmu.core.inplane_contact import InPlaneSimulator, deflection_for_load, loaded_modes
+from tire_fmu.core.obstacles import cleat
+from tire_fmu.core.parameters import DEFAULT_LOAD_N, ParameterError
+
+MODEL = InPlaneTire()
+SPACING = 0.01
+
+
+@pytest.fixture(scope="module")
+def deflection():
+    return deflection_for_load(MODEL, DEFAULT_LOAD_N, 100, point_spacing_m=SPACING)
+
+
+def point_normal_forces(sim, y):
+    """The road's push on each point (along its ray) in the static state y."""
+    pen = sim._pen0 + sim._jn @ y
+    return np.where(pen > 0, sim._kn * pen, 0.0)
+
+
+def test_the_deflection_carries_the_load(deflection):
+    sim = InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=SPACING)
+    assert sim.static_load_n() == pytest.approx(DEFAULT_LOAD_N, rel=1e-9)
+
+
+@pytest.mark.parametrize("sidewall", ["tied", "lumped"])
+@pytest.mark.parametrize("speed", [0.0, 10.0])
+def test_rim_force_balances_the_road_force(deflection, sidewall, speed):
+    """Statically the rim carries what the road pushes (1e-6: the interpolation of the
+    rigid patterns to the points), and at rest nothing pushes sideways or turns the rim."""
+    sim = InPlaneSimulator(InPlaneTire(sidewall_tangential=sidewall), 100, speed, deflection,
+                           point_spacing_m=SPACING)
+    y = sim.static_state()
+    fx, fz, my = sim.rim_force(y, np.zeros_like(y))
+    push = point_normal_forces(sim, y)
+    zone = sim._zone  # the pushes reach the nodes radially: their vertical and fore-aft parts
+    assert fz == pytest.approx(push @ zone.force_cos, rel=1e-9)
+    assert fx == pytest.approx(push @ zone.force_sin, abs=1e-9 * fz)
+    assert abs(my) < 1e-9 * fz * MODEL.tire.R  # a push along the ray turns nothing
+    if speed == 0.0:
+        assert abs(fx) < 1e-9 * fz
+
+
+def test_at_rest_the_pressed_tire_stays_put(deflection):
+    sim = InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=SPACING)
+    run = sim.run(0.01, record_every=10)
+    np.testing.assert_allclose(run.rim_fz_n, DEFAULT_LOAD_N, rtol=1e-6)
+    assert np.abs(run.rim_fx_n).max() < 1e-6 * DEFAULT_LOAD_N
+
+
+@pytest.fixture(scope="module")
+def free_rolling(deflection):
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
+    return sim, sim.run(0.3, record_every=10)
+
+
+def test_free_rolling_resistance_is_the_pressure_asymmetry(free_rolling):
+    """A free wheel turns no moment into the rim, so the road's drag on the tread elements
+    sums to no moment either, and the rolling resistance is the fore-aft resultant of the
+    pressure, which material damping shifts forward: the frictionless steady state (a static
+    solve of the rolling ring) gives it, within 5 %."""
+    sim, run = free_rolling
+    settled = run.time_s > 0.15
+    y = sim.static_state()
+    fx_frictionless, _, my_frictionless = sim.rim_force(y, np.zeros_like(y))
+    assert fx_frictionless < 0  # a drag
+    assert abs(my_frictionless) < 1e-9 * DEFAULT_LOAD_N
+    assert run.rim_fx_n[settled].mean() == pytest.approx(fx_frictionless, rel=0.05)
+    assert abs(run.rim_my_n_m[settled].mean()) < 0.05 * abs(fx_frictionless) * MODEL.tire.R
+    assert run.sliding_points[settled].max() == 0
+
+
+def test_brake_torque_is_carried_by_the_road(deflection):
+    """A brake torque at 10 m/s: once settled the tire holds the rim against it and the
+    road's drag times the loaded radius carries it (within the rolling resistance)."""
+    torque = -3000.0
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
+    run = sim.run(0.45, torque_n_m=lambda t: torque if t > 0.05 else 0.0, record_every=10)
+    settled = run.time_s > 0.3
+    my = run.rim_my_n_m[settled].mean()
+    assert my == pytest.approx(-torque, rel=0.01)
+    loaded_radius = MODEL.tire.R - deflection
+    drag = -run.rim_fx_n[settled].mean()
+    assert drag * loaded_radius == pytest.approx(-torque, rel=0.05)
+    spin = run.spin_rad_s[settled].mean()
+    assert spin < sim.spin_rad_s  # a braked wheel turns slower than it rolls free
+    slip = 1.0 - spin / sim.spin_rad_s
+    stiffness_per_load = drag / slip / DEFAULT_LOAD_N
+    assert 5 < stiffness_per_load < 30  # truck tires' C_Fκ/Fz (the k_tx default's source)
+
+
+def test_cleat_forces_converge_with_the_time_step(deflection):
+    runs = []
+    for step in (1e-4, 5e-5):
+        sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, step_s=step,
+                               point_spacing_m=SPACING, obstacle=cleat(0.02, 0.02),
+                               obstacle_ahead_m=0.6)
+        runs.append(sim.run(0.1, record_every=int(round(1e-4 / step))))
+    coarse, fine = runs
+    rise = fine.rim_fz_n - DEFAULT_LOAD_N
+    assert rise.max() > 0.5 * DEFAULT_LOAD_N  # the cleat is felt
+    assert np.sqrt(np.mean((coarse.rim_fz_n - fine.rim_fz_n) ** 2)) < 0.03 * np.sqrt(
+        np.mean(rise**2))
+    assert np.sqrt(np.mean((coarse.rim_fx_n - fine.rim_fx_n) ** 2)) < 0.1 * np.sqrt(
+        np.mean(fine.rim_fx_n**2))
+    assert fine.rim_fx_n.min() < -0.05 * DEFAULT_LOAD_N  # the cleat pushes the tire back
+
+
+def test_bad_simulator_inputs_are_reported_at_once():
+    with pytest.raises(ParameterError) as error:
+        InPlaneSimulator(MODEL, 100, -1.0, 0.5, step_s=1.0, wheel="loose")
+    text = str(error.value)
+    for name in ("speed_m_s = -1", "step_s = 1", "wheel = 'loose'", "deflection_m = 0.5"):
+        assert name in text
+
+
+def test_no_friction_means_no_drive(deflection):
+    """μ = 0: the road cannot pull the tread, so a torque spins the whole wheel up (rim, tread
+    and sidewall turning together) as if it were off the ground: the pushes along the rays
+    have no moment."""
+    model = InPlaneTire(tangential=TangentialParameters(friction_coefficient=0.0))
+    sim = InPlaneSimulator(model, 64, 10.0, deflection, point_spacing_m=SPACING)
+    run = sim.run(0.3, torque_n_m=100.0, record_every=10)
+    assert np.abs(run.contact_fx_n).max() < 1e-9
+    t = model.tire
+    tire_inertia = 2 * np.pi * t.R**3 * (t.rhoA + t.m_s)
+    inertia = model.tangential.wheel_inertia_kg_m2 + tire_inertia
+    late = run.time_s > 0.1  # the torsional mode's ringing from the torque's onset averages out
+    accel = np.polyfit(run.time_s[late], run.spin_rad_s[late], 1)[0]
+    assert accel == pytest.approx(100.0 / inertia, rel=0.01)
+    # the rim turns the tire: the tire's moment on the rim is its inertia's reaction
+    assert run.rim_my_n_m[late].mean() == pytest.approx(-tire_inertia * accel, rel=0.01)
+
+
+def test_loaded_rotational_mode_rings_at_the_frequency_modes_report(deflection):
+    """At rest on the road a short torque on the free wheel sets the tire ringing; its
+    spectrum peaks at the loaded rotational mode of the linearised footprint, within 2 %."""
+    from scipy.signal import periodogram
+
+    sim = InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=SPACING)
+    modes = loaded_modes(sim, f_max_hz=120)
+    (rotational,) = [f for f, k in zip(modes.frequencies_hz, modes.kinds) if k == "rotational"]
+    run = sim.run(0.4, torque_n_m=lambda t: 200.0 if t < 2e-3 else 0.0)
+    late = run.time_s > 0.01
+    signal = run.spin_rad_s[late]
+    freq, power = periodogram(signal - signal.mean(), fs=1 / sim.step_s, nfft=2**18)
+    assert freq[np.argmax(power)] == pytest.approx(rotational, rel=0.02)
+
+
+def test_footprint_holds_the_tread_by_its_elements_alone(deflection):
+    """With the rim held, the road's pushes act along the rays and so cannot resist the
+    tread's turn (v = const moves no surface): without tread elements (k_tx = 0) the loaded
+    rotational mode is the unloaded one exactly; the elements stiffen it."""
+    from tire_fmu.core.inplane import InPlaneRing
+    from tire_fmu.core.inplane_modes import tire_modes
+
+    def held_rotational(model):
+        sim = InPlaneSimulator(model, 100, 0.0, deflection, point_spacing_m=SPACING,
+                               wheel="held")
+        modes = loaded_modes(sim, f_max_hz=120)
+        return [f for f, k in zip(modes.frequencies_hz, modes.kinds) if k == "rotational"][0]
+
+    bare = InPlaneTire(tangential=TangentialParameters(k_tx=0.0))
+    (unloaded,) = tire_modes(InPlaneRing(bare, 100), f_max_hz=120).select(kind="rotational")
+    assert held_rotational(bare) == pytest.approx(unloaded.frequency_hz, rel=1e-9)
+    assert held_rotational(MODEL) > 1.1 * unloaded.frequency_hz
