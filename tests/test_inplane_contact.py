@@ -175,3 +175,20 @@ def test_footprint_holds_the_tread_by_its_elements_alone(deflection):
     (unloaded,) = tire_modes(InPlaneRing(bare, 100), f_max_hz=120).select(kind="rotational")
     assert held_rotational(bare) == pytest.approx(unloaded.frequency_hz, rel=1e-9)
     assert held_rotational(MODEL) > 1.1 * unloaded.frequency_hz
+
+
+def test_command_reports_the_loaded_modes(capsys):
+    import json
+
+    from tire_fmu.cli import main
+
+    assert main(["inplane-modes", "--load", "27700", "--rim-free", "--point-spacing", "0.01",
+                 "--max-frequency", "60", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    deflection = deflection_for_load(MODEL, 27700.0, 100, point_spacing_m=0.01)
+    assert data["deflection_m"] == pytest.approx(deflection, rel=1e-12)
+    modes = loaded_modes(InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=0.01),
+                         f_max_hz=60)
+    np.testing.assert_allclose([m["frequency_hz"] for m in data["modes"]],
+                               modes.frequencies_hz, rtol=1e-9)
+    assert [m["kind"] for m in data["modes"]].count("rotational") == 1

@@ -43,6 +43,12 @@ def register(subparsers) -> None:
                    help="number of nodes around the ring (default 100)")
     p.add_argument("--rim-free", action="store_true",
                    help="let the rim translate and turn (wheel mass and inertia from --tangential)")
+    p.add_argument("--load", metavar="N", type=float,
+                   help="press the tire on a flat road with this load in N (at rest): the "
+                   "modes of the linearised footprint (points in contact, tread elements "
+                   "sticking), the axle held; with --rim-free the wheel turns freely")
+    p.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
+                   help="contact point spacing in m with --load (default 0.005)")
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
                    help="forward speed in m/s: list each order's ground-frame frequencies")
     p.add_argument("--nmax", metavar="N", type=int, default=8,
@@ -91,6 +97,8 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential),
                         sidewall_tangential=args.sidewall_tangential)
     spin = args.speed / model.tire.R
+    if args.load is not None:
+        return _loaded(args, model)
     if args.speed > 0:
         if args.rim_free:
             raise CliError("--speed with --rim-free: the per-order frequencies are the ring's "
@@ -123,3 +131,28 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
                     data=result.to_dict() | {"tangential": model.tangential.as_dict()})
     write_plot(args, output, plot_with("plot_inplane_modes", result))
     return output
+
+
+def _loaded(args: argparse.Namespace, model) -> Output:
+    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load, loaded_modes
+
+    raise_problems([positive_problem("--load", args.load, "N"),
+                    range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m")])
+    if args.speed > 0:
+        raise CliError("--load with --speed: the loaded modes are the tire's at rest")
+    wheel = "free" if args.rim_free else "held"
+    deflection = deflection_for_load(model, args.load, args.elements,
+                                     point_spacing_m=args.point_spacing)
+    sim = InPlaneSimulator(model, args.elements, 0.0, deflection, wheel=wheel,
+                           point_spacing_m=args.point_spacing)
+    result = loaded_modes(sim, f_max_hz=args.max_frequency)
+    rows = [[i + 1, f, z, k] for i, (f, z, k) in
+            enumerate(zip(result.frequencies_hz, result.damping_ratios, result.kinds))]
+    head = (f"{len(rows)} modes of the tire pressed with {args.load:g} N (deflection "
+            f"{deflection * 1e3:.2f} mm, {result.points_in_contact} points in contact) up to "
+            f"{args.max_frequency:g} Hz; N = {args.elements}, axle held, wheel {wheel}")
+    data = {"load_n": args.load, "deflection_m": deflection, "wheel": wheel,
+            "points_in_contact": result.points_in_contact,
+            "modes": [{"frequency_hz": f, "damping_ratio": z, "kind": k}
+                      for _, f, z, k in rows]}
+    return Output(text=head + "\n" + table(rows, ["#", "f [Hz]", "zeta", "kind"]), data=data)
