@@ -192,12 +192,17 @@ def fit(meshes) -> None:
                     seconds = statistics.median(times[2:]) / n_sub  # the first two warm up
                     work = real(c.n_modes, c.n_orders, c.n_zone, c.n_points, c.n_support,
                                 truncated)
-                    rows.append(([f(c, truncated) for _, f in TERMS.values()], seconds))
+                    rows.append(([f(c, truncated) for _, f in TERMS.values()], seconds, work))
                     print(f"   {n:>4} {load or 'rated':>6} {spacing:8.1e} {truncated!s:>9} "
                           f"{c.n_modes:>5} {c.n_zone:>5} {c.n_points:>5} {c.n_support:>2} "
                           f"{seconds * 1e6:8.1f} {work:>9} {1e9 * seconds / work:8.3f}")
     counts = np.array([r[0] for r in rows], dtype=float)
     seconds = np.array([r[1] for r in rows])
+    per_unit = 1e9 * seconds / np.array([r[2] for r in rows])
+    print(f"   ns per unit with the weights of step_limits: {per_unit.min():.3f} to "
+          f"{per_unit.max():.3f} ({per_unit.max() / per_unit.min():.1f}x over the rows)")
+    # the terms that grow with the mesh (modes, transforms, node pairs, rate entries) grow
+    # together, as do the points' two: the fit apportions their sum loosely between them
     cost, _ = nnls(counts / seconds[:, None], np.ones(seconds.size))
     # a unit: the transforms' multiply-add (an order x zone node item over its weight)
     unit = (cost[list(TERMS).index("order x zone node")]

@@ -41,13 +41,15 @@ SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring tru
                        "every mode, or turn the static correction off, to step shorter")
 
 #: The work of one internal sub-step of the kernel, in units of about one multiply-add of the
-#: zone transforms; each term of substep_work is one loop of kernel.c's substep (and of its
-#: numpy reference's _substep), weighted by what it measured to cost beside the transforms
-#: (benchmarks/bench_step_work.py --fit). This is the fixed part: the rim's couplings, the
-#: direct terms of the rim's motion, the calls.
+#: zone transforms. Each term of substep_work is one loop of kernel.c's substep and its
+#: contact solve (one active-set pass, the kernel both FMUs step with), per item of the loop:
+#: its multiply-adds where arithmetic bounds it (the transforms, the node-space products), its
+#: measured cost beside the transforms' where memory and bookkeeping do (the modes, the points,
+#: the rate term); benchmarks/bench_step_work.py --fit measures them. This is the fixed part:
+#: the rim's couplings, the direct terms of the rim's motion, the calls.
 SUBSTEP_WORK_BASE = 1000
 #: Per mode kept: the one pass over the modes (decay, the held forces' ramp, the readout
-#: through gamma and eta: four complex products).
+#: through gamma and eta: four complex products, streamed from five arrays).
 SUBSTEP_WORK_PER_MODE = 12
 #: Per order and zone node pair (n_orders x (n_zone // 2 + 1)): the two inverse DFTs that read
 #: the ring at the zone nodes and the DFT of the end forces, two multiply-adds each.
@@ -65,12 +67,12 @@ SUBSTEP_WORK_PER_NODE_PAIR = 2
 #: correction only: 3 + 2 n_zone rows x n_zone): one multiply-add that streams E from memory,
 #: measured at about four of the transforms'.
 SUBSTEP_WORK_PER_RATE_ENTRY = 4
-#: The most work one communication step may take (units): about half a second of CPU on the
-#: machine the weights were measured on (0.2-0.55 ns a unit; bench_step_work.py), so about a
-#: second on one twice as slow. A tire whose millisecond would take more (a stiff contact on a
-#: light tread, sub-stepped at 1/sqrt(k_cw/rhoA), on a fine mesh) is refused when it is built,
-#: and a longer step than the tire allows when it is taken, so no host waits minutes on one
-#: call.
+#: The most work one communication step may take (units): at most about 0.7 s of CPU on the
+#: machine the weights were measured on (0.2-0.75 ns a unit over bench_step_work.py's sweeps,
+#: the active set's churn making the spread), about a second on one somewhat slower. A tire
+#: whose millisecond would take more (a stiff contact on a light tread, sub-stepped at
+#: 1/sqrt(k_cw/rhoA), on a fine mesh) is refused when it is built, and a longer step than the
+#: tire allows when it is taken, so no host waits minutes on one call.
 MAX_STEP_WORK = 1_000_000_000
 #: The longest interval a tire must step within MAX_STEP_WORK (s).
 WORK_INTERVAL_S = 1e-3
