@@ -224,6 +224,40 @@ def test_the_builders_agree_on_the_default_tire(c_builder, speed, n_elements, sp
     assert differences(python_contract(case), native) == []
 
 
+@pytest.mark.parametrize("n_elements, spacing, f_max, static_correction", [
+    (100, 2.5e-3, 0.0, True),     # every mode: no rate term on the held forces
+    (400, 1.0, 2000.0, True),     # truncated with static correction: the rate term's rows
+    (400, 1.0, 2000.0, False),    # truncated without: no rate term
+    (800, 6e-4, 0.0, True),       # a fine mesh with fine points
+])
+def test_the_builders_count_the_same_substep_work(c_builder, n_elements, spacing, f_max,
+                                                  static_correction):
+    """Both builders put substep_work's one sum on the contract (and refuse by it): the same
+    integer, the sum of the kernel's sub-step loops for the contract's sizes; a ring truncated
+    with static correction adds its rate term's (3 + 2 Z) x Z entries, one without does not."""
+    from tire_fmu.core import step_limits
+
+    case = {**DEFAULT_CASE, "n_elements": n_elements, "spacing": spacing, "f_max": f_max,
+            "static_correction": static_correction}
+    python = python_contract(case)
+    native, problems = c_builder.build(c_values(case))
+    assert native is not None, problems
+    assert native.substep_work == python.substep_work
+    z = python.n_zone
+    loops = (step_limits.SUBSTEP_WORK_BASE
+             + step_limits.SUBSTEP_WORK_PER_MODE * python.n_modes
+             + step_limits.SUBSTEP_WORK_PER_ORDER_NODE * python.n_orders * (z // 2 + 1)
+             + step_limits.SUBSTEP_WORK_PER_SUPPORT * python.n_points * python.n_support
+             + step_limits.SUBSTEP_WORK_PER_POINT * python.n_points
+             + step_limits.SUBSTEP_WORK_PER_NODE_PAIR * z * z)
+    rate_term = step_limits.SUBSTEP_WORK_PER_RATE_ENTRY * (3 + 2 * z) * z
+    truncated = f_max > 0 and static_correction
+    assert (python.min_step_s > 0) == truncated
+    assert python.substep_work == loops + (rate_term if truncated else 0)
+    # no term of the points' count is quadratic any more: the dense solve's 3 P^2 is gone
+    assert python.substep_work < 3 * python.n_points ** 2 or python.n_points < 100
+
+
 @pytest.mark.slow
 def test_the_builders_agree_on_random_tires(c_builder):
     """60 random tires in range (seeded): each either refused by both builders or built to
@@ -380,7 +414,8 @@ def reference_contract(case: dict, m: int) -> StepContract | None:
         n_points=n_points, n_support=n_support, n_ring_rows=3 + 2 * n_zone,
         n_ring_cols=1 + n_zone, linear=int(case["linear_contact"]),
         centre_point=int(np.flatnonzero(np.abs(theta) == 0.0)[0]),
-        substep_work=substep_work(modes.n_modes, n // 2 + 1, n_zone, n_points, n_support),
+        substep_work=substep_work(modes.n_modes, n // 2 + 1, n_zone, n_points, n_support,
+                                  truncated),
         substep_s=min(MAX_SUBSTEP_S, 1.0 / math.sqrt(tire.k_cw / tire.rhoA)),
         speed_m_s=float(speed), static_deflection_m=float(deflection),
         min_step_s=MIN_CORRECTED_STEP_S if truncated else 0.0, **arrays)

@@ -361,7 +361,7 @@ def test_tiny_values_are_refused_alike_naming_the_parameter(native, python, para
 @pytest.mark.parametrize("parameters, phrase", [
     ({"k_cw": 1e13, "rhoA": 1e-3}, "which would be below 1e-07 s"),  # the issue's case
     ({"k_cw": 1e11, "rhoA": 1e-3, "n_elements": 800, "load": 100.0},
-     "more than the 500000000 a step may take"),
+     "more than the 1000000000 a step may take"),
 ])
 def test_a_contact_the_step_cannot_afford_is_refused_alike(native, python, parameters, phrase):
     """Issue 20: the native FMU ran k_cw = 1e13 on a 1e-3 kg/m tread for 45 s in one 1 s
@@ -375,8 +375,37 @@ def test_a_contact_the_step_cannot_afford_is_refused_alike(native, python, param
     assert line.startswith("parameter problem 1/1: k_cw = ") and phrase in line
 
 
+def test_a_contact_the_dense_count_refused_is_taken_alike(native, python):
+    """k_cw = 1e10 on a 1e-3 kg/m tread, 800 nodes: a millisecond is 3163 sub-steps of 3.2e-7
+    s. Counted as the points' dense solve (3 P^2 a sub-step) that was 1.2e9 units, beyond the
+    former 5e8 and the present limit, and refused; counted as the node-space solve costs it,
+    6.9e8, within the limit: both FMUs build it and step it to the same outputs."""
+    from tire_fmu.core.contact_dynamics import build_contact_model
+    from tire_fmu.core.contract import build_contract
+    from tire_fmu.core.step_limits import MAX_STEP_WORK, WORK_INTERVAL_S
+
+    contact = build_contact_model(TireParameters(k_cw=1e10, rhoA=1e-3),
+                                  OperatingPoint(n_elements=800, load_n=100.0))
+    c = build_contract(contact)
+    per_ms = math.ceil(WORK_INTERVAL_S / contact.substep_s * (1 - 1e-12))
+    dense = (1000 + c.n_modes + 2 * c.n_orders * (c.n_zone // 2 + 1) + 3 * c.n_points ** 2
+             + 2 * c.n_points * c.n_support)  # the former count
+    assert per_ms * c.substep_work <= MAX_STEP_WORK < per_ms * dense
+    parameters = {"k_cw": 1e10, "rhoA": 1e-3, "n_elements": 800, "load": 100.0}
+    for fmu in (native, python):
+        status, lines, _ = _problems(fmu, parameters)
+        assert status == 0 and lines == []
+
+    def pressed(t: float) -> tuple[float, float, float, float]:
+        return 1e-5, 0.0, 0.0, 0.0  # the rim 10 um down: the stiff contact rings
+
+    reference = run(python, parameters, pressed, steps=2, h=1e-3)
+    errors = relative_errors(reference, run(native, parameters, pressed, steps=2, h=1e-3))
+    assert errors.max() < 1e-9, dict(zip(OUTPUTS, errors))
+
+
 def test_a_step_of_more_work_than_a_step_may_take_is_refused_alike(native, python):
-    """A stiff contact on a 400-node mesh: a 1 s step would take 1.2e9 units of work (about
+    """A stiff contact on a 400-node mesh: a 1 s step would take 4.4e9 units of work (about
     2 s of CPU); both FMUs refuse it with one message naming the longest step they take, and
     take that one."""
     parameters = {"n_elements": 400, "k_cw": 100 * TireParameters().k_cw}
@@ -389,7 +418,7 @@ def test_a_step_of_more_work_than_a_step_may_take_is_refused_alike(native, pytho
         said.append([m for s, _, m in instance.log if s >= 3])
         instance.slave.freeInstance()
     assert said[0] == said[1] and len(said[0]) == 1
-    assert "more than the 500000000 a step may take (about 1 s of CPU); take steps of at " \
+    assert "more than the 1000000000 a step may take (about 1 s of CPU); take steps of at " \
         "most" in said[0][0]
 
 

@@ -99,8 +99,8 @@ LENGTH_BISECTIONS = 60
 #: points per node.
 POINT_SPACING_SLACK = 1e-9
 #: The most contact points a zone may have: the contact solve runs in node space (O(P) a
-#: product), but its active-set iteration may take up to two passes a point, and the step
-#: work bound (step_limits.substep_work) still counts the dense solve's 3 P^2 a sub-step.
+#: product, step_limits.substep_work counts it so), but its active-set iteration may take up
+#: to two passes a point.
 MAX_CONTACT_POINTS = 4000
 #: How a spacing that makes too many points is refused (printf, so that the native FMU says
 #: the same): the smallest spacing allowed; then the points per node, the carrying nodes, the

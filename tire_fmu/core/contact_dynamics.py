@@ -36,6 +36,8 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
+import numpy as np
+
 from .contact import ContactPatch, RoadWindows
 from .free_ring import FreeRingModel, RingModes, RingTruncation, ring_modes
 from .model import TireModel, build_model, check_resolved
@@ -149,8 +151,11 @@ def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint |
             SUBSTEP_REASON % MIN_SUBSTEP_S)])
     substep = min(settings.max_substep_s, 1.0 / contact_rad_s)
     zone = model.patch.zone
+    # a ring truncated with static correction reads the held forces through its rate term
+    # every sub-step (contract.build_contract's truncated, ring.c's)
+    truncated = bool(np.any(modes.d[:, 1:]) or np.any(modes.e[:, 1:]))
     work = substep_work(modes.n_modes, model.grid.n_elements // 2 + 1, zone.n_nodes,
-                        zone.n_points, int(zone.point_support.shape[1]))
+                        zone.n_points, int(zone.point_support.shape[1]), truncated)
     per_interval = math.ceil(WORK_INTERVAL_S / substep * (1 - 1e-12))
     if per_interval * work > MAX_STEP_WORK:
         from .parameters import TIRE_FIELDS, ParameterError, Problem

@@ -207,7 +207,7 @@ def build_contract(contact) -> StepContract:
         n_ring_rows=3 + 2 * n_zone, n_ring_cols=1 + n_zone,
         linear=int(contact.settings.law == "linear"), centre_point=zone.centre_point,
         substep_work=substep_work(modes.n_modes, grid.n_elements // 2 + 1, n_zone, n_points,
-                                  int(zone.point_support.shape[1])),
+                                  int(zone.point_support.shape[1]), truncated),
         substep_s=float(contact.substep_s), speed_m_s=float(model.speed_m_s),
         static_deflection_m=float(patch.deflection_m),
         min_step_s=float(MIN_CORRECTED_STEP_S if truncated else 0.0), **arrays)

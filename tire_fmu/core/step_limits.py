@@ -40,29 +40,55 @@ SHORT_STEP_TEMPLATE = ("step size h = %s s: must be at least %g s for a ring tru
                        "static correction (the dropped modes' rate term grows as 1/h); keep "
                        "every mode, or turn the static correction off, to step shorter")
 
-#: The work of one internal sub-step of the kernel, in units: a fixed part (the road read, the
-#: solve's set-up, the outputs), one per mode kept (its decay and ramp), two per order and zone
-#: node pair (the forces' DFT and the readout's inverse at the zone nodes), three per pair
-#: of contact points (the interface the contact solve reads) and two per point and support
-#: node (reading the tread at the points, spreading their forces back to the nodes).
-#: benchmarks/bench_step_work.py measures a unit at 0.5-1.5 ns on the machines this was
-#: written on.
+#: The work of one internal sub-step of the kernel, in units of about one multiply-add of the
+#: zone transforms. Each term of substep_work is one loop of kernel.c's substep and its
+#: contact solve (one active-set pass, the kernel both FMUs step with), per item of the loop:
+#: its multiply-adds where arithmetic bounds it (the transforms, the node-space products), its
+#: measured cost beside the transforms' where memory and bookkeeping do (the modes, the points,
+#: the rate term); benchmarks/bench_step_work.py --fit measures them. This is the fixed part:
+#: the rim's couplings, the direct terms of the rim's motion, the calls.
 SUBSTEP_WORK_BASE = 1000
-#: The most work one communication step may take (units): about a second of CPU. A tire whose
-#: millisecond would take more (a stiff contact on a light tread, sub-stepped at
+#: Per mode kept: the one pass over the modes (decay, the held forces' ramp, the readout
+#: through gamma and eta: four complex products, streamed from five arrays).
+SUBSTEP_WORK_PER_MODE = 12
+#: Per order and zone node pair (n_orders x (n_zone // 2 + 1)): the two inverse DFTs that read
+#: the ring at the zone nodes and the DFT of the end forces, two multiply-adds each.
+SUBSTEP_WORK_PER_ORDER_NODE = 6
+#: Per point and support node: reading the tread at the points (twice), spreading the end
+#: forces back to the nodes, and in the contact solve's pass the same both ways again.
+SUBSTEP_WORK_PER_SUPPORT = 16
+#: Per contact point: its penetration and rate, the law, the outputs' three rows, its state.
+SUBSTEP_WORK_PER_POINT = 32
+#: Per zone node pair (n_zone^2): the node-space contact solve, W_w and W_r applied to the
+#: forces on the nodes the pushing points load and the active set's block (O(Z^2) where the
+#: points' dense solve cost O(P^2)).
+SUBSTEP_WORK_PER_NODE_PAIR = 2
+#: Per entry of the direct rate term on the held forces (a ring truncated with static
+#: correction only: 3 + 2 n_zone rows x n_zone): one multiply-add that streams E from memory,
+#: measured at about four of the transforms'.
+SUBSTEP_WORK_PER_RATE_ENTRY = 4
+#: The most work one communication step may take (units): at most about 0.7 s of CPU on the
+#: machine the weights were measured on (0.2-0.75 ns a unit over bench_step_work.py's sweeps,
+#: the active set's churn making the spread), about a second on one somewhat slower. A tire
+#: whose millisecond would take more (a stiff contact on a light tread, sub-stepped at
 #: 1/sqrt(k_cw/rhoA), on a fine mesh) is refused when it is built, and a longer step than the
 #: tire allows when it is taken, so no host waits minutes on one call.
-MAX_STEP_WORK = 500_000_000
+MAX_STEP_WORK = 1_000_000_000
 #: The longest interval a tire must step within MAX_STEP_WORK (s).
 WORK_INTERVAL_S = 1e-3
 
 
-def substep_work(n_modes: int, n_orders: int, n_zone: int, n_points: int,
-                 n_support: int) -> int:
-    """The work of one sub-step (see SUBSTEP_WORK_BASE), the same sum in both builders
-    (contract_pack.c's contract_substep_work)."""
-    return (SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone // 2 + 1) + 3 * n_points ** 2
-            + 2 * n_points * n_support)
+def substep_work(n_modes: int, n_orders: int, n_zone: int, n_points: int, n_support: int,
+                 truncated: bool) -> int:
+    """The work of one sub-step (units, SUBSTEP_WORK_BASE): the same sum in both builders
+    (contract_pack.c's contract_substep_work). ``truncated``: a ring truncated with static
+    correction, whose sub-step also reads the held forces through the direct rate term."""
+    return (SUBSTEP_WORK_BASE + SUBSTEP_WORK_PER_MODE * n_modes
+            + SUBSTEP_WORK_PER_ORDER_NODE * n_orders * (n_zone // 2 + 1)
+            + SUBSTEP_WORK_PER_SUPPORT * n_points * n_support
+            + SUBSTEP_WORK_PER_POINT * n_points
+            + SUBSTEP_WORK_PER_NODE_PAIR * n_zone * n_zone
+            + (SUBSTEP_WORK_PER_RATE_ENTRY * (3 + 2 * n_zone) * n_zone if truncated else 0))
 
 
 #: How a step that would take more than MAX_STEP_WORK is refused: h (repr), the sub-steps it

@@ -7,10 +7,15 @@
 #include "contract_pack.h"
 #include "spec.h"
 
-int contract_substep_work(int n_modes, int n_orders, int n_zone, int n_points, int n_support)
+int contract_substep_work(int n_modes, int n_orders, int n_zone, int n_points, int n_support,
+                          int truncated)
 {
-    return SPEC_SUBSTEP_WORK_BASE + n_modes + 2 * n_orders * (n_zone / 2 + 1)
-           + 3 * n_points * n_points + 2 * n_points * n_support;
+    return SPEC_SUBSTEP_WORK_BASE + SPEC_SUBSTEP_WORK_PER_MODE * n_modes
+           + SPEC_SUBSTEP_WORK_PER_ORDER_NODE * n_orders * (n_zone / 2 + 1)
+           + SPEC_SUBSTEP_WORK_PER_SUPPORT * n_points * n_support
+           + SPEC_SUBSTEP_WORK_PER_POINT * n_points
+           + SPEC_SUBSTEP_WORK_PER_NODE_PAIR * n_zone * n_zone
+           + (truncated ? SPEC_SUBSTEP_WORK_PER_RATE_ENTRY * (3 + 2 * n_zone) * n_zone : 0);
 }
 
 void contract_free(TireContract* c, const Memory* mem)
@@ -48,7 +53,7 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     c->n_ring_cols = cols;
     c->linear = linear;
     c->centre_point = zone->centre_point;
-    c->substep_work = contract_substep_work(K, ring->n_orders, Z, P, S);
+    c->substep_work = contract_substep_work(K, ring->n_orders, Z, P, S, ring->truncated);
     c->substep_s = substep_s;
     c->speed_m_s = speed;
     c->static_deflection_m = deflection;

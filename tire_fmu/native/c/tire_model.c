@@ -411,7 +411,7 @@ static int contact_problem(const Tire* t, const Ring* ring, const Zone* zone, in
     double rate = sqrt(t->k_cw / t->rhoA), substep = fmin(SPEC_MAX_SUBSTEP_S, 1.0 / rate);
     double per_interval = ceil(SPEC_WORK_INTERVAL_S / substep * (1 - 1e-12));
     int work = contract_substep_work(ring->n_modes, ring->n_orders, zone->n_zone,
-                                     zone->n_points, zone->n_support);
+                                     zone->n_points, zone->n_support, ring->truncated);
     char allowed[256], reason[256];
     if (1.0 / rate < SPEC_MIN_SUBSTEP_S) {
         snprintf(allowed, sizeof allowed, SPEC_MSG_SUBSTEP_ALLOWED,
