@@ -427,6 +427,124 @@ def loaded_modes(sim: InPlaneSimulator, f_max_hz: float = 200.0) -> LoadedModes:
     return LoadedModes(omega / (2 * np.pi), zeta, tuple(kinds), vectors, int(active.sum()))
 
 
+@dataclass(frozen=True)
+class SteadyRolling:
+    """The tire rolling steadily under a torque: rim force, spin, slip, tread elements."""
+
+    rim_fx_n: float
+    rim_fz_n: float
+    rim_my_n_m: float
+    spin_rad_s: float  # the wheel's spin: nominal V/R plus the steady offset
+    slip_ratio: float  # (spin R - V)/V with R the tread radius (negative braking)
+    sliding_points: int
+    element_deflection_m: np.ndarray  # e at the points
+    state: np.ndarray  # y with the wheel's spin offset in the ψ slot
+
+
+def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRolling:
+    """The steady state of :class:`InPlaneSimulator` on a flat road, solved directly (no time
+    stepping): ∂/∂t = 0 in the ground frame, the ring rim-relative and still, the wheel turning
+    at a steady offset ω from the nominal spin (ψ = ωt), and the tread elements' field solving
+    Ω de/dθ = s along the points (trapezoidal from the front, an element entering half a
+    spacing before its first point in contact). The contact and stick sets are iterated as in
+    a step. With the wheel held, ω = 0 and the torque is what holds it."""
+    if sim.obstacle is not None:
+        raise ValueError("steady_rolling: a flat road only (obstacle = None)")
+    if sim.spin_rad_s <= 0.0:
+        raise ValueError("steady_rolling: the tire must roll (speed_m_s > 0)")
+    nr, ny, p = sim._ring.n_ring_dof, sim._ny, sim._zone.n_points
+    omega = sim.spin_rad_s
+    spacing = np.diff(sim._zone.point_theta).mean()
+    # unknowns u = [y_rel (nr), ω (if free), e (P)]: the ring's rows, then the elements'
+    nu = ny + p
+    ring_cols = slice(0, ny)
+    # s = A_s u_ring + s0: the material's fore-aft speed against the road
+    a_s = omega * sim._jl.copy()
+    if sim._free_spin:
+        a_s[:, -1] = sim._jxw[:, -1]
+    base = np.zeros((ny, ny))
+    base[:, :nr] = sim._k[:, :nr]
+    if sim._free_spin:
+        base[:, -1] = sim._c[:, -1]  # the wheel's steady turn meets the damping (Coriolis)
+    rhs_ring = sim._f_ext(0.0, torque_n_m)
+    contact = sim._pen0 > 0
+    stick = np.ones(p, dtype=bool)
+    sign = np.ones(p)
+    for _ in range(MAX_SET_PASSES):
+        a = np.zeros((nu, nu))
+        b = np.zeros(nu)
+        a[:ny, ring_cols] = base
+        b[:ny] = rhs_ring
+        c = contact
+        # normal pushes: + Jnᵀ k (pen0 + Jn y) on the left
+        a[:ny, ring_cols] += sim._jnw[c].T @ (sim._kn[c, None] * sim._jn[c])
+        b[:ny] -= sim._jnw[c].T @ (sim._kn[c] * sim._pen0[c])
+        st, sl = c & stick, c & ~stick
+        # sticking elements pull with -(k_x e + c_x s): -J_xᵀ f_x = J_xᵀ(k_x e + c_x s)
+        rows = np.flatnonzero(st)
+        a[:ny, ny + rows] += sim._jxw[rows].T * sim._kx[rows]
+        a[:ny, ring_cols] += sim._jxw[rows].T @ (sim._cx[rows, None] * a_s[rows])
+        b[:ny] -= sim._jxw[rows].T @ (sim._cx[rows] * sim._s0[rows])
+        # sliding ones pull with -σ μ f_n
+        rows = np.flatnonzero(sl)
+        mu_sign = sim._mu * sign[rows]
+        a[:ny, ring_cols] += sim._jxw[rows].T @ ((mu_sign * sim._kn[rows])[:, None]
+                                                  * sim._jn[rows])
+        b[:ny] -= sim._jxw[rows].T @ (mu_sign * sim._kn[rows] * sim._pen0[rows])
+        # the elements' field
+        for j in range(p):
+            row = ny + j
+            a[row, ny + j] = 1.0
+            if not c[j]:
+                continue  # e = 0 off the road
+            if sl[j]:  # held at the friction limit
+                a[row, ring_cols] -= sign[j] * sim._mu * sim._kn[j] / sim._kx[j] * sim._jn[j]
+                b[row] = sign[j] * sim._mu * sim._kn[j] * sim._pen0[j] / sim._kx[j]
+                continue
+            entering = j == 0 or not c[j - 1]
+            weight = spacing / (2 * omega)
+            a[row, ring_cols] -= weight * a_s[j]
+            b[row] = weight * sim._s0[j]
+            if not entering:
+                a[row, ny + j - 1] = -1.0
+                a[row, ring_cols] -= weight * a_s[j - 1]
+                b[row] += weight * sim._s0[j - 1]
+        u = np.linalg.solve(a, b)
+        y, e = u[:ny], u[ny:]
+        pen = sim._pen0 + sim._jn @ y
+        f_n = sim._kn * pen
+        slip_speed = a_s @ y + sim._s0
+        # each point's element as it would arrive sticking, carried from the point ahead
+        # (a sliding point is judged by this, not by the limit it is held at)
+        carried = np.concatenate([[0.0], e[:-1]])
+        ahead = np.concatenate([[0.0], slip_speed[:-1]])
+        entering = ~np.concatenate([[False], c[:-1]])
+        e_trial = np.where(entering, 0.0, carried + spacing / (2 * omega) * ahead) + (
+            spacing / (2 * omega) * slip_speed)
+        tread = sim._kx * e_trial + sim._cx * slip_speed
+        new_contact = (pen > 0) & (f_n > 0)
+        new_stick = np.abs(tread) <= sim._mu * np.maximum(f_n, 0) * (1 + 1e-12)
+        new_sign = np.where(new_stick, sign, np.sign(tread))
+        if (np.array_equal(new_contact, contact) and np.array_equal(
+                new_stick | ~new_contact, stick | ~contact) and np.array_equal(
+                new_sign[new_contact & ~new_stick], sign[contact & ~stick])):
+            break
+        contact, stick, sign = new_contact, new_stick, new_sign
+    else:
+        raise ContactSetError("steady_rolling: the contact and stick sets did not settle")
+    rate = np.zeros(ny)
+    if sim._free_spin:
+        rate[-1] = y[-1]
+    state = y.copy()
+    if sim._free_spin:
+        state[-1] = 0.0  # the angle: rigid, moves no force
+    fx, fz, my = sim.rim_force(state, rate)
+    spin = omega + (y[-1] if sim._free_spin else 0.0)
+    return SteadyRolling(float(fx), float(fz), float(my), float(spin),
+                         float(spin * sim.model.tire.R / sim.speed_m_s - 1.0),
+                         int(np.sum(contact & ~stick)), np.where(contact, e, 0.0), y)
+
+
 def carry_matrix(theta: np.ndarray, shift_rad: float) -> np.ndarray:
     """B (P x P): the field at the points carried by ``shift_rad`` in the direction of θ,
     e_new = B e, by cubic Lagrange interpolation at the departure points θ_p - shift (zero
