@@ -274,6 +274,73 @@ def inplane_rotational_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-cleat")
+def inplane_cleat_table() -> str:
+    data = record("bench_inplane_cleat")
+    res = data["results"]
+    lines = ["| obstacle | point spacing | peak Fz | Fx min / max | Fx rms | Fx dominant | "
+             "run time |", "|---|---|---|---|---|---|---|"]
+    for row in res["cleat"]:
+        lines.append(f"| {row['obstacle']} | {row['spacing_m'] * 1e3:g} mm | "
+                     f"{row['peak_fz_n'] / 1e3:.2f} kN | {row['fx_min_n'] / 1e3:.2f} / "
+                     f"{row['fx_max_n'] / 1e3:.2f} kN | {row['fx_rms_n'] / 1e3:.2f} kN | "
+                     f"{row['fx_dominant_hz']:.1f} Hz | {row['seconds']:.0f} s |")
+    lines += ["", f"Axle held, wheel free, {res['speed_m_s']:g} m/s, N = 100, h = "
+              f"{res['step_s'] * 1e6:g} µs, 27.7 kN; the rim forces after the start of rolling "
+              "has settled. " + provenance(data)]
+    return "\n".join(lines)
+
+
+@generator("inplane-rolling-resistance")
+def inplane_rolling_resistance_table() -> str:
+    data = record("bench_inplane_cleat")
+    rows = data["results"]["rolling_resistance"]
+    speeds = sorted({r["speed_m_s"] for r in rows})
+    loads = sorted({r["load_n"] for r in rows})
+    lines = ["| load | " + " | ".join(f"{v:g} m/s" for v in speeds) + " |",
+             "|---|" + "---|" * len(speeds)]
+    for load in loads:
+        cells = [next(r for r in rows if r["load_n"] == load and r["speed_m_s"] == v)
+                 for v in speeds]
+        lines.append(f"| {load / 1e3:.2f} kN | "
+                     + " | ".join(f"{c['coefficient']:.5f}" for c in cells) + " |")
+    lines += ["", "Rolling resistance coefficient -Fx/Fz of the free wheel on a flat road "
+              "(default in-plane tire, N = 100, 10 mm points). " + provenance(data)]
+    return "\n".join(lines)
+
+
+@generator("inplane-footprint")
+def inplane_footprint_table() -> str:
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_contact import (
+        InPlaneSimulator,
+        deflection_for_load,
+        loaded_modes,
+        steady_rolling,
+    )
+
+    model = InPlaneTire()
+    spacing = 0.005
+    deflection = deflection_for_load(model, 27.7e3, 100, point_spacing_m=spacing)
+    lines = ["| wheel | loaded rotational mode | points in contact |", "|---|---|---|"]
+    for wheel in ("held", "free"):
+        modes = loaded_modes(InPlaneSimulator(model, 100, 0.0, deflection, wheel=wheel,
+                                              point_spacing_m=spacing), f_max_hz=100)
+        (f,) = [f for f, k in zip(modes.frequencies_hz, modes.kinds) if k == "rotational"]
+        lines.append(f"| {wheel} | {f:.2f} Hz | {modes.points_in_contact} |")
+    lines += ["", "| brake torque | slip ratio | Fx | sliding points |", "|---|---|---|---|"]
+    sim = InPlaneSimulator(model, 100, 10.0, deflection, point_spacing_m=spacing)
+    for torque in (0.0, -1000.0, -3000.0, -6000.0):
+        st = steady_rolling(sim, torque)
+        lines.append(f"| {torque:g} N m | {st.slip_ratio * 100:.3f} % | "
+                     f"{st.rim_fx_n / 1e3:.3f} kN | {st.sliding_points} |")
+    lines += ["", f"27.7 kN (deflection {deflection * 1e3:.2f} mm), N = 100, 5 mm points; the "
+              "loaded modes at rest, the steady rolling at 10 m/s; computed by "
+              "`docs/generate.py` (`tire-fmu inplane-modes --load 27700 [--rim-free]`, "
+              "`core.inplane_contact.steady_rolling`)."]
+    return "\n".join(lines)
+
+
 @generator("tied-sidewall")
 def tied_sidewall_table() -> str:
     import numpy as np
