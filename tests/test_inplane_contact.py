@@ -223,3 +223,21 @@ def test_brake_slip_settles_where_the_steady_solve_says(deflection):
     assert slip == pytest.approx(steady.slip_ratio, rel=0.02)
     assert run.rim_fx_n[settled].mean() == pytest.approx(steady.rim_fx_n, rel=0.005)
     assert steady.rim_my_n_m == pytest.approx(-torque, rel=1e-9)
+
+
+@pytest.mark.parametrize("f_max_hz, bound", [(300.0, 0.005), (150.0, 0.05)])
+def test_reduced_ring_follows_the_unreduced_one_over_a_cleat(deflection, f_max_hz, bound):
+    """The 20 mm cleat at 10 m/s, axle held: the ring reduced to its modes up to f_max with
+    the zone nodes' static shapes gives Fx, Fz and My within 5 % rms of every DOF stepped
+    (0.5 % at 300 Hz), on a basis a third (or a sixth) the size."""
+    runs = []
+    for f_max in (None, f_max_hz):
+        sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING,
+                               obstacle=cleat(0.02, 0.02), obstacle_ahead_m=0.6, f_max_hz=f_max)
+        runs.append((sim, sim.run(0.12, record_every=2)))
+    (full_sim, full), (reduced_sim, reduced) = runs
+    assert reduced_sim._ny < full_sim._ny / 1.8
+    for name, offset in (("rim_fz_n", DEFAULT_LOAD_N), ("rim_fx_n", 0.0), ("rim_my_n_m", 0.0)):
+        exact, approx = getattr(full, name), getattr(reduced, name)
+        scale = np.sqrt(np.mean((exact - offset) ** 2))
+        assert np.sqrt(np.mean((approx - exact) ** 2)) < bound * scale, name

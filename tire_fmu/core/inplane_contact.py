@@ -91,7 +91,9 @@ class InPlaneSimulator:
 
     ``wheel`` is ``"free"`` (ψ a DOF with the wheel inertia; apply ``torque_n_m``) or
     ``"held"`` (spin fixed at the nominal V/R). ``obstacle`` starts ``obstacle_ahead_m`` in
-    front of the contact centre (road distance)."""
+    front of the contact centre (road distance). ``f_max_hz`` steps a reduced ring instead
+    (:func:`ritz_basis`: the free ring's modes up to it and the static shapes of every zone
+    node's radial and tangential load); None steps every DOF."""
 
     model: InPlaneTire
     n_elements: int = 100
@@ -104,6 +106,7 @@ class InPlaneSimulator:
     obstacle: Obstacle | None = None
     obstacle_ahead_m: float = 0.5
     torque_n_m: float = 0.0
+    f_max_hz: float | None = None
     _state: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
@@ -114,6 +117,10 @@ class InPlaneSimulator:
             problems.append(Problem("step_s", self.step_s, "s", "in [1e-07, 0.01] s"))
         if self.wheel not in ("free", "held"):
             problems.append(Problem("wheel", self.wheel, "", "'free' or 'held'"))
+        if self.f_max_hz is not None and not (math.isfinite(self.f_max_hz)
+                                              and 1.0 <= self.f_max_hz <= 1e5):
+            problems.append(Problem("f_max_hz", self.f_max_hz, "Hz",
+                                    "in [1, 1e+05] Hz, or None for every DOF", ""))
         if not (math.isfinite(self.deflection_m) and 0.0 <= self.deflection_m < 0.2 *
                 self.model.tire.R):
             problems.append(Problem("deflection_m", self.deflection_m, "m",
@@ -162,6 +169,19 @@ class InPlaneSimulator:
         jl = np.zeros((zone.n_points, ny))  # x part of L u at the points
         jl[:, : 2 * n] = jx[:, : 2 * n] @ tread_L
         arc = zone.point_arc_m
+        self._basis = None
+        self._n_ring_coords = nr
+        if self.f_max_hz is not None:
+            basis = ritz_basis(self.model, self.n_elements, zone.nodes, self.f_max_hz)
+            if free_spin:
+                basis = np.block([[basis, np.zeros((nr, 1))],
+                                  [np.zeros((1, basis.shape[1])), np.ones((1, 1))]])
+            self._basis = basis
+            self._n_ring_coords = basis.shape[1] - (1 if free_spin else 0)
+            mass, damping, stiffness = (basis.T @ a @ basis for a in (mass, damping, stiffness))
+            jn, jx, jn_work, jx_work, jl = (a @ basis for a in (jn, jx, jn_work, jx_work, jl))
+            to_abs = to_abs @ basis
+            ny = basis.shape[1]
         self._ring, self._zone, self._to_abs = ring, zone, to_abs
         self._m, self._c, self._k = mass, damping, stiffness
         self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
@@ -211,7 +231,7 @@ class InPlaneSimulator:
     # ----- static state -----
     def static_state(self) -> np.ndarray:
         """The tire pressed onto the flat road at the deflection, frictionless, at rest."""
-        nr = self._ring.n_ring_dof
+        nr = self._n_ring_coords
         k = self._k[:nr, :nr]
         jn = self._jn[:, :nr]
         active = self._pen0 > 0
@@ -418,7 +438,10 @@ def loaded_modes(sim: InPlaneSimulator, f_max_hz: float = 200.0) -> LoadedModes:
     t, tang = sim.model.tire, sim.model.tangential
     v = sim._ring.field_slice("v")
     wheel_turn = vectors[-1] if sim._free_spin else np.zeros(lam.size)
-    tread_turn = vectors[v].mean(axis=0) / t.R + wheel_turn
+    ring_part = vectors[: sim._n_ring_coords]
+    if sim._basis is not None:
+        ring_part = sim._basis[: sim._ring.n_ring_dof, : sim._n_ring_coords] @ ring_part
+    tread_turn = ring_part[v].mean(axis=0) / t.R + wheel_turn
     tread_inertia = 2 * np.pi * t.R**3 * t.rhoA
     turning = (tread_inertia * tread_turn**2 + tang.wheel_inertia_kg_m2 * wheel_turn**2) / (
         modal_mass)
@@ -452,7 +475,7 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
         raise ValueError("steady_rolling: a flat road only (obstacle = None)")
     if sim.spin_rad_s <= 0.0:
         raise ValueError("steady_rolling: the tire must roll (speed_m_s > 0)")
-    nr, ny, p = sim._ring.n_ring_dof, sim._ny, sim._zone.n_points
+    nr, ny, p = sim._n_ring_coords, sim._ny, sim._zone.n_points
     omega = sim.spin_rad_s
     spacing = np.diff(sim._zone.point_theta).mean()
     # unknowns u = [y_rel (nr), ω (if free), e (P)]: the ring's rows, then the elements'
@@ -543,6 +566,30 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
     return SteadyRolling(float(fx), float(fz), float(my), float(spin),
                          float(spin * sim.model.tire.R / sim.speed_m_s - 1.0),
                          int(np.sum(contact & ~stick)), np.where(contact, e, 0.0), y)
+
+
+def ritz_basis(model: InPlaneTire, n_elements: int, zone_nodes: np.ndarray,
+               f_max_hz: float) -> np.ndarray:
+    """An orthonormal basis (ring DOFs x r) of the free ring's undamped modes at rest up to
+    ``f_max_hz`` (rim held) and the static shapes of a unit radial and tangential load at each
+    zone node: every contact force reaches the ring through the zone nodes, so the static
+    part of any footprint's response lies in the basis, and the modes above f_max enter
+    through it statically."""
+    import scipy.linalg
+
+    from .inplane_modes import tire_modes
+
+    ring = InPlaneRing(model, n_elements)
+    modes = tire_modes(ring, f_max_hz=f_max_hz)
+    k = 0.5 * (ring.stiffness + ring.stiffness.T)
+    loads = np.zeros((ring.n_ring_dof, 2 * zone_nodes.size))
+    w, v = ring.field_slice("w"), ring.field_slice("v")
+    for i, node in enumerate(zone_nodes):
+        loads[w.start + node, 2 * i] = 1.0
+        loads[v.start + node, 2 * i + 1] = 1.0
+    static = np.linalg.solve(k, loads)
+    shapes = np.hstack([modes.shapes, static / np.abs(static).max(axis=0)])
+    return scipy.linalg.orth(shapes, rcond=1e-10)
 
 
 def carry_matrix(theta: np.ndarray, shift_rad: float) -> np.ndarray:
