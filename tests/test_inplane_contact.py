@@ -241,3 +241,38 @@ def test_reduced_ring_follows_the_unreduced_one_over_a_cleat(deflection, f_max_h
         exact, approx = getattr(full, name), getattr(reduced, name)
         scale = np.sqrt(np.mean((exact - offset) ** 2))
         assert np.sqrt(np.mean((approx - exact) ** 2)) < bound * scale, name
+
+
+def test_a_change_of_speed_settles_where_the_tire_built_at_the_new_speed_rolls(deflection):
+    """The road slows from 20 to 10 m/s during the run: the step follows the wheel's spin
+    (its speed terms rebuilt as it changes), and once settled the drag and spin are those of
+    the tire built at 10 m/s from the start."""
+    def ramp(t):
+        return 20.0 - 10.0 * min(max(t - 0.1, 0.0) / 0.2, 1.0)
+
+    changing = InPlaneSimulator(MODEL, 100, 20.0, deflection, point_spacing_m=SPACING,
+                                f_max_hz=150.0)
+    run = changing.run(1.0, speed_m_s=ramp, record_every=10)
+    built = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING,
+                             f_max_hz=150.0)
+    reference = built.run(0.6, record_every=10)
+    late, settled = run.time_s > 0.8, reference.time_s > 0.3
+    assert run.rim_fx_n[late].mean() == pytest.approx(reference.rim_fx_n[settled].mean(),
+                                                      rel=0.01)
+    assert run.spin_rad_s[late].mean() == pytest.approx(reference.spin_rad_s[settled].mean(),
+                                                        rel=1e-5)
+
+
+def test_a_decelerating_road_brakes_the_free_wheel_through_the_footprint(deflection):
+    """The road slows at 20 m/s² from 10 m/s: the free wheel follows it, decelerating at
+    a/R, and the road's pull on the footprint is what turns its inertia, I α / R."""
+    decel = 20.0
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING,
+                           f_max_hz=150.0)
+    run = sim.run(0.5, speed_m_s=lambda t: 10.0 - decel * max(t - 0.1, 0.0), record_every=10)
+    during = (run.time_s > 0.2) & (run.time_s < 0.5)
+    alpha = np.polyfit(run.time_s[during], run.spin_rad_s[during], 1)[0]
+    t = MODEL.tire
+    assert alpha == pytest.approx(-decel / t.R, rel=0.01)
+    inertia = MODEL.tangential.wheel_inertia_kg_m2 + 2 * np.pi * t.R**3 * (t.rhoA + t.m_s)
+    assert run.rim_fx_n[during].mean() == pytest.approx(-inertia * alpha / t.R, rel=0.03)

@@ -62,6 +62,9 @@ from .parameters import ParameterError, Problem
 MAX_SET_PASSES = 50
 #: Passes after which the sets may only shrink (see the step).
 SETTLE_PASSES = 12
+#: How far (a fraction of the spin, at least 1 rad/s) a free wheel's spin may move from the
+#: one the step was built at before it is rebuilt at the new spin, when the speed changes.
+SPIN_REBUILD_FRACTION = 2e-3
 
 
 class ContactSetError(RuntimeError):
@@ -136,8 +139,11 @@ class InPlaneSimulator:
 
     def _build(self) -> None:
         t, tang = self.model.tire, self.model.tangential
-        ring = InPlaneRing(self.model, self.n_elements, spin_rad_s=self.spin_rad_s,
-                           rim_free=True)
+        # C and K are polynomials in the spin (C linear, K quadratic): read them off three
+        # spins, so that the step can follow the wheel's spin as it changes
+        rings = [InPlaneRing(self.model, self.n_elements, spin_rad_s=spin, rim_free=True)
+                 for spin in (0.0, 1.0, 2.0)]
+        ring = rings[0]
         zone = contact_zone(Grid(self.n_elements, t.R), t.k_cw, t.beta, self.zone_length_m,
                             self.point_spacing_m)
         nr, n = ring.n_ring_dof, self.n_elements
@@ -150,8 +156,11 @@ class InPlaneSimulator:
             to_abs[:nr, nr] = ring.rim_patterns[:, 2]
             to_abs[nr + 2, nr] = 1.0
         mass = to_abs.T @ ring.mass @ to_abs
-        damping = to_abs.T @ ring.damping @ to_abs
-        stiffness = to_abs.T @ ring.stiffness @ to_abs
+        c_at = [to_abs.T @ r.damping @ to_abs for r in rings]
+        k_at = [to_abs.T @ r.stiffness @ to_abs for r in rings]
+        k2 = 0.5 * (k_at[2] - 2.0 * k_at[1] + k_at[0])
+        spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k_at[0],
+                      "k1": k_at[1] - k_at[0] - k2, "k2": k2}
 
         interp = np.zeros((zone.n_points, n))
         interp[:, zone.nodes] = zone.interpolation  # zone nodes -> ring nodes
@@ -178,12 +187,22 @@ class InPlaneSimulator:
                                   [np.zeros((1, basis.shape[1])), np.ones((1, 1))]])
             self._basis = basis
             self._n_ring_coords = basis.shape[1] - (1 if free_spin else 0)
-            mass, damping, stiffness = (basis.T @ a @ basis for a in (mass, damping, stiffness))
+            mass = basis.T @ mass @ basis
+            spin_terms = {k: basis.T @ a @ basis for k, a in spin_terms.items()}
             jn, jx, jn_work, jx_work, jl = (a @ basis for a in (jn, jx, jn_work, jx_work, jl))
             to_abs = to_abs @ basis
             ny = basis.shape[1]
         self._ring, self._zone, self._to_abs = ring, zone, to_abs
-        self._m, self._c, self._k = mass, damping, stiffness
+        # the rim's rows of the tire's forces (InPlaneRing.rim_force), as polynomials in spin
+        rows_k = [r.stiffness[-3:] for r in rings]
+        rows_c = [r.damping[-3:] for r in rings]
+        mass_rows = ring.mass[-3:].copy()
+        mass_rows[:, -3:] -= np.diag([tang.wheel_mass_kg, tang.wheel_mass_kg,
+                                      tang.wheel_inertia_kg_m2])
+        rk2 = 0.5 * (rows_k[2] - 2.0 * rows_k[1] + rows_k[0])
+        self._rim_rows = {"k0": rows_k[0], "k1": rows_k[1] - rows_k[0] - rk2, "k2": rk2,
+                          "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows}
+        self._m, self._spin_terms = mass, spin_terms
         self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
         self._kn = zone.stiffness_n_per_m
         self._cn = zone.damping_n_s_per_m
@@ -191,41 +210,53 @@ class InPlaneSimulator:
         self._mu = tang.friction_coefficient
         self._pen0 = t.R - (t.R - self.deflection_m) / np.cos(th)
         self._sec = 1.0 / np.cos(th)
-        self._s0 = self.speed_m_s - self.spin_rad_s * t.R * np.cos(th)
-        height = t.R - self.deflection_m
+        self._cos = np.cos(th)
         self._x_lo, self._x_hi = zone.road_windows_m(self.deflection_m)
-        del height
         self._ny, self._free_spin = ny, free_spin
-        h = self.step_s
-        a0 = 4.0 / h**2 * mass + 2.0 / h * damping + stiffness
+        self._cx = t.beta * self._kx
+        self._set_spin(self.spin_rad_s, self.speed_m_s)
+
+    def _set_spin(self, spin_rad_s: float, speed_m_s: float) -> None:
+        """Build the step at this spin (the reference the wheel's ψ̇ is measured from) and
+        road speed: the speed's terms of C and K, the step's matrices, the elements' carry."""
+        h, o = self.step_s, spin_rad_s
+        terms = self._spin_terms
+        self._spin_now, self._speed_now = o, speed_m_s
+        self._c = terms["c0"] + o * terms["c1"]
+        self._k = terms["k0"] + o * terms["k1"] + o**2 * terms["k2"]
+        self._s0 = speed_m_s - o * self.model.tire.R * self._cos
+        jn, jx_work, jn_work, jl = self._jn, self._jxw, self._jnw, self._jl
+        a0 = 4.0 / h**2 * self._m + 2.0 / h * self._c + self._k
         self._a0_inv = np.linalg.inv(a0)
         # e = γ + G y while a point sticks (trapezoidal slip over the step)
-        self._gain = jx_work + 0.5 * h * self.spin_rad_s * jl
+        self._gain = jx_work + 0.5 * h * o * jl
         self._yn = self._a0_inv @ jn_work.T  # ring response to unit point forces
         self._yx = self._a0_inv @ jx_work.T
         self._wnn, self._wnx = jn @ self._yn, jn @ self._yx
         # the tread element's force k_x e + c_x ė (ė = s while it sticks) on y: t = t0 + K_G y
-        self._cx = t.beta * self._kx
         self._kg = (self._kx[:, None] * self._gain
-                    + self._cx[:, None] * (2.0 / h * jx_work + self.spin_rad_s * jl))
+                    + self._cx[:, None] * (2.0 / h * jx_work + o * jl))
         self._kgn, self._kgx = self._kg @ self._yn, self._kg @ self._yx
-        self._carry = carry_matrix(zone.point_theta, self.spin_rad_s * h)
+        self._carry = carry_matrix(self._zone.point_theta, o * h)
 
-    def road(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(height, rate) of the road under each point at ``time_s``: the obstacle moves
-        back at V from ``obstacle_ahead_m`` in front of the contact centre."""
+    def road(self, time_s: float, distance_m: float | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """(height, rate) of the road under each point: the obstacle moves back from
+        ``obstacle_ahead_m`` in front of the contact centre by the road's travel,
+        ``distance_m`` (V t at a constant speed), at the current road speed."""
         zero = np.zeros(self._zone.n_points)
         if self.obstacle is None:
             return zero, zero
-        edge = self.obstacle_ahead_m - self.speed_m_s * time_s
+        travelled = self.speed_m_s * time_s if distance_m is None else distance_m
+        edge = self.obstacle_ahead_m - travelled
+        speed = self._speed_now
 
         def height(at_edge):
             return self.obstacle.mean_height(self._x_lo - at_edge, self._x_hi - at_edge)
 
         # the rate by a central difference of the window means over a hundredth of a step
         dt = 1e-2 * self.step_s
-        rate = (height(edge - self.speed_m_s * dt) - height(edge + self.speed_m_s * dt)) / (
-            2 * dt)
+        rate = (height(edge - speed * dt) - height(edge + speed * dt)) / (2 * dt)
         return height(edge), rate
 
     # ----- static state -----
@@ -254,11 +285,16 @@ class InPlaneSimulator:
 
     # ----- stepping -----
     def run(self, duration_s: float, torque_n_m=None, record_every: int = 1,
-            progress=None) -> InPlaneRun:
+            progress=None, speed_m_s=None) -> InPlaneRun:
         """Step from the static state (rolling starts at t = 0) for ``duration_s``.
         ``torque_n_m`` (a constant or a function of time) turns the wheel (+ in the direction
-        of rotation; a brake is negative)."""
+        of rotation; a brake is negative). ``speed_m_s``, a function of time, changes the
+        road's speed during the run (it starts at the simulator's ``speed_m_s``): the step
+        follows the wheel's spin, rebuilt at the current spin whenever it has moved by
+        :data:`SPIN_REBUILD_FRACTION` (every step with the wheel held, whose spin is V/R)."""
         h, ny = self.step_s, self._ny
+        self._set_spin(self.spin_rad_s, self.speed_m_s)
+        speed_now, distance = self.speed_m_s, 0.0
         steps = int(round(duration_s / h))
         torque = self.torque_n_m if torque_n_m is None else torque_n_m
         y = self.static_state()
@@ -271,7 +307,17 @@ class InPlaneSimulator:
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
         for i in range(1, steps + 1):
             time = i * h
-            height, rate = self.road(time)
+            if speed_m_s is not None:
+                speed_new = float(speed_m_s(time))
+                if not (math.isfinite(speed_new) and 0.0 <= speed_new <= 150.0):
+                    raise ParameterError([Problem("speed_m_s", speed_new, "m/s",
+                                                  "in [0, 150] m/s", f"at t = {time:g} s")])
+                distance += 0.5 * h * (speed_now + speed_new)
+                speed_now = speed_new
+                yd = self._follow_spin(yd, speed_now)
+            else:
+                distance = self.speed_m_s * time
+            height, rate = self.road(time, distance)
             s_old = self._slip(y, yd)
             # the element field carried back by Ωh through the points (zero ahead of them)
             e_conv = self._carry @ e
@@ -332,8 +378,8 @@ class InPlaneSimulator:
                 records["rim_my_n_m"].append(rim[2])
                 records["contact_fz_n"].append(f_n.sum())
                 records["contact_fx_n"].append(f_x.sum())
-                records["spin_rad_s"].append(self.spin_rad_s + (yd[-1] if self._free_spin
-                                                               else 0.0))
+                records["spin_rad_s"].append(self._spin_now + (yd[-1] if self._free_spin
+                                                              else 0.0))
                 records["sliding_points"].append(int(np.sum(contact & ~stick)))
             if progress is not None:
                 progress(i, steps)
@@ -363,6 +409,22 @@ class InPlaneSimulator:
         forces = np.linalg.solve(matrix, rhs)
         return forces[:p], forces[p:]
 
+    def _follow_spin(self, yd: np.ndarray, speed: float) -> np.ndarray:
+        """The step at the road's new speed: s0 always; the spin's terms when the wheel's
+        spin has moved (the free wheel's offset ψ̇ is then measured from the new spin)."""
+        if not self._free_spin:
+            self._set_spin(speed / self.model.tire.R, speed)
+            return yd
+        spin = self._spin_now + yd[-1]
+        if abs(spin - self._spin_now) > SPIN_REBUILD_FRACTION * max(abs(self._spin_now), 1.0):
+            yd = yd.copy()
+            yd[-1] = 0.0
+            self._set_spin(spin, speed)
+        else:
+            self._speed_now = speed
+            self._s0 = speed - self._spin_now * self.model.tire.R * self._cos
+        return yd
+
     def _f_ext(self, time_s, torque) -> np.ndarray:
         f = np.zeros(self._ny)
         if self._free_spin:
@@ -371,7 +433,7 @@ class InPlaneSimulator:
 
     def _slip(self, y, yd) -> np.ndarray:
         """Fore-aft velocity of the tread at each point relative to the road, less s0."""
-        return self._jxw @ yd + self.spin_rad_s * (self._jl @ y)
+        return self._jxw @ yd + self._spin_now * (self._jl @ y)
 
     def _contact_and_rates(self, y, yd, e, time_s):
         height, rate = self.road(time_s)
@@ -384,9 +446,14 @@ class InPlaneSimulator:
         return forces, contact, np.ones_like(contact), np.ones(contact.size)
 
     def rim_force(self, y, yd, ydd=None) -> np.ndarray:
-        """(Fx, Fz, My) the tire puts on the rim (N, N, N m)."""
-        qdd = None if ydd is None else self._to_abs @ ydd
-        return self._ring.rim_force(self._to_abs @ y, self._to_abs @ yd, qdd)
+        """(Fx, Fz, My) the tire puts on the rim (N, N, N m): the rim's rows of the tire's
+        forces at the current spin (:meth:`InPlaneRing.rim_force`)."""
+        rows, o = self._rim_rows, self._spin_now
+        f = (rows["k0"] + o * rows["k1"] + o**2 * rows["k2"]) @ (self._to_abs @ y)
+        f += (rows["c0"] + o * rows["c1"]) @ (self._to_abs @ yd)
+        if ydd is not None:
+            f += rows["m"] @ (self._to_abs @ ydd)
+        return -f
 
     def static_load_n(self) -> float:
         """The vertical load the deflection carries at rest (N)."""
