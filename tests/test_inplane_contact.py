@@ -276,3 +276,31 @@ def test_a_decelerating_road_brakes_the_free_wheel_through_the_footprint(deflect
     assert alpha == pytest.approx(-decel / t.R, rel=0.01)
     inertia = MODEL.tangential.wheel_inertia_kg_m2 + 2 * np.pi * t.R**3 * (t.rhoA + t.m_s)
     assert run.rim_fx_n[during].mean() == pytest.approx(-inertia * alpha / t.R, rel=0.03)
+
+
+def test_cleat_command_runs_the_cleat_test_of_the_core(capsys, tmp_path):
+    import json
+
+    from tire_fmu.cli import main
+
+    argv = ["inplane-cleat", "--point-spacing", "0.01", "--f-max", "150", "--speed", "15"]
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    summary = data["summary"]
+    deflection = deflection_for_load(MODEL, 27700.0, 100, point_spacing_m=0.01)
+    assert summary["deflection_m"] == pytest.approx(deflection, rel=1e-12)
+    sim = InPlaneSimulator(MODEL, 100, 15.0, deflection, point_spacing_m=0.01,
+                           obstacle=cleat(0.02, 0.02), obstacle_ahead_m=0.4, f_max_hz=150.0)
+    run = sim.run(len(data["run"]["time_s"]) * sim.step_s)
+    assert max(data["run"]["rim_fz_n"]) == pytest.approx(run.rim_fz_n.max(), rel=1e-9)
+    # the cleat pushes the tire back, then forward, ringing at the loaded rotational mode
+    assert summary["fx_min_n"] < -0.05 * 27700 and summary["fx_max_n"] > 0.05 * 27700
+    modes = loaded_modes(InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=0.01),
+                         f_max_hz=60)
+    (rotational,) = [f for f, k in zip(modes.frequencies_hz, modes.kinds) if k == "rotational"]
+    assert summary["fx_dominant_hz"] == pytest.approx(rotational, rel=0.25)
+    assert main([*argv, "--plot", str(tmp_path / "cleat.png")]) == 0
+    assert (tmp_path / "cleat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["inplane-cleat", "--speed", "0", "--height", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "--speed = 0.0 m/s" in err and "--height = 1.0 m" in err

@@ -536,3 +536,35 @@ def plot_inplane_modes(result, path: Path, max_modes: int = 12, scale: float = 0
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_inplane_cleat(run, load_n: float, window, path: Path) -> Path:
+    """The cleat test: Fx, Fz - load and My at the axle against time, and the spectra of Fx
+    and Fz (Welch's estimate of the part after the start of rolling)."""
+    from scipy.signal import welch
+
+    plt = _pyplot()
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6.5))
+    t = run.time_s
+    top.plot(t, run.rim_fx_n / 1e3, label="Fx")
+    top.plot(t, (run.rim_fz_n - load_n) / 1e3, label="Fz - static load")
+    top.set_xlabel("time [s]")
+    top.set_ylabel("force at the axle [kN]")
+    twin = top.twinx()
+    twin.plot(t, run.rim_my_n_m / 1e3, color="C2", lw=0.8, label="My")
+    twin.set_ylabel("My [kN m]", color="C2")
+    top.legend(loc="upper left")
+    top.grid(alpha=0.3)
+    fs = 1.0 / (t[1] - t[0])
+    for name, signal in (("Fx", run.rim_fx_n[window]), ("Fz", run.rim_fz_n[window])):
+        freq, power = welch(signal - signal.mean(), fs=fs, nperseg=min(signal.size, 4096))
+        bottom.semilogy(freq, power, label=name)
+    bottom.set_xlim(0, 300)
+    bottom.set_xlabel("frequency [Hz]")
+    bottom.set_ylabel("PSD [N²/Hz]")
+    bottom.legend()
+    bottom.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

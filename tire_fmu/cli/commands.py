@@ -11,6 +11,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "modes": ("ring", "natural frequencies, damping and labelled mode shapes"),
     "inplane-modes": ("inplane", "modes of the full in-plane ring: radial, tangential and "
                       "rotational, rim held or free"),
+    "inplane-cleat": ("inplane", "the in-plane tire over a cleat, axle held: Fx, Fz and My "
+                      "against time, their spectra"),
     "analytic": ("ring", "closed-form frequencies of the undeformed ring (eq. 12)"),
     "patch": ("ring", "static footprint for a load (or a deflection): length, pressure, "
               "stiffness"),

@@ -26,6 +26,11 @@ DEFAULT_TIRE_FILE = "GL073A"
 
 
 def register(subparsers) -> None:
+    register_modes(subparsers)
+    register_cleat(subparsers)
+
+
+def register_modes(subparsers) -> None:
     from ..core.inplane import TANGENTIAL_RANGES
 
     names = ", ".join(f"{name} [{unit}]" for name, (_, _, unit) in TANGENTIAL_RANGES.items())
@@ -63,6 +68,101 @@ def register(subparsers) -> None:
     add_tire_options(p)
     add_output_options(p)
     p.set_defaults(handler=run_inplane_modes)
+
+
+def register_cleat(subparsers) -> None:
+    from ..core.obstacles import MAX_OBSTACLE_LENGTH_M, MAX_OBSTACLE_SIZE_M
+
+    p = subparsers.add_parser(
+        "inplane-cleat",
+        help=command_help("inplane-cleat"),
+        description="The classic cleat test with the in-plane tire (SAE J2730-like): the "
+        "axle held at the deflection of --load, the wheel free to turn, the road carrying a "
+        "cleat at --speed; Fx, Fz and My at the axle against time, and the spectra of Fx and "
+        "Fz with the frequencies that dominate them.",
+    )
+    p.add_argument("--speed", metavar="M_PER_S", type=float, default=10.0,
+                   help="road speed in m/s (default 10)")
+    p.add_argument("--load", metavar="N", type=float, default=27700.0,
+                   help="static load in N that sets the axle's height (default 27700)")
+    p.add_argument("--height", metavar="M", type=float, default=0.02,
+                   help="cleat height in m (default 0.02)")
+    p.add_argument("--length", metavar="M", type=float, default=0.02,
+                   help="cleat length along the road in m (default 0.02)")
+    p.add_argument("--shape", choices=("rectangular", "rounded"), default="rectangular",
+                   help="rectangular (steps) or rounded (1 - cos)")
+    p.add_argument("--elements", metavar="N", type=int, default=100,
+                   help="number of nodes around the ring (default 100)")
+    p.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
+                   help="contact point spacing in m (default 0.005)")
+    p.add_argument("--f-max", metavar="HZ", type=float, default=300.0,
+                   help="reduce the ring to its modes up to this frequency with the zone's "
+                   "static shapes (default 300; 0 steps every DOF)")
+    p.add_argument("--step", metavar="S", type=float, default=1e-4,
+                   help="time step in s (default 1e-4)")
+    p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
+                   help="override a tangential parameter (repeatable; see inplane-modes)")
+    add_tire_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_inplane_cleat, max_obstacle=(MAX_OBSTACLE_SIZE_M,
+                                                             MAX_OBSTACLE_LENGTH_M))
+
+
+def run_inplane_cleat(args: argparse.Namespace) -> Output:
+    import numpy as np
+    from scipy.signal import periodogram
+
+    from ..core.inplane import InPlaneTire
+    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load
+    from ..core.obstacles import cleat
+
+    size, length = args.max_obstacle
+    raise_problems([
+        elements_problem(args.elements),
+        range_problem("--speed", args.speed, 0.5, 60.0, "m/s"),
+        positive_problem("--load", args.load, "N"),
+        range_problem("--height", args.height, 1e-4, size, "m"),
+        range_problem("--length", args.length, 1e-4, length, "m"),
+        range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m"),
+        range_problem("--f-max", args.f_max, 0.0, 1e5, "Hz"),
+        range_problem("--step", args.step, 1e-6, 1e-3, "s"),
+    ])
+    if args.tire_file is None:
+        args.tire_file = DEFAULT_TIRE_FILE
+    model = InPlaneTire(checked_tire(args), _tangential(args.tangential))
+    deflection = deflection_for_load(model, args.load, args.elements,
+                                     point_spacing_m=args.point_spacing)
+    ahead = 0.4  # m of road before the cleat: past the zone's front, rolling settled
+    sim = InPlaneSimulator(model, args.elements, args.speed, deflection, step_s=args.step,
+                           point_spacing_m=args.point_spacing,
+                           obstacle=cleat(args.height, args.length, args.shape),
+                           obstacle_ahead_m=ahead, f_max_hz=args.f_max or None)
+    duration = (ahead + 0.3 + args.length) / args.speed + 0.1
+    run = sim.run(duration)
+    on = run.time_s > 0.5 * ahead / args.speed
+
+    def dominant(signal):
+        freq, power = periodogram(signal - signal.mean(), fs=1 / args.step, nfft=2**16)
+        band = freq >= 5.0
+        return float(freq[band][np.argmax(power[band])])
+
+    fx, fz = run.rim_fx_n[on], run.rim_fz_n[on]
+    summary = {"deflection_m": deflection, "peak_fz_n": float(fz.max()),
+               "fx_min_n": float(fx.min()), "fx_max_n": float(fx.max()),
+               "fx_dominant_hz": dominant(fx), "fz_dominant_hz": dominant(fz),
+               "basis_size": sim._ny}
+    text = (f"{cleat(args.height, args.length, args.shape).label} at {args.speed:g} m/s, "
+            f"axle held at {deflection * 1e3:.2f} mm ({args.load:g} N), wheel free, "
+            f"N = {args.elements}, {args.point_spacing * 1e3:g} mm points, "
+            f"{'every DOF' if not args.f_max else f'modes to {args.f_max:g} Hz'}\n"
+            + table([["peak Fz [kN]", summary["peak_fz_n"] / 1e3],
+                     ["Fx min / max [kN]", f"{summary['fx_min_n'] / 1e3:.3g} / "
+                      f"{summary['fx_max_n'] / 1e3:.3g}"],
+                     ["Fx dominant [Hz]", summary["fx_dominant_hz"]],
+                     ["Fz dominant [Hz]", summary["fz_dominant_hz"]]], ["", "value"]))
+    output = Output(text=text, data={"summary": summary, "run": run.to_dict()})
+    write_plot(args, output, plot_with("plot_inplane_cleat", run, args.load, on))
+    return output
 
 
 def _tangential(items: list[str]):
