@@ -304,3 +304,33 @@ def test_cleat_command_runs_the_cleat_test_of_the_core(capsys, tmp_path):
     assert main(["inplane-cleat", "--speed", "0", "--height", "1"]) == 2
     err = capsys.readouterr().err
     assert "--speed = 0.0 m/s" in err and "--height = 1.0 m" in err
+
+
+def test_a_braked_quarter_car_decelerates_as_its_moment_balance_says(deflection):
+    """The fore-aft quarter car: the vehicle's 2820 kg driven by the tire's force on the axle,
+    a 6 kN m brake on the wheel. Once the slip has settled the vehicle decelerates at
+    a = T/(m R + I/R), the wheel's and the vehicle's balance with the road's drag acting at
+    R (within 3 %: the pressure's own fore-aft resultant under braking, the slip's share of
+    the wheel's deceleration); the slip is the steady solve's for the torque the road
+    carries, within 10 % (10 mm points: the two transports of the elements differ by 5 % at
+    this spacing at a constant speed, 1.5 % at 2.5 mm, tested above)."""
+    from tire_fmu.core.inplane_contact import steady_rolling
+
+    torque, mass = -6000.0, 2820.0
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING,
+                           f_max_hz=150.0)
+    run = sim.run(0.8, torque_n_m=lambda t: torque if t > 0.05 else 0.0,
+                  vehicle_mass_kg=mass, record_every=20)
+    settled = run.time_s > 0.4
+    decel = np.polyfit(run.time_s[settled], run.speed_m_s[settled], 1)[0]
+    t = MODEL.tire
+    inertia = MODEL.tangential.wheel_inertia_kg_m2 + 2 * np.pi * t.R**3 * (t.rhoA + t.m_s)
+    assert decel == pytest.approx(torque / (mass * t.R + inertia / t.R), rel=0.03)
+    assert decel == pytest.approx(run.rim_fx_n[settled].mean() / mass, rel=1e-3)
+    # the road carries the brake less what decelerates the wheel's inertia
+    slip = run.spin_rad_s[settled] * t.R / run.speed_m_s[settled] - 1.0
+    speed = run.speed_m_s[settled].mean()
+    steady = steady_rolling(InPlaneSimulator(MODEL, 100, speed, deflection,
+                                             point_spacing_m=SPACING, f_max_hz=150.0),
+                            torque - inertia * decel / t.R)
+    assert slip.mean() == pytest.approx(steady.slip_ratio, rel=0.1)

@@ -83,6 +83,7 @@ class InPlaneRun:
     contact_fx_n: np.ndarray  # road's fore-aft force on the tread, summed (+ forward)
     spin_rad_s: np.ndarray  # the wheel's spin (nominal + ψ̇)
     sliding_points: np.ndarray  # how many points slide
+    speed_m_s: np.ndarray  # the road's (the vehicle's) speed
 
     def to_dict(self) -> dict:
         return {k: v.tolist() for k, v in self.__dict__.items()}
@@ -285,13 +286,22 @@ class InPlaneSimulator:
 
     # ----- stepping -----
     def run(self, duration_s: float, torque_n_m=None, record_every: int = 1,
-            progress=None, speed_m_s=None) -> InPlaneRun:
+            progress=None, speed_m_s=None, vehicle_mass_kg: float | None = None
+            ) -> InPlaneRun:
         """Step from the static state (rolling starts at t = 0) for ``duration_s``.
         ``torque_n_m`` (a constant or a function of time) turns the wheel (+ in the direction
         of rotation; a brake is negative). ``speed_m_s``, a function of time, changes the
         road's speed during the run (it starts at the simulator's ``speed_m_s``): the step
         follows the wheel's spin, rebuilt at the current spin whenever it has moved by
-        :data:`SPIN_REBUILD_FRACTION` (every step with the wheel held, whose spin is V/R)."""
+        :data:`SPIN_REBUILD_FRACTION` (every step with the wheel held, whose spin is V/R).
+        ``vehicle_mass_kg`` instead lets the road's speed be the vehicle's, which the tire's
+        fore-aft force on the axle drives (m dV/dt = Fx, the axle's height held): a braking
+        or driven quarter car in the fore-aft direction."""
+        if speed_m_s is not None and vehicle_mass_kg is not None:
+            raise ValueError("run: give speed_m_s (a road) or vehicle_mass_kg (a vehicle)")
+        if vehicle_mass_kg is not None and not (math.isfinite(vehicle_mass_kg)
+                                                and vehicle_mass_kg > 0):
+            raise ParameterError([Problem("vehicle_mass_kg", vehicle_mass_kg, "kg", "> 0 kg")])
         h, ny = self.step_s, self._ny
         self._set_spin(self.spin_rad_s, self.speed_m_s)
         speed_now, distance = self.speed_m_s, 0.0
@@ -305,10 +315,14 @@ class InPlaneSimulator:
                               - self._c @ yd - self._k @ y)
         contact, stick, slip_sign = ring_forces[1], ring_forces[2], ring_forces[3]
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
+        fx_axle = 0.0
         for i in range(1, steps + 1):
             time = i * h
-            if speed_m_s is not None:
-                speed_new = float(speed_m_s(time))
+            if speed_m_s is not None or vehicle_mass_kg is not None:
+                if vehicle_mass_kg is not None:  # explicit: the vehicle is heavy
+                    speed_new = max(speed_now + h * fx_axle / vehicle_mass_kg, 0.0)
+                else:
+                    speed_new = float(speed_m_s(time))
                 if not (math.isfinite(speed_new) and 0.0 <= speed_new <= 150.0):
                     raise ParameterError([Problem("speed_m_s", speed_new, "m/s",
                                                   "in [0, 150] m/s", f"at t = {time:g} s")])
@@ -365,6 +379,8 @@ class InPlaneSimulator:
             yd_new = 2.0 / h * (y_new - y) - yd
             ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
             y, yd = y_new, yd_new
+            if vehicle_mass_kg is not None:
+                fx_axle = self.rim_force(y, yd, ydd)[0]
             f_n = np.where(contact, f_n, 0.0)
             e = np.where(contact, np.where(stick, e_trial,
                                            slip_sign * limit / np.maximum(self._kx, 1e-300)),
@@ -381,6 +397,7 @@ class InPlaneSimulator:
                 records["spin_rad_s"].append(self._spin_now + (yd[-1] if self._free_spin
                                                               else 0.0))
                 records["sliding_points"].append(int(np.sum(contact & ~stick)))
+                records["speed_m_s"].append(speed_now)
             if progress is not None:
                 progress(i, steps)
         self._state = {"y": y, "yd": yd, "e": e}
