@@ -71,6 +71,22 @@ class ContactSetError(RuntimeError):
     """The step's contact and stick sets did not settle."""
 
 
+def sets_settled(old, new) -> bool:
+    """Whether a pass left the sets (in contact, sticking, sliding direction) as they were:
+    the same points on the road, the same ones sticking among them, the sliding ones sliding
+    the same way (off the road, sticking means nothing)."""
+    (contact, stick, sign), (new_contact, new_stick, new_sign) = old, new
+    return bool(np.array_equal(new_contact, contact)
+                and np.array_equal(new_stick | ~new_contact, stick | ~contact)
+                and np.array_equal(new_sign[new_contact & ~new_stick], sign[contact & ~stick]))
+
+
+def quadratic_in_spin(at_0, at_1, at_2) -> tuple:
+    """(a0, a1, a2) with a(Ω) = a0 + Ω a1 + Ω² a2 from its values at Ω = 0, 1, 2 rad/s."""
+    a2 = 0.5 * (at_2 - 2.0 * at_1 + at_0)
+    return at_0, at_1 - at_0 - a2, a2
+
+
 @dataclass(frozen=True)
 class InPlaneRun:
     """Histories of a run (SI): rim force and moment on the rim, contact totals, wheel spin."""
@@ -159,9 +175,8 @@ class InPlaneSimulator:
         mass = to_abs.T @ ring.mass @ to_abs
         c_at = [to_abs.T @ r.damping @ to_abs for r in rings]
         k_at = [to_abs.T @ r.stiffness @ to_abs for r in rings]
-        k2 = 0.5 * (k_at[2] - 2.0 * k_at[1] + k_at[0])
-        spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k_at[0],
-                      "k1": k_at[1] - k_at[0] - k2, "k2": k2}
+        k0, k1, k2 = quadratic_in_spin(*k_at)
+        spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k0, "k1": k1, "k2": k2}
 
         interp = np.zeros((zone.n_points, n))
         interp[:, zone.nodes] = zone.interpolation  # zone nodes -> ring nodes
@@ -200,8 +215,8 @@ class InPlaneSimulator:
         mass_rows = ring.mass[-3:].copy()
         mass_rows[:, -3:] -= np.diag([tang.wheel_mass_kg, tang.wheel_mass_kg,
                                       tang.wheel_inertia_kg_m2])
-        rk2 = 0.5 * (rows_k[2] - 2.0 * rows_k[1] + rows_k[0])
-        self._rim_rows = {"k0": rows_k[0], "k1": rows_k[1] - rows_k[0] - rk2, "k2": rk2,
+        rk0, rk1, rk2 = quadratic_in_spin(*rows_k)
+        self._rim_rows = {"k0": rk0, "k1": rk1, "k2": rk2,
                           "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows}
         self._m, self._spin_terms = mass, spin_terms
         self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
@@ -367,9 +382,7 @@ class InPlaneSimulator:
                     # so the sets can only shrink and the passes end
                     new_stick &= stick | ~contact
                     new_contact &= contact
-                if (np.array_equal(new_contact, contact) and np.array_equal(
-                        new_stick | ~new_contact, stick | ~contact) and np.array_equal(
-                        new_sign[new_contact & ~new_stick], slip_sign[contact & ~stick])):
+                if sets_settled((contact, stick, slip_sign), (new_contact, new_stick, new_sign)):
                     break
                 contact, stick, slip_sign = new_contact, new_stick, new_sign
             else:
@@ -632,9 +645,7 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
         new_contact = (pen > 0) & (f_n > 0)
         new_stick = np.abs(tread) <= sim._mu * np.maximum(f_n, 0) * (1 + 1e-12)
         new_sign = np.where(new_stick, sign, np.sign(tread))
-        if (np.array_equal(new_contact, contact) and np.array_equal(
-                new_stick | ~new_contact, stick | ~contact) and np.array_equal(
-                new_sign[new_contact & ~new_stick], sign[contact & ~stick])):
+        if sets_settled((contact, stick, sign), (new_contact, new_stick, new_sign)):
             break
         contact, stick, sign = new_contact, new_stick, new_sign
     else:
