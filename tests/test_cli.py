@@ -666,7 +666,8 @@ def test_build_fmu_into_a_folder_that_does_not_exist_yet(capsys, tmp_path):
 
 
 LOAD_DEFAULTS = {"modes": 0.0, "frf": DEFAULT_LOAD_N, "reduce": DEFAULT_LOAD_N,
-                 "export": DEFAULT_LOAD_N, "cleat": DEFAULT_LOAD_N}
+                 "export": DEFAULT_LOAD_N, "cleat": DEFAULT_LOAD_N,
+                 "inplane-cleat": DEFAULT_LOAD_N}
 
 
 def _load_help(command: str) -> str:
@@ -678,7 +679,7 @@ def _load_help(command: str) -> str:
 
 def test_every_load_option_says_its_default_and_what_0_means():
     with_load = [name for name, options in _options() if "--load" in options]
-    assert sorted(with_load) == sorted([*LOAD_DEFAULTS, "patch", "fit"])
+    assert sorted(with_load) == sorted([*LOAD_DEFAULTS, "patch", "fit", "inplane-modes"])
     for command in with_load:
         text = _load_help(command)
         if command in LOAD_DEFAULTS:
@@ -703,7 +704,8 @@ def test_the_default_load_a_help_states_is_the_one_used(capsys, monkeypatch, tmp
     else:
         extra = {"modes": ["--elements", "20", "--max-frequency", "60"],
                  "frf": ["--elements", "20", "--points", "3"], "reduce": ["--elements", "20"],
-                 "cleat": ["--elements-list", "20", "--length", "0.01"]}
+                 "cleat": ["--elements-list", "20", "--length", "0.01"],
+                 "inplane-cleat": ["--point-spacing", "0.01", "--f-max", "150", "--speed", "20"]}
         data = run_json(capsys, command, *extra[command])
         used = data.get("operating_point", data)["load_n"]
     assert used == pytest.approx(stated, rel=1e-12)

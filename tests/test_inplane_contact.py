@@ -287,7 +287,7 @@ def test_cleat_command_runs_the_cleat_test_of_the_core(capsys, tmp_path):
     assert main([*argv, "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     summary = data["summary"]
-    deflection = deflection_for_load(MODEL, 27700.0, 100, point_spacing_m=0.01)
+    deflection = deflection_for_load(MODEL, DEFAULT_LOAD_N, 100, point_spacing_m=0.01)
     assert summary["deflection_m"] == pytest.approx(deflection, rel=1e-12)
     sim = InPlaneSimulator(MODEL, 100, 15.0, deflection, point_spacing_m=0.01,
                            obstacle=cleat(0.02, 0.02), obstacle_ahead_m=0.4, f_max_hz=150.0)

@@ -5,14 +5,17 @@ from __future__ import annotations
 
 import argparse
 
+from ..core.parameters import DEFAULT_LOAD_N
 from .commands import command_help
 from .common import (
+    LOAD_ZERO,
     CliError,
     Output,
     add_output_options,
     add_tire_options,
     checked_tire,
     elements_problem,
+    load_default_text,
     plot_with,
     positive_problem,
     raise_problems,
@@ -51,7 +54,8 @@ def register_modes(subparsers) -> None:
     p.add_argument("--load", metavar="N", type=float,
                    help="press the tire on a flat road with this load in N (at rest): the "
                    "modes of the linearised footprint (points in contact, tread elements "
-                   "sticking), the axle held; with --rim-free the wheel turns freely")
+                   "sticking), the axle held; with --rim-free the wheel turns freely (no "
+                   f"default: the undeformed tire; {LOAD_ZERO})")
     p.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
                    help="contact point spacing in m with --load (default 0.005)")
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
@@ -83,8 +87,9 @@ def register_cleat(subparsers) -> None:
     )
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=10.0,
                    help="road speed in m/s (default 10)")
-    p.add_argument("--load", metavar="N", type=float, default=27700.0,
-                   help="static load in N that sets the axle's height (default 27700)")
+    p.add_argument("--load", metavar="N", type=float, default=DEFAULT_LOAD_N,
+                   help="static load in N that sets the axle's height "
+                   f"({load_default_text(DEFAULT_LOAD_N)}; {LOAD_ZERO})")
     p.add_argument("--height", metavar="M", type=float, default=0.02,
                    help="cleat height in m (default 0.02)")
     p.add_argument("--length", metavar="M", type=float, default=0.02,
@@ -120,7 +125,7 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
     raise_problems([
         elements_problem(args.elements),
         range_problem("--speed", args.speed, 0.5, 60.0, "m/s"),
-        positive_problem("--load", args.load, "N"),
+        range_problem("--load", args.load, 0.0, 1e6, "N"),
         range_problem("--height", args.height, 1e-4, size, "m"),
         range_problem("--length", args.length, 1e-4, length, "m"),
         range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m"),
@@ -130,8 +135,8 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential))
-    deflection = deflection_for_load(model, args.load, args.elements,
-                                     point_spacing_m=args.point_spacing)
+    deflection = 0.0 if args.load == 0 else deflection_for_load(
+        model, args.load, args.elements, point_spacing_m=args.point_spacing)
     ahead = 0.4  # m of road before the cleat: past the zone's front, rolling settled
     sim = InPlaneSimulator(model, args.elements, args.speed, deflection, step_s=args.step,
                            point_spacing_m=args.point_spacing,
@@ -160,7 +165,8 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
                       f"{summary['fx_max_n'] / 1e3:.3g}"],
                      ["Fx dominant [Hz]", summary["fx_dominant_hz"]],
                      ["Fz dominant [Hz]", summary["fz_dominant_hz"]]], ["", "value"]))
-    output = Output(text=text, data={"summary": summary, "run": run.to_dict()})
+    output = Output(text=text, data={"load_n": args.load, "summary": summary,
+                                     "run": run.to_dict()})
     write_plot(args, output, plot_with("plot_inplane_cleat", run, args.load, on))
     return output
 
@@ -197,7 +203,7 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential),
                         sidewall_tangential=args.sidewall_tangential)
     spin = args.speed / model.tire.R
-    if args.load is not None:
+    if args.load is not None and not args.load == 0.0:  # 0 N: the undeformed tire
         return _loaded(args, model)
     if args.speed > 0:
         if args.rim_free:
@@ -236,7 +242,7 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
 def _loaded(args: argparse.Namespace, model) -> Output:
     from ..core.inplane_contact import InPlaneSimulator, deflection_for_load, loaded_modes
 
-    raise_problems([positive_problem("--load", args.load, "N"),
+    raise_problems([range_problem("--load", args.load, 0.0, 1e6, "N"),
                     range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m")])
     if args.speed > 0:
         raise CliError("--load with --speed: the loaded modes are the tire's at rest")
