@@ -255,3 +255,45 @@ def test_native_export_with_a_tire_file_is_built_for_that_tire(tmp_path, capsys)
     expected = replace(read_tire_file("GL073A_shear").tire, inflation_pressure=7e5)
     for name, value in expected.as_dict().items():
         assert float(starts[name]) == value, name
+
+
+def test_the_inplane_tire_file_ships_the_tangential_data_with_their_units(tmp_path):
+    from tire_fmu.core.inplane import TangentialParameters
+
+    shipped = read_tire_file("GL073A_inplane")
+    assert shipped.tangential == TangentialParameters()
+    assert shipped.tire == read_tire_file("GL073A").tire  # the paper's radial data
+    assert read_tire_file("GL073A").tangential is None
+    text = shipped.path.read_text().replace('k_tx = "N/m^2"', 'k_tx = "N/mm^2"').replace(
+        "EA = 10000000.0", "EA = 'stiff'")
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text + '\n[extra]\n')
+    with pytest.raises(TireFileError) as error:
+        read_tire_file(bad)
+    message = str(error.value)
+    for part in ("tangential_units.k_tx = 'N/mm^2'", "tangential.EA = 'stiff'", "'extra'"):
+        assert part in message, part
+
+
+def test_the_inplane_commands_read_the_tangential_table_and_override_it(tmp_path, capsys):
+    import json
+
+    from tire_fmu.cli import main
+    from tire_fmu.core.inplane import InPlaneRing, InPlaneTire, TangentialParameters
+    from tire_fmu.core.inplane_modes import tire_modes
+
+    text = read_tire_file("GL073A_inplane").path.read_text().replace(
+        "k_t1 = 1600000.0", "k_t1 = 3200000.0")
+    custom = tmp_path / "stiff_sidewall.toml"
+    custom.write_text(text)
+    for extra, tangential in (([], TangentialParameters(k_t1=3.2e6)),
+                              (["--tangential", "k_t2=2e6"],
+                               TangentialParameters(k_t1=3.2e6, k_t2=2e6))):
+        assert main(["inplane-modes", "--tire-file", str(custom), "--elements", "32",
+                     "--max-frequency", "60", "--json", *extra]) == 0
+        data = json.loads(capsys.readouterr().out)
+        assert data["tangential"] == tangential.as_dict()
+        expected = tire_modes(InPlaneRing(InPlaneTire(read_tire_file(custom).tire, tangential),
+                                          32), f_max_hz=60)
+        assert [m["frequency_hz"] for m in data["modes"]] == pytest.approx(
+            list(expected.frequencies_hz()), rel=1e-12)

@@ -35,6 +35,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from .core.inplane import TANGENTIAL_RANGES, TangentialParameters
 from .core.parameters import TIRE_FIELDS, TireParameters, render, tire_problems
 
 if sys.version_info >= (3, 11):
@@ -46,6 +47,8 @@ FORMAT = "tire_fmu-tire/1"
 #: Top-level keys a tire file may hold; tables beyond [parameters] and [units] are metadata.
 TEXT_KEYS = ("format", "name", "description", "source")
 METADATA_TABLES = ("fit",)
+#: The in-plane ring's own tables: its tangential data and their units.
+TANGENTIAL_TABLES = ("tangential", "tangential_units")
 DIMENSIONLESS = ("", "1")
 _SHIPPED = ("data", "tires")
 
@@ -66,6 +69,8 @@ class TireFile:
     #: parameters the file did not give (they took the GL073A defaults)
     defaulted: tuple[str, ...] = ()
     metadata: dict = field(default_factory=dict)
+    #: the in-plane ring's tangential data (a [tangential] table), or None: the radial tire
+    tangential: TangentialParameters | None = None
 
 
 def shipped_tire_names() -> list[str]:
@@ -109,6 +114,8 @@ def read_tire_file(spec: str | Path, warn: bool = True) -> TireFile:
     except OSError as error:
         raise TireFileError(f"{path}: cannot be read: {error}") from error
     values, problems = _parameters(document)
+    tangential, more = _tangential_table(document)
+    problems += more
     if problems:
         raise TireFileError(f"{path}: " + "; ".join(problems))
     defaulted = tuple(f.name for f in fields(TireParameters) if f.name not in values)
@@ -119,12 +126,13 @@ def read_tire_file(spec: str | Path, warn: bool = True) -> TireFile:
         tire=TireParameters(**values), path=path, defaulted=defaulted,
         name=str(document.get("name", "")), description=str(document.get("description", "")),
         source=str(document.get("source", "")),
-        metadata={k: document[k] for k in METADATA_TABLES if k in document})
+        metadata={k: document[k] for k in METADATA_TABLES if k in document},
+        tangential=None if tangential is None else TangentialParameters(**tangential))
 
 
 def _parameters(document: dict) -> tuple[dict[str, float], list[str]]:
     problems = []
-    allowed = {*TEXT_KEYS, "parameters", "units", *METADATA_TABLES}
+    allowed = {*TEXT_KEYS, "parameters", "units", *TANGENTIAL_TABLES, *METADATA_TABLES}
     for key in sorted(set(document) - allowed):
         problems.append(f"unknown key {key!r} (a tire file holds {sorted(allowed)})")
     fmt = document.get("format", FORMAT)
@@ -164,6 +172,41 @@ def _parameters(document: dict) -> tuple[dict[str, float], list[str]]:
     for name in sorted(set(units) - set(parameters)):
         problems.append(f"units.{name}: no parameters.{name} to go with it")
     problems += [render(problem) for problem in tire_problems(values)]
+    return values, problems
+
+
+def _tangential_table(document: dict) -> tuple[dict[str, float] | None, list[str]]:
+    """The [tangential] table's values, their [tangential_units] checked as [units] are."""
+    table, units = (document.get(name) for name in TANGENTIAL_TABLES)
+    if table is None:
+        if units is not None:
+            return None, ["[tangential_units] without a [tangential] table"]
+        return None, []
+    if not isinstance(table, dict):
+        return None, ["[tangential] must be a table of NAME = number"]
+    units = units if isinstance(units, dict) else {}
+    problems, values = [], {}
+    for name, value in table.items():
+        if name not in TANGENTIAL_RANGES:
+            problems.append(f"tangential.{name}: not a tangential parameter; known: "
+                            f"{sorted(TANGENTIAL_RANGES)}")
+            continue
+        low, high, expected = TANGENTIAL_RANGES[name]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            problems.append(f"tangential.{name} = {value!r}: must be a number in "
+                            f"[{low:g}, {high:g}] {expected}".rstrip())
+            continue
+        unit = units.get(name)
+        shown = f'"{expected}"' if expected else '"1"'
+        if unit is None:
+            problems.append(f"tangential_units.{name} missing: state the unit of "
+                            f"tangential.{name} ({name} = {shown})")
+        elif not _same_unit(unit, expected):
+            problems.append(f"tangential_units.{name} = {unit!r}: tangential.{name} must be "
+                            f"given in {shown} (units are checked, not converted)")
+        values[name] = float(value)
+    for name in sorted(set(units) - set(table)):
+        problems.append(f"tangential_units.{name}: no tangential.{name} to go with it")
     return values, problems
 
 

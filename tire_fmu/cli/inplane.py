@@ -24,8 +24,9 @@ from .common import (
     write_plot,
 )
 
-#: The in-plane ring has the paper's lumped radial sidewall: its default tire is GL073A.
-DEFAULT_TIRE_FILE = "GL073A"
+#: The in-plane ring's default tire file: GL073A (the paper's lumped radial sidewall) with
+#: the tangential data and their provenance.
+DEFAULT_TIRE_FILE = "GL073A_inplane"
 
 
 def register(subparsers) -> None:
@@ -45,7 +46,9 @@ def register_modes(subparsers) -> None:
         "with the wheel's mass and inertia. Each mode is labelled with its dominant order and "
         "kind (radial, tangential, rotational: the tangential order 0). With --speed, the "
         "ground-frame frequencies of each order (rim held) instead. The tire data default to "
-        f"{DEFAULT_TIRE_FILE} (the in-plane ring has its lumped radial sidewall).",
+        f"{DEFAULT_TIRE_FILE} (GL073A, its lumped radial sidewall, with tangential data); a "
+        "tire file's [tangential] table gives the tangential data, --tangential overrides "
+        "them.",
     )
     p.add_argument("--elements", metavar="N", type=int, default=100,
                    help="number of nodes around the ring (default 100)")
@@ -134,7 +137,7 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
     ])
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
-    model = InPlaneTire(checked_tire(args), _tangential(args.tangential))
+    model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
     deflection = 0.0 if args.load == 0 else deflection_for_load(
         model, args.load, args.elements, point_spacing_m=args.point_spacing)
     ahead = 0.4  # m of road before the cleat: past the zone's front, rolling settled
@@ -171,10 +174,20 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
     return output
 
 
-def _tangential(items: list[str]):
+def _tangential(items: list[str], tire_file: str | None = None):
+    """The tangential data: the tire file's [tangential] table, then --tangential."""
+    from dataclasses import asdict
+
     from ..core.inplane import TANGENTIAL_RANGES, TangentialParameters
+    from ..tire_files import TireFileError, read_tire_file
 
     values = {}
+    if tire_file is not None:
+        try:
+            table = read_tire_file(tire_file, warn=False).tangential
+        except TireFileError as error:
+            raise CliError(f"--tire-file: {error}") from error
+        values = {} if table is None else asdict(table)
     for item in items:
         name, sep, text = item.partition("=")
         name = name.strip()
@@ -200,7 +213,7 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
                     range_problem("--nmax", args.nmax, 0, args.elements // 2, integer=True)])
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
-    model = InPlaneTire(checked_tire(args), _tangential(args.tangential),
+    model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file),
                         sidewall_tangential=args.sidewall_tangential)
     spin = args.speed / model.tire.R
     if args.load is not None and not args.load == 0.0:  # 0 N: the undeformed tire

@@ -155,7 +155,7 @@ class InPlaneTire:
                 "sidewall_max_order", self.tire.sidewall_max_order, "",
                 "0 with sidewall_shear = 0 for the in-plane ring",
                 "it has the paper's lumped radial sidewall; the radial ring's tie is not "
-                "carried over yet: use the tire file GL073A"))
+                "carried over yet: use the tire file GL073A_inplane (or GL073A)"))
         if problems:
             raise ParameterError(problems)
 
