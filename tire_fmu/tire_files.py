@@ -149,28 +149,10 @@ def _parameters(document: dict) -> tuple[dict[str, float], list[str]]:
     if not isinstance(units, dict):
         problems.append("[units] must be a table of NAME = \"unit\"")
         units = {}
-    values: dict[str, float] = {}
-    for name, value in parameters.items():
-        if name not in TIRE_FIELDS:
-            problems.append(f"parameters.{name}: not a tire parameter; known: "
-                            f"{sorted(TIRE_FIELDS)}")
-            continue
-        expected = TIRE_FIELDS[name].unit
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            problems.append(f"parameters.{name} = {value!r}: must be a number in "
-                            f"{TIRE_FIELDS[name].range_text()}")
-            continue
-        unit = units.get(name)
-        shown = f'"{expected}"' if expected else '"1"'
-        if unit is None:
-            problems.append(f"units.{name} missing: state the unit of parameters.{name} "
-                            f"({name} = {shown})")
-        elif not _same_unit(unit, expected):
-            problems.append(f"units.{name} = {unit!r}: parameters.{name} must be given in "
-                            f"{shown} (units are checked, not converted)")
-        values[name] = float(value)
-    for name in sorted(set(units) - set(parameters)):
-        problems.append(f"units.{name}: no parameters.{name} to go with it")
+    known = {name: (spec.unit, spec.range_text()) for name, spec in TIRE_FIELDS.items()}
+    values, more = _numbers_with_units(parameters, units, ("parameters", "units"), known,
+                                       "a tire parameter")
+    problems += more
     problems += [render(problem) for problem in tire_problems(values)]
     return values, problems
 
@@ -185,28 +167,38 @@ def _tangential_table(document: dict) -> tuple[dict[str, float] | None, list[str
     if not isinstance(table, dict):
         return None, ["[tangential] must be a table of NAME = number"]
     units = units if isinstance(units, dict) else {}
+    known = {name: (unit, f"[{low:g}, {high:g}] {unit}".rstrip())
+             for name, (low, high, unit) in TANGENTIAL_RANGES.items()}
+    return _numbers_with_units(table, units, TANGENTIAL_TABLES, known,
+                               "a tangential parameter")
+
+
+def _numbers_with_units(table: dict, units: dict, names: tuple[str, str],
+                        known: dict[str, tuple[str, str]], kind: str
+                        ) -> tuple[dict[str, float], list[str]]:
+    """A table of numbers and the table of their units, ``names`` = (its name, the units'
+    name), ``known`` = name -> (unit, allowed range text): the values, and every problem."""
+    table_name, units_name = names
     problems, values = [], {}
     for name, value in table.items():
-        if name not in TANGENTIAL_RANGES:
-            problems.append(f"tangential.{name}: not a tangential parameter; known: "
-                            f"{sorted(TANGENTIAL_RANGES)}")
+        if name not in known:
+            problems.append(f"{table_name}.{name}: not {kind}; known: {sorted(known)}")
             continue
-        low, high, expected = TANGENTIAL_RANGES[name]
+        expected, allowed = known[name]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            problems.append(f"tangential.{name} = {value!r}: must be a number in "
-                            f"[{low:g}, {high:g}] {expected}".rstrip())
+            problems.append(f"{table_name}.{name} = {value!r}: must be a number in {allowed}")
             continue
         unit = units.get(name)
         shown = f'"{expected}"' if expected else '"1"'
         if unit is None:
-            problems.append(f"tangential_units.{name} missing: state the unit of "
-                            f"tangential.{name} ({name} = {shown})")
+            problems.append(f"{units_name}.{name} missing: state the unit of "
+                            f"{table_name}.{name} ({name} = {shown})")
         elif not _same_unit(unit, expected):
-            problems.append(f"tangential_units.{name} = {unit!r}: tangential.{name} must be "
+            problems.append(f"{units_name}.{name} = {unit!r}: {table_name}.{name} must be "
                             f"given in {shown} (units are checked, not converted)")
         values[name] = float(value)
     for name in sorted(set(units) - set(table)):
-        problems.append(f"tangential_units.{name}: no tangential.{name} to go with it")
+        problems.append(f"{units_name}.{name}: no {table_name}.{name} to go with it")
     return values, problems
 
 

@@ -34,10 +34,23 @@ def register(subparsers) -> None:
     register_cleat(subparsers)
 
 
-def register_modes(subparsers) -> None:
+def add_ring_options(parser, points_when: str) -> None:
+    """--elements, --point-spacing and --tangential, as both in-plane commands take them."""
     from ..core.inplane import TANGENTIAL_RANGES
 
-    names = ", ".join(f"{name} [{unit}]" for name, (_, _, unit) in TANGENTIAL_RANGES.items())
+    names = ", ".join(f"{name} [{unit or '1'}]"
+                      for name, (_, _, unit) in TANGENTIAL_RANGES.items())
+    parser.add_argument("--elements", metavar="N", type=int, default=100,
+                        help="number of nodes around the ring (default 100)")
+    when = f" {points_when}" if points_when else ""
+    parser.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
+                        help=f"contact point spacing in m{when} (default 0.005)")
+    parser.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
+                        help="override a tangential parameter of the tire file (repeatable). "
+                        f"Names: {names}")
+
+
+def register_modes(subparsers) -> None:
     p = subparsers.add_parser(
         "inplane-modes",
         help=command_help("inplane-modes"),
@@ -50,8 +63,7 @@ def register_modes(subparsers) -> None:
         "tire file's [tangential] table gives the tangential data, --tangential overrides "
         "them.",
     )
-    p.add_argument("--elements", metavar="N", type=int, default=100,
-                   help="number of nodes around the ring (default 100)")
+    add_ring_options(p, "with --load")
     p.add_argument("--rim-free", action="store_true",
                    help="let the rim translate and turn (wheel mass and inertia from --tangential)")
     p.add_argument("--load", metavar="N", type=float,
@@ -59,8 +71,6 @@ def register_modes(subparsers) -> None:
                    "modes of the linearised footprint (points in contact, tread elements "
                    "sticking), the axle held; with --rim-free the wheel turns freely (no "
                    f"default: the undeformed tire; {LOAD_ZERO})")
-    p.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
-                   help="contact point spacing in m with --load (default 0.005)")
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
                    help="forward speed in m/s: list each order's ground-frame frequencies")
     p.add_argument("--nmax", metavar="N", type=int, default=8,
@@ -70,8 +80,6 @@ def register_modes(subparsers) -> None:
     p.add_argument("--sidewall-tangential", choices=("tied", "lumped"), default="tied",
                    help="the sidewall's tangential motion: tied to the tread at its static "
                    "share (default) or lumped masses of its own")
-    p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
-                   help=f"override a tangential parameter (repeatable). Names: {names}")
     add_tire_options(p)
     add_output_options(p)
     p.set_defaults(handler=run_inplane_modes)
@@ -99,17 +107,12 @@ def register_cleat(subparsers) -> None:
                    help="cleat length along the road in m (default 0.02)")
     p.add_argument("--shape", choices=("rectangular", "rounded"), default="rectangular",
                    help="rectangular (steps) or rounded (1 - cos)")
-    p.add_argument("--elements", metavar="N", type=int, default=100,
-                   help="number of nodes around the ring (default 100)")
-    p.add_argument("--point-spacing", metavar="M", type=float, default=0.005,
-                   help="contact point spacing in m (default 0.005)")
+    add_ring_options(p, "")
     p.add_argument("--f-max", metavar="HZ", type=float, default=300.0,
                    help="reduce the ring to its modes up to this frequency with the zone's "
                    "static shapes (default 300; 0 steps every DOF)")
     p.add_argument("--step", metavar="S", type=float, default=1e-4,
                    help="time step in s (default 1e-4)")
-    p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
-                   help="override a tangential parameter (repeatable; see inplane-modes)")
     add_tire_options(p)
     add_output_options(p)
     p.set_defaults(handler=run_inplane_cleat, max_obstacle=(MAX_OBSTACLE_SIZE_M,
