@@ -41,8 +41,9 @@ and the wheel's moment balance carry.
 **Stepping.** Trapezoidal rule (Newmark, average acceleration) on the ring with the rim's
 translation held and its rotation free (wheel inertia, a torque applied) or held at the
 nominal spin; the contact forces are implicit in the step, solved by an active-set iteration
-on (in contact, sticking). The element's convection is semi-Lagrangian (its state at θ_p - Ωh,
-linearly interpolated, plus the step's slip by the trapezoidal rule).
+on (in contact, sticking). The element's convection is semi-Lagrangian (its state at
+θ_p - Ωh by cubic Lagrange interpolation, :func:`carry_matrix`, plus the step's slip by the
+trapezoidal rule).
 """
 
 from __future__ import annotations
