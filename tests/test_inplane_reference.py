@@ -67,7 +67,9 @@ class UnreducedCleatRun:
         nr = ring.n_ring_dof
         free = wheel == "free"
         ny = nr + free
-        # y = [ring rim-relative, the wheel's turn ψ if free]; the rim's x and z held
+        # y = [ring rim-relative, the wheel's turn ψ if free]; the rim's x and z held. The
+        # mapping and the point Jacobians mirror InPlaneSimulator._build on purpose: the
+        # reference takes none of the simulator's assembly, so an error there shows here
         to_abs = np.zeros((ring.n_dof, ny))
         to_abs[:nr, :nr] = np.eye(nr)
         if free:
