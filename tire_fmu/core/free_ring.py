@@ -129,6 +129,15 @@ class FreeRingModel:
         return modal + self.d[:, :, None] + iw * self.e[:, :, None]
 
 
+def order_sum(weight: np.ndarray, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """Σ_n w_n Re(left_n @ right_n) over the orders, as one matrix product: the orders'
+    (outputs x inputs) products are never formed one by one (at N = 1600 with a long zone
+    they were 16 M complex numbers, most of a fine mesh's build)."""
+    n, rows, inner = left.shape
+    stacked = (weight[:, None, None] * left).transpose(1, 0, 2).reshape(rows, n * inner)
+    return np.real(stacked @ right.reshape(n * inner, right.shape[2]))
+
+
 def _order_weights(n_elements: int, orders: np.ndarray) -> np.ndarray:
     """How many signed orders each half order stands for: 2 for 0 < n < N/2 (n and -n)."""
     return np.where((orders == 0) | (2 * orders == n_elements), 1.0, 2.0)
@@ -177,8 +186,7 @@ class _Orders:
     def static_gain(self) -> np.ndarray:
         """Exact DC gain: u_n = K_n⁻¹ B_z,n r, summed over the signed orders."""
         k_inv = np.linalg.inv(self.stiffness)
-        per_order = np.einsum("noi,nij,njk->nok", self.l_u, k_inv, self.b_z)
-        return np.einsum("n,nok->ok", self.weight, per_order.real) + self.d_direct
+        return order_sum(self.weight, self.l_u @ k_inv, self.b_z) + self.d_direct
 
 
 def _orders(tire: TireParameters, grid: Grid, spin_rad_s: float,
@@ -349,10 +357,12 @@ def ring_modes(tire: TireParameters, grid: Grid, spin_rad_s: float, zone_nodes: 
     # Momentum form per order and its eigen-decomposition (canonical modes).
     a_n = momentum_matrices(mass, damping, stiffness)
     mb_v = o.b_v * m_inv[None, :, None]
-    b_n = np.concatenate([mb_v, o.b_z - np.einsum("nij,njk->nik", damping, mb_v)], axis=1)
-    c_n = np.concatenate([o.l_u, o.l_v * m_inv[None, None, :]], axis=2)
-    feedthrough = np.einsum("n,nok->ok", o.weight,
-                            np.einsum("noi,nik->nok", o.l_v * m_inv[None, None, :], o.b_v).real)
+    # of the momentum form's input and output maps only the rim's column and rows are read
+    # per mode (the zone's are the phases, written out by ``dense``)
+    b_n = np.concatenate([mb_v[:, :, :1], o.b_z[:, :, :1] - damping @ mb_v[:, :, :1]],
+                         axis=1)
+    c_n = np.concatenate([o.l_u[:, :2], o.l_v[:, :2] * m_inv[None, None, :]], axis=2)
+    feedthrough = order_sum(o.weight, o.l_v * m_inv[None, None, :], o.b_v)
     real_orders = o.weight == 1.0
     lam_n, vectors_n = order_modes(a_n, real_orders)
     orders, lam, beta, gamma, eta, b_rim, c_rim = [], [], [], [], [], [], []
@@ -370,7 +380,7 @@ def ring_modes(tire: TireParameters, grid: Grid, spin_rad_s: float, zone_nodes: 
         gamma.append(factor * vectors[0])
         eta.append(factor * vectors[2] * m_inv[0])
         b_rim.append(inverse @ b_n[index][:, 0])
-        c_rim.append(factor[None, :] * (c_n[index][:2] @ vectors))
+        c_rim.append(factor[None, :] * (c_n[index] @ vectors))
     orders = np.concatenate(orders)
     lam, beta, gamma, eta = (np.concatenate(x) for x in (lam, beta, gamma, eta))
     b_rim, c_rim = np.concatenate(b_rim), np.hstack(c_rim)
