@@ -996,6 +996,34 @@ def _demo_road_run() -> str:
     return f"a class-{s.road_class} road at {s.road_speed_m_s:g} m/s"
 
 
+def _braking_settings():
+    from vehicle_demo.braking import BrakingSettings
+
+    return BrakingSettings()
+
+
+@value("braking-runs")
+def _braking_runs() -> str:
+    from vehicle_demo.braking import BrakingSettings
+
+    s, quick = BrakingSettings(), BrakingSettings.quick()
+    return (f"N = {s.n_elements}, {s.duration_s:g} s per run; `--quick`: N = "
+            f"{quick.n_elements}, {quick.duration_s:g} s")
+
+
+@value("braking-setup")
+def _braking_setup() -> str:
+    s = _braking_settings()
+    return (f"Three runs from `--speed` (default {s.speed_m_s:g} m/s), the brake torque "
+            f"(`--torque`, default {s.brake_torque_n_m / 1e3:g} kN m) ramped in over "
+            f"{s.brake_ramp_s:g} s after {s.brake_at_s:g} s of rolling: on a level road, on an "
+            f"ISO 8608 road (`--road-class`, default {s.road_class}, a profile in space so "
+            f"that the slowing vehicle reads it at its own speed, level for its first "
+            f"{s.road_fade_in_m:g} m) and over a {s.cleat_height_m * 1e3:g} × "
+            f"{s.cleat_length_m * 1e3:g} mm cleat. Then the classic cleat test of a drum: the "
+            f"axle held, the wheel free, a constant {s.cleat_test_speed_m_s:g} m/s")
+
+
 @value("demo-cleat")
 def _demo_cleat() -> str:
     s = _settings()

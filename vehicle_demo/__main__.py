@@ -1,6 +1,8 @@
-"""``python -m vehicle_demo [--out DIR] [--quick]`` and ``python -m vehicle_demo sweep ...``.
+"""``python -m vehicle_demo [--out DIR] [--quick]``, ``python -m vehicle_demo sweep ...`` and
+``python -m vehicle_demo braking ...``.
 
-Only parses arguments and delegates to :mod:`vehicle_demo.demo` and :mod:`vehicle_demo.sweep`.
+Only parses arguments and delegates to :mod:`vehicle_demo.demo`, :mod:`vehicle_demo.sweep` and
+:mod:`vehicle_demo.braking`.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ def _demo_parser() -> argparse.ArgumentParser:
                     "functions (0.5-300 Hz) against the full-model and spring-damper "
                     "references, an ISO 8608 road run and a cleat. Writes figures and "
                     "summary tables to --out. (For a parameter sweep: python -m vehicle_demo "
-                    "sweep --help.)")
+                    "sweep --help; for the braking quarter car: python -m vehicle_demo braking "
+                    "--help.)")
     p.add_argument("--out", type=Path, default=Path("demo_output"),
                    help="output folder (default: demo_output)")
     p.add_argument("--quick", action="store_true",
@@ -105,6 +108,48 @@ def _parse_factors(items: list[str]) -> dict:
     return factors
 
 
+def _braking_parser() -> argparse.ArgumentParser:
+    p = Parser(
+        prog="python -m vehicle_demo braking",
+        description="Braking quarter car with the in-plane tire (core, in process): the wheel "
+                    "a turning body under a brake torque, the vehicle's fore-aft speed driven "
+                    "by Fx, the axle's height held; on a level road, an ISO 8608 road and over "
+                    "a cleat, then the classic cleat test (axle held, constant speed). Writes "
+                    "braking.png, cleat_test.png and summary.json to --out.")
+    p.add_argument("--out", type=Path, default=Path("braking_output"),
+                   help="output folder (default: braking_output)")
+    p.add_argument("--quick", action="store_true", help="shorter run: N = 60, 0.6 s")
+    p.add_argument("--speed", type=float, help="start speed in m/s (default 20)")
+    p.add_argument("--torque", type=float,
+                   help="brake torque in N m, negative brakes (default -6000)")
+    p.add_argument("--duration", type=float, help="run length in s (default 1.2, quick 0.6)")
+    p.add_argument("--road-class", choices=list("ABCDEFGH"), help="ISO 8608 class (default C)")
+    p.add_argument("--n-elements", type=int, help="tire mesh (default 100, quick 60)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    return p
+
+
+#: The braking demo's settings under the names of their options, for error messages.
+BRAKING_OPTION_NAMES = {"speed_m_s": "--speed", "brake_torque_n_m": "--torque",
+                        "duration_s": "--duration", "road_class": "--road-class",
+                        "n_elements": "--n-elements"}
+
+
+def _braking(argv) -> int:
+    from .braking import BrakingSettings, format_braking, run_braking
+
+    args = _braking_parser().parse_args(argv)
+    given = {"out_dir": args.out, "speed_m_s": args.speed, "brake_torque_n_m": args.torque,
+             "duration_s": args.duration, "road_class": args.road_class,
+             "n_elements": args.n_elements, "progress": not args.no_progress}
+    overrides = {k: v for k, v in given.items() if v is not None}
+    settings = (BrakingSettings.quick(**overrides) if args.quick
+                else BrakingSettings(**overrides))
+    summary = run_braking(settings, log=say, names=BRAKING_OPTION_NAMES)
+    say(format_braking(summary))
+    return 0
+
+
 def _demo(argv) -> int:
     from .demo import DemoSettings, format_summary, run_demo
 
@@ -157,8 +202,10 @@ def main(argv=None) -> int:
 
 
 def _main(argv: list[str]) -> int:
+    from tire_fmu.core.inplane_contact import ContactSetError
     from tire_fmu.core.parameters import ParameterError
 
+    from .braking import BrakingError
     from .cosim import CoSimError
     from .demo import DemoError
     from .quarter_car import QuarterCarError
@@ -166,11 +213,14 @@ def _main(argv: list[str]) -> int:
     from .sweep import SweepError
 
     user_errors = (DemoError, SweepError, RoadError, QuarterCarError, CoSimError,
-                   ParameterError, FileNotFoundError, PermissionError)
+                   BrakingError, ContactSetError, ParameterError, FileNotFoundError,
+                   PermissionError)
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     try:
         if argv[:1] == ["sweep"]:
             return _sweep(argv[1:])
+        if argv[:1] == ["braking"]:
+            return _braking(argv[1:])
         return _demo(argv)
     except user_errors as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)

@@ -293,3 +293,31 @@ def plot_contact_events(events, runs, path, title: str = "") -> Path:
         fig.suptitle(title, fontsize=12)
     fig.tight_layout(rect=(0, 0.03, 1, 1))
     return _save(fig, path)
+
+
+def plot_braking(runs, steady_slip_ratio: float, path) -> Path:
+    """The braking runs: Fx and Fz at the axle, the slip beside the steady solve's, and the
+    wheel's and the vehicle's speed, against time, one colour per road."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(4, 1, figsize=(8.5, 10), sharex=True)
+    fx, fz, slip, speed = axes
+    for i, run in enumerate(runs):
+        colour = f"C{i}"
+        fx.plot(run.time_s, run.fx_n / 1e3, color=colour, lw=0.9, label=run.name)
+        fz.plot(run.time_s, run.fz_n / 1e3, color=colour, lw=0.9)
+        slip.plot(run.time_s, 100 * run.slip_ratio, color=colour, lw=0.9)
+        speed.plot(run.time_s, run.wheel_speed_m_s, color=colour, lw=0.9)
+        speed.plot(run.time_s, run.vehicle_speed_m_s, color=colour, lw=1.6, ls="--")
+    slip.axhline(100 * steady_slip_ratio, color="k", lw=0.8, ls=":",
+                 label="steady rolling solve")
+    fx.set_ylabel("Fx at the axle [kN]")
+    fz.set_ylabel("Fz at the axle [kN]")
+    slip.set_ylabel("slip ratio [%]")
+    speed.set_ylabel("speed [m/s]\n(wheel spin·R solid, vehicle dashed)")
+    speed.set_xlabel("time [s]")
+    fx.legend(loc="lower left", fontsize=8)
+    slip.legend(loc="lower left", fontsize=8)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fx.set_title("Braking quarter car (fore-aft), in-plane tire, axle height held")
+    return _save(fig, path)

@@ -8,6 +8,10 @@ distance along the road behind its first edge (the edge a rolling tire meets fir
 - rectangular: H for 0 <= s < L, else 0 (its edges are steps; the tire's contact points
   average them over their own windows of road);
 - rounded: a (1 - cos) bump, H/2 (1 - cos 2πs/L) on 0 <= s < L, with its slope.
+
+A longer road (a random ISO 8608 profile, a measured one) is a :class:`SampledRoad`: heights
+every ``spacing_m`` from s = 0, linear between them. Both answer what the in-plane simulator
+asks of a road, the mean height over each contact point's window, from their exact integral.
 """
 
 from __future__ import annotations
@@ -26,8 +30,20 @@ MAX_OBSTACLE_SIZE_M = 0.3
 MAX_OBSTACLE_LENGTH_M = 10.0
 
 
+class _WindowMeans:
+    """The mean of a height profile over windows of road, from its exact integral."""
+
+    def mean_height(self, s_lo, s_hi) -> np.ndarray:
+        """Mean height over the road [s_lo, s_hi] (the height itself where s_lo = s_hi)."""
+        s_lo, s_hi = np.asarray(s_lo, dtype=float), np.asarray(s_hi, dtype=float)
+        width = s_hi - s_lo
+        point = width <= 0
+        mean = (self.integral(s_hi) - self.integral(s_lo)) / np.where(point, 1.0, width)
+        return np.where(point, self.profile(s_lo)[0], mean)
+
+
 @dataclass(frozen=True)
-class Obstacle:
+class Obstacle(_WindowMeans):
     """A cleat (``height_m > 0``) or a pothole (``height_m < 0``) of ``length_m``."""
 
     height_m: float
@@ -85,14 +101,6 @@ class Obstacle:
         wave = 2 * np.pi * s / self.length_m
         return 0.5 * self.height_m * (s - self.length_m / (2 * np.pi) * np.sin(wave))
 
-    def mean_height(self, s_lo, s_hi) -> np.ndarray:
-        """Mean height over the road [s_lo, s_hi] (the height itself where s_lo = s_hi)."""
-        s_lo, s_hi = np.asarray(s_lo, dtype=float), np.asarray(s_hi, dtype=float)
-        width = s_hi - s_lo
-        point = width <= 0
-        mean = (self.integral(s_hi) - self.integral(s_lo)) / np.where(point, 1.0, width)
-        return np.where(point, self.profile(s_lo)[0], mean)
-
     def road_samples(self, s, spacing_m: float) -> tuple[np.ndarray, np.ndarray]:
         """(height, slope) of a road signal sampled every ``spacing_m`` of road at ``s``.
 
@@ -111,6 +119,70 @@ class Obstacle:
     def to_dict(self) -> dict:
         return {"kind": self.kind, "height_m": self.height_m, "length_m": self.length_m,
                 "shape": self.shape, "label": self.label}
+
+
+@dataclass(frozen=True, eq=False)
+class SampledRoad(_WindowMeans):
+    """A road profile: ``heights_m`` every ``spacing_m`` from s = 0, linear between samples,
+    level (0) before the first and after the last."""
+
+    spacing_m: float
+    heights_m: np.ndarray
+    description: str = "sampled road"
+
+    def __post_init__(self) -> None:
+        heights = np.asarray(self.heights_m, dtype=float)
+        problems = []
+        if not (isinstance(self.spacing_m, (int, float)) and math.isfinite(self.spacing_m)
+                and 1e-5 <= self.spacing_m <= 1.0):
+            problems.append(Problem("spacing_m", self.spacing_m, "m", "in [1e-05, 1] m"))
+        if heights.ndim != 1 or heights.size < 2:
+            problems.append(Problem("heights_m", f"shape {heights.shape}", "",
+                                    "a 1-D array of at least 2 samples"))
+        elif not (np.all(np.isfinite(heights))
+                  and np.max(np.abs(heights)) <= MAX_OBSTACLE_SIZE_M):
+            worst = heights[np.argmax(np.where(np.isfinite(heights), np.abs(heights), np.inf))]
+            problems.append(Problem("heights_m", float(worst), "m",
+                                    f"finite and in [-{MAX_OBSTACLE_SIZE_M:g}, "
+                                    f"{MAX_OBSTACLE_SIZE_M:g}] m"))
+        if problems:
+            raise ParameterError(problems)
+        heights = heights.copy()
+        heights.flags.writeable = False
+        object.__setattr__(self, "heights_m", heights)
+        # the integral at each sample (trapezoids, exact for the linear profile)
+        steps = 0.5 * self.spacing_m * (heights[1:] + heights[:-1])
+        object.__setattr__(self, "_at_samples", np.r_[0.0, np.cumsum(steps)])
+
+    @property
+    def length_m(self) -> float:
+        return self.spacing_m * (self.heights_m.size - 1)
+
+    @property
+    def label(self) -> str:
+        return self.description
+
+    def _segment(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """The sample each s follows and its distance past it, s clipped to the profile."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length_m)
+        k = np.minimum((s / self.spacing_m).astype(int), self.heights_m.size - 2)
+        return k, s - k * self.spacing_m
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at ``s`` (m); 0 off the profile."""
+        s = np.asarray(s, dtype=float)
+        k, past = self._segment(s)
+        h = self.heights_m
+        slope = (h[k + 1] - h[k]) / self.spacing_m
+        on = (s >= 0) & (s <= self.length_m)
+        return np.where(on, h[k] + slope * past, 0.0), np.where(on, slope, 0.0)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from s = 0 to ``s`` (m²; 0 before, constant after the profile)."""
+        k, past = self._segment(s)
+        h = self.heights_m
+        slope = (h[k + 1] - h[k]) / self.spacing_m
+        return self._at_samples[k] + h[k] * past + 0.5 * slope * past**2
 
 
 def cleat(height_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:

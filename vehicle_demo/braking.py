@@ -1,0 +1,320 @@
+"""The braking quarter car with the in-plane tire: ``python -m vehicle_demo braking``.
+
+The wheel is a body that turns (its inertia, the tire's moment about the axle and a brake
+torque) and the vehicle a mass that the tire's fore-aft force at the axle slows
+(m dV/dt = Fx): :meth:`tire_fmu.core.inplane_contact.InPlaneSimulator.run` with
+``vehicle_mass_kg``. The axle's height is held at the static deflection of the load (the
+vertical suspension is the ride demo's, ``python -m vehicle_demo``): this is the fore-aft
+quarter car, the one a brake or an ABS controller sees.
+
+Three braking runs from the same speed, the brake torque ramped in after rolling settles:
+on a level road (the slip it settles at beside :func:`.steady_rolling`'s solve for the same
+torque and speed), on an ISO 8608 road of a class, and over a cleat. Then the classic cleat
+test of a drum: axle held, wheel free, constant road speed, Fx and Fz at the axle against
+time and their spectra. Figures and ``summary.json`` go to ``--out``.
+
+The in-plane tire is the core's; it is not in the FMUs yet, so this demo runs it in process.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tire_fmu.core.parameters import DEFAULT_LOAD_N
+
+#: Standard gravity (m/s²): the vehicle's mass from the load its wheel carries.
+GRAVITY_M_S2 = 9.80665
+#: Road before the rough profile begins and before the cleat (m ahead of the contact centre):
+#: past the front of the contact zone, so that the tire starts on a level road.
+ROAD_AHEAD_M = 0.5
+
+
+class BrakingError(ValueError):
+    """A setting the braking demo cannot run with (the message names it and its range)."""
+
+
+@dataclass(frozen=True)
+class BrakingSettings:
+    out_dir: Path = Path("braking_output")
+    speed_m_s: float = 20.0
+    load_n: float = DEFAULT_LOAD_N
+    #: the vehicle's share on this wheel; None: load / g
+    vehicle_mass_kg: float | None = None
+    brake_torque_n_m: float = -6000.0  # negative brakes
+    brake_at_s: float = 0.15
+    brake_ramp_s: float = 0.1
+    duration_s: float = 1.2
+    road_class: str = "C"
+    road_seed: int = 0
+    road_fade_in_m: float = 2.0
+    cleat_height_m: float = 0.02
+    cleat_length_m: float = 0.02
+    cleat_at_s: float = 0.7  # when the cleat meets the contact centre, about
+    cleat_test_speed_m_s: float = 10.0
+    n_elements: int = 100
+    point_spacing_m: float = 0.01
+    step_s: float = 1e-4
+    f_max_hz: float = 300.0
+    progress: bool = True
+    tire: object = field(default=None, repr=False)  # an InPlaneTire; None: the default
+
+    @classmethod
+    def quick(cls, **overrides) -> BrakingSettings:
+        """A short look: a coarser mesh and half the time."""
+        values = dict(n_elements=60, duration_s=0.6, cleat_at_s=0.4, road_fade_in_m=1.0)
+        values.update(overrides)
+        return cls(**values)
+
+    @property
+    def mass_kg(self) -> float:
+        return self.load_n / GRAVITY_M_S2 if self.vehicle_mass_kg is None else (
+            self.vehicle_mass_kg)
+
+    def problems(self, names: dict[str, str] | None = None) -> list[str]:
+        """Every setting outside its range, all at once (``names``: the options' names)."""
+        from tire_fmu.core.parameters import MAX_ELEMENTS, MIN_ELEMENTS
+
+        names = names or {}
+        found = []
+
+        def check(name, ok, unit, allowed):
+            if not ok:
+                found.append(f"{names.get(name, name)} = {getattr(self, name)!r}"
+                             f"{' ' + unit if unit else ''}: must be {allowed}")
+
+        def within(name, lo, hi, unit, open_low=False):
+            value = getattr(self, name)
+            ok = isinstance(value, (int, float)) and math.isfinite(value) and (
+                lo < value if open_low else lo <= value) and value <= hi
+            check(name, ok, unit, f"in {'(' if open_low else '['}{lo:g}, {hi:g}] {unit}")
+
+        within("speed_m_s", 0.5, 60.0, "m/s")
+        within("load_n", 1000.0, 1e5, "N")
+        if self.vehicle_mass_kg is not None:
+            within("vehicle_mass_kg", 10.0, 1e5, "kg")
+        within("brake_torque_n_m", -5e4, 5e4, "N m")
+        within("brake_at_s", 0.0, 10.0, "s")
+        within("brake_ramp_s", 0.0, 10.0, "s")
+        within("duration_s", 0.05, 60.0, "s")
+        within("road_fade_in_m", 0.0, 100.0, "m")
+        within("cleat_height_m", 0.0, 0.1, "m", open_low=True)
+        within("cleat_length_m", 0.0, 1.0, "m", open_low=True)
+        within("cleat_at_s", 0.0, 60.0, "s")
+        within("cleat_test_speed_m_s", 0.5, 60.0, "m/s")
+        within("point_spacing_m", 1e-3, 0.05, "m")
+        within("step_s", 1e-6, 1e-3, "s")
+        within("f_max_hz", 50.0, 1e5, "Hz")
+        from vehicle_demo.road import ISO_8608_GD_N0_M3
+
+        check("road_class", self.road_class in ISO_8608_GD_N0_M3, "",
+              f"one of {', '.join(ISO_8608_GD_N0_M3)}")
+        n = self.n_elements
+        check("n_elements", isinstance(n, int) and MIN_ELEMENTS <= n <= MAX_ELEMENTS, "",
+              f"an integer in [{MIN_ELEMENTS}, {MAX_ELEMENTS}]")
+        return found
+
+
+@dataclass(frozen=True, eq=False)
+class BrakingRun:
+    """One run's histories (SI) and the road it ran on."""
+
+    name: str
+    road: str
+    time_s: np.ndarray
+    fx_n: np.ndarray  # at the axle, + forward (a brake pulls it back: negative)
+    fz_n: np.ndarray
+    my_n_m: np.ndarray
+    slip_ratio: np.ndarray  # (spin R - V)/V, R the tread radius
+    wheel_speed_m_s: np.ndarray  # spin R
+    vehicle_speed_m_s: np.ndarray
+    torque_n_m: np.ndarray
+    sliding_points: np.ndarray
+
+    def summary(self, after_s: float) -> dict:
+        on = self.time_s >= after_s
+        return {"name": self.name, "road": self.road,
+                "mean_slip_ratio": float(self.slip_ratio[on].mean()),
+                "mean_fx_n": float(self.fx_n[on].mean()),
+                "fz_min_n": float(self.fz_n[on].min()), "fz_max_n": float(self.fz_n[on].max()),
+                "vehicle_speed_end_m_s": float(self.vehicle_speed_m_s[-1]),
+                "most_sliding_points": int(self.sliding_points.max())}
+
+
+@dataclass(frozen=True, eq=False)
+class BrakingSummary:
+    runs: tuple
+    steady_slip_ratio: float  # steady_rolling's, at the brake torque and the start speed
+    steady_fx_n: float
+    settled_after_s: float
+    cleat_test: dict
+    figures: tuple
+    wall_s: float
+
+    def to_dict(self) -> dict:
+        return {"runs": [run.summary(self.settled_after_s) for run in self.runs],
+                "steady_slip_ratio": self.steady_slip_ratio, "steady_fx_n": self.steady_fx_n,
+                "settled_after_s": self.settled_after_s, "cleat_test": self.cleat_test,
+                "figures": [str(p) for p in self.figures], "wall_s": self.wall_s}
+
+
+def brake_torque(settings: BrakingSettings):
+    """The brake torque against time: 0, then a linear ramp to the full torque."""
+    start, ramp, full = settings.brake_at_s, settings.brake_ramp_s, settings.brake_torque_n_m
+
+    def torque(t):
+        if t < start:
+            return 0.0
+        return full if ramp == 0 or t >= start + ramp else full * (t - start) / ramp
+
+    return torque
+
+
+def _simulator(settings, model, deflection, speed, obstacle=None, ahead_m=ROAD_AHEAD_M):
+    from tire_fmu.core.inplane_contact import InPlaneSimulator
+
+    return InPlaneSimulator(model, settings.n_elements, speed, deflection,
+                            step_s=settings.step_s, wheel="free",
+                            point_spacing_m=settings.point_spacing_m, obstacle=obstacle,
+                            obstacle_ahead_m=ahead_m, f_max_hz=settings.f_max_hz)
+
+
+def rough_road(settings: BrakingSettings):
+    """The ISO 8608 profile under the braking run, level for its first ``road_fade_in_m``
+    (a half-cosine rise), long enough for the run at the start speed."""
+    from tire_fmu.core.obstacles import SampledRoad
+    from vehicle_demo.road import iso8608_road
+
+    spacing = 0.25 * settings.point_spacing_m
+    length = settings.speed_m_s * settings.duration_s + 1.0
+    # a road of the class at 1 m/s is its profile in space: time in s is distance in m
+    signal, _ = iso8608_road(settings.road_class, 1.0, length, spacing, settings.road_seed,
+                             fade_in_s=min(settings.road_fade_in_m, length))
+    return SampledRoad(spacing, signal.height_m,
+                       f"ISO 8608 class {settings.road_class} (seed {settings.road_seed})")
+
+
+def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
+    run = sim.run(settings.duration_s, torque_n_m=torque, vehicle_mass_kg=settings.mass_kg,
+                  progress=bar)
+    radius = sim.model.tire.R
+    wheel = run.spin_rad_s * radius
+    road = "level road" if sim.obstacle is None else sim.obstacle.label
+    return BrakingRun(name, road, run.time_s, run.rim_fx_n, run.rim_fz_n, run.rim_my_n_m,
+                      wheel / run.speed_m_s - 1.0, wheel, run.speed_m_s,
+                      np.array([torque(t) for t in run.time_s]), run.sliding_points)
+
+
+def run_braking(settings: BrakingSettings | None = None, log=print,
+                names: dict[str, str] | None = None) -> BrakingSummary:
+    """The braking runs and the cleat test; figures and ``summary.json`` into ``out_dir``."""
+    from scipy.signal import periodogram
+
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_contact import deflection_for_load, steady_rolling
+    from tire_fmu.core.obstacles import cleat
+    from tire_fmu.plots import plot_inplane_cleat
+
+    from .plots import plot_braking
+
+    settings = settings or BrakingSettings()
+    found = settings.problems(names)
+    if found:
+        raise BrakingError("; ".join(found))
+    started = time.perf_counter()
+    out = Path(settings.out_dir)
+    model = settings.tire or InPlaneTire()
+    deflection = deflection_for_load(model, settings.load_n, settings.n_elements,
+                                     point_spacing_m=settings.point_spacing_m)
+    log(f"in-plane tire at {settings.load_n:g} N: axle {deflection * 1e3:.2f} mm down, "
+        f"N = {settings.n_elements}, {settings.point_spacing_m * 1e3:g} mm points, modes to "
+        f"{settings.f_max_hz:g} Hz; vehicle {settings.mass_kg:.0f} kg from "
+        f"{settings.speed_m_s:g} m/s, brake {settings.brake_torque_n_m:g} N m")
+    torque = brake_torque(settings)
+    steady = steady_rolling(_simulator(settings, model, deflection, settings.speed_m_s),
+                            settings.brake_torque_n_m)
+    # the cleat meets the contact centre at about cleat_at_s (the vehicle slows a little)
+    cleat_ahead = settings.speed_m_s * settings.cleat_at_s
+    cases = [("level road", None, ROAD_AHEAD_M),
+             (f"ISO 8608 class {settings.road_class}", rough_road(settings), ROAD_AHEAD_M),
+             ("cleat", cleat(settings.cleat_height_m, settings.cleat_length_m), cleat_ahead)]
+    steps = int(round(settings.duration_s / settings.step_s))
+    runs = []
+    for name, road, ahead in cases:
+        sim = _simulator(settings, model, deflection, settings.speed_m_s, road, ahead)
+        with _bar(steps, settings.progress, f"braking, {name}") as bar:
+            runs.append(_braking_run(name, sim, settings, torque, _advance(bar)))
+    # the classic cleat test: the axle held, the wheel free, the road's speed constant
+    speed = settings.cleat_test_speed_m_s
+    ahead = 0.4
+    sim = _simulator(settings, model, deflection, speed,
+                     cleat(settings.cleat_height_m, settings.cleat_length_m), ahead)
+    duration = (ahead + 0.3 + settings.cleat_length_m) / speed + 0.1
+    with _bar(int(round(duration / settings.step_s)), settings.progress, "cleat test") as bar:
+        test = sim.run(duration, progress=_advance(bar))
+    on = test.time_s > 0.5 * ahead / speed
+
+    def dominant_hz(signal):
+        freq, power = periodogram(signal - signal.mean(), fs=1 / settings.step_s, nfft=2**16)
+        band = freq >= 5.0
+        return float(freq[band][np.argmax(power[band])])
+
+    cleat_test = {"speed_m_s": speed, "fx_min_n": float(test.rim_fx_n[on].min()),
+                  "fx_max_n": float(test.rim_fx_n[on].max()),
+                  "fz_max_n": float(test.rim_fz_n[on].max()),
+                  "fx_dominant_hz": dominant_hz(test.rim_fx_n[on]),
+                  "fz_dominant_hz": dominant_hz(test.rim_fz_n[on])}
+    out.mkdir(parents=True, exist_ok=True)
+    settled = settings.brake_at_s + settings.brake_ramp_s + 0.2 * settings.duration_s
+    figures = (plot_braking(runs, steady.slip_ratio, out / "braking.png"),
+               plot_inplane_cleat(test, settings.load_n, on, out / "cleat_test.png"))
+    summary = BrakingSummary(tuple(runs), steady.slip_ratio, steady.rim_fx_n, settled,
+                             cleat_test, figures, time.perf_counter() - started)
+    data = {"settings": {k: (str(v) if isinstance(v, Path) else v)
+                         for k, v in asdict(settings).items() if k != "tire"},
+            **summary.to_dict()}
+    (out / "summary.json").write_text(json.dumps(data, indent=2))
+    return summary
+
+
+def format_braking(summary: BrakingSummary) -> str:
+    """The summary as text: each run's settled slip and force, the steady solve, the cleat
+    test's extremes and dominant frequencies."""
+    lines = [f"steady rolling solve at the brake torque: slip {summary.steady_slip_ratio:.4%}, "
+             f"Fx {summary.steady_fx_n / 1e3:.3f} kN",
+             f"{'run':<22}{'slip (mean)':>12}{'Fx mean kN':>12}{'Fz min kN':>11}"
+             f"{'Fz max kN':>11}{'V end m/s':>11}{'sliding':>9}"]
+    for run in summary.runs:
+        s = run.summary(summary.settled_after_s)
+        lines.append(f"{s['name']:<22}{s['mean_slip_ratio']:>12.4%}{s['mean_fx_n'] / 1e3:>12.3f}"
+                     f"{s['fz_min_n'] / 1e3:>11.2f}{s['fz_max_n'] / 1e3:>11.2f}"
+                     f"{s['vehicle_speed_end_m_s']:>11.3f}{s['most_sliding_points']:>9d}")
+    c = summary.cleat_test
+    lines.append(f"cleat test at {c['speed_m_s']:g} m/s: Fx {c['fx_min_n'] / 1e3:.2f} to "
+                 f"{c['fx_max_n'] / 1e3:.2f} kN, peak Fz {c['fz_max_n'] / 1e3:.2f} kN; "
+                 f"Fx dominated by {c['fx_dominant_hz']:.1f} Hz, Fz by "
+                 f"{c['fz_dominant_hz']:.1f} Hz")
+    lines += [f"wrote {p}" for p in summary.figures]
+    lines.append(f"({summary.wall_s:.1f} s)")
+    return "\n".join(lines)
+
+
+def _bar(total, enabled, what):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, disable=not enabled, desc=what, unit="step", unit_scale=True,
+                mininterval=0.5)
+
+
+def _advance(bar):
+    def progress(i, steps):
+        bar.n = i
+        if i == steps or i % 500 == 0:
+            bar.refresh()
+
+    return progress
