@@ -1646,6 +1646,18 @@ def _road_reach() -> str:
 
 # -- rewriting ----------------------------------------------------------------------------------
 
+# Each generator's text depends on the code and the recorded results only, so one process
+# makes it once (the checks render every file more than once)
+@functools.cache
+def _section_text(name: str) -> str:
+    return GENERATORS[name]().rstrip()
+
+
+@functools.cache
+def _value_text(name: str) -> str:
+    return value_text(name)
+
+
 def render(text: str) -> tuple[str, list[str]]:
     """The text with every generated section and value regenerated, and the names it holds."""
     names = []
@@ -1655,12 +1667,12 @@ def render(text: str) -> tuple[str, list[str]]:
         if name not in GENERATORS:
             raise KeyError(f"unknown generated section {name!r}; known: {sorted(GENERATORS)}")
         names.append(name)
-        return f"{match.group(1)}{GENERATORS[name]().rstrip()}\n{match.group(4)}"
+        return f"{match.group(1)}{_section_text(name)}\n{match.group(4)}"
 
     def replace_value(match):
         name = match.group("name")
         names.append(name)
-        return f"{match.group(1)}{value_text(name)}{match.group(4)}"
+        return f"{match.group(1)}{_value_text(name)}{match.group(4)}"
 
     text = SECTION.sub(replace, text)
     return VALUE.sub(replace_value, text), names

@@ -4,6 +4,7 @@ checked prose, and the README's fmpy example runs cleanly."""
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import json
 import re
@@ -15,7 +16,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@functools.cache
 def _generate():
+    """docs/generate.py, loaded once: its generators' texts are made once per process."""
     spec = importlib.util.spec_from_file_location("docs_generate", ROOT / "docs" / "generate.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
