@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .inplane_contact import InPlaneSimulator, steady_rolling
+from .parameters import ParameterError, Problem
 
 #: An eigenvalue whose energy is more than this share in the tread elements' springs is the
 #: transport's (module doc), not a mode of the tire.
@@ -185,7 +186,7 @@ def rolling_modes(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     import scipy.linalg
 
     if not (np.isfinite(f_max_hz) and f_max_hz > 0):
-        raise ValueError(f"rolling_modes: f_max_hz = {f_max_hz!r}, must be > 0 Hz")
+        raise ParameterError([Problem("f_max_hz", f_max_hz, "Hz", "> 0 Hz")])
     system = rolling_system(sim, torque_n_m)
     lam, vectors = scipy.linalg.eig(system.a)
     keep = (lam.imag > 1e-9 * np.abs(lam)) & (np.abs(lam) / (2 * np.pi) <= f_max_hz)
