@@ -69,7 +69,8 @@ def register_modes(subparsers) -> None:
     p.add_argument("--load", metavar="N", type=float,
                    help="press the tire on a flat road with this load in N (at rest): the "
                    "modes of the linearised footprint (points in contact, tread elements "
-                   "sticking), the axle held; with --rim-free the wheel turns freely (no "
+                   "sticking), the axle held; with --rim-free the wheel turns freely; with "
+                   "--speed the modes of the tire rolling steadily (no "
                    f"default: the undeformed tire; {LOAD_ZERO})")
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
                    help="forward speed in m/s: list each order's ground-frame frequencies; "
