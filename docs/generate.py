@@ -418,6 +418,47 @@ def inplane_rolling_modes_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-rolling-entry")
+def inplane_rolling_entry_table() -> str:
+    import numpy as np
+
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_contact import (
+        InPlaneSimulator,
+        deflection_for_load,
+        steady_rolling,
+    )
+    from tire_fmu.core.inplane_rolling_modes import rolling_modes, steady_sets
+
+    model = InPlaneTire()
+    spacing, torque = 0.01, -3000.0
+    deflection = deflection_for_load(model, 27.7e3, 100, point_spacing_m=spacing)
+    sim = InPlaneSimulator(model, 100, 10.0, deflection, point_spacing_m=spacing, wheel="free")
+    steady = steady_rolling(sim, torque)
+    contact, stick, sign = steady_sets(sim, steady)
+    first = int(np.flatnonzero(contact)[0])
+    nr = sim._n_ring_coords
+    pressed = float(sim._pen0[first] + sim._jn[first, :nr] @ steady.state[:nr])
+    sliding, off, slide_sign = stick.copy(), contact.copy(), sign.copy()
+    sliding[first] = False
+    off[first] = False
+    # sliding the way its element is deflected, as the run's first point does
+    slide_sign[first] = np.sign(steady.element_deflection_m[first])
+    lines = ["| first point in contact | rotational mode | decay |", "|---|---|---|"]
+    for label, sets in (("sticking (steady_rolling's sets)", None),
+                        ("sliding", (contact, sliding, slide_sign)),
+                        ("off the road", (off, stick, sign))):
+        modes = rolling_modes(sim, torque, 100.0, sets)
+        (k,) = [i for i, kind in enumerate(modes.kinds) if kind == "rotational"]
+        lines.append(f"| {label} | {modes.frequencies_hz[k]:.2f} Hz | "
+                     f"{modes.decay_rates_1_s[k]:.1f} 1/s |")
+    lines += ["", f"{torque:g} N m at 10 m/s, wheel free, 27.7 kN, N = 100, 10 mm points; the "
+              f"first point in contact pressed by {pressed * 1e6:.1f} µm in the steady rolling; "
+              "the other points frozen as in the steady rolling; computed by "
+              "`docs/generate.py` (`rolling_modes(..., sets=...)`)."]
+    return "\n".join(lines)
+
+
 @generator("tied-sidewall")
 def tied_sidewall_table() -> str:
     import numpy as np

@@ -50,6 +50,26 @@ def test_the_equilibrium_is_the_steady_rolling(deflection, wheel, torque):
         assert np.sum(system.contact & ~system.stick) >= 1  # a sliding point is in the test
 
 
+def test_other_frozen_sets_are_not_the_steady_rolling(deflection):
+    """The steady rolling's own sets handed in give the same system; the first point in
+    contact frozen off the road gives another, whose equilibrium steady_rolling's state is
+    not (the equilibrium test above can fail)."""
+    from tire_fmu.core.inplane_contact import steady_rolling
+    from tire_fmu.core.inplane_rolling_modes import steady_sets
+
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
+    contact, stick, sign = steady_sets(sim, steady_rolling(sim, -3000.0))
+    same = rolling_system(sim, -3000.0, (contact, stick, sign))
+    np.testing.assert_array_equal(same.a, rolling_system(sim, -3000.0).a)
+    off = contact.copy()
+    off[np.flatnonzero(contact)[0]] = False
+    other = rolling_system(sim, -3000.0, (off, stick, sign))
+    residual = other.a @ other.steady_x + other.b
+    assert np.abs(residual).max() > 1e-6 * np.abs(other.b).max()
+    assert rotational(rolling_modes(sim, -3000.0, 90.0, (off, stick, sign)))[0] != (
+        pytest.approx(rotational(rolling_modes(sim, -3000.0, 90.0))[0], rel=2e-3))
+
+
 @pytest.mark.parametrize("wheel", ["free", "held"])
 def test_slow_rolling_has_the_loaded_modes_at_rest(deflection, wheel):
     """As the speed goes to zero the elements stop being renewed and stick as springs: the

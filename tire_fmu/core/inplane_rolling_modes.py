@@ -84,10 +84,16 @@ class RollingSystem:
     stick: np.ndarray
 
 
-def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> RollingSystem:
-    """The simulator's laws with steady_rolling's sets frozen, as a first-order system."""
+def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
+                   sets: tuple | None = None) -> RollingSystem:
+    """The simulator's laws with steady_rolling's sets frozen, as a first-order system.
+    ``sets`` (contact, stick, sliding sign; boolean, boolean and ±1 per point) freezes others
+    instead, e.g. a run's: their system's equilibrium is then not steady_rolling's state,
+    which ``steady_x`` still holds."""
     steady = steady_rolling(sim, torque_n_m)
-    contact, stick, sign = _steady_sets(sim, steady)
+    contact, stick, sign = steady_sets(sim, steady) if sets is None else (
+        np.asarray(sets[0], dtype=bool), np.asarray(sets[1], dtype=bool) | ~np.asarray(
+            sets[0], dtype=bool), np.asarray(sets[2], dtype=float))
     nr, ny = sim._n_ring_coords, sim._ny
     omega = sim.spin_rad_s
     th = sim._zone.point_theta
@@ -157,7 +163,7 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> RollingSys
     return RollingSystem(a, b, steady_x, nr, ny, rows_st, contact, stick)
 
 
-def _steady_sets(sim: InPlaneSimulator, steady) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def steady_sets(sim: InPlaneSimulator, steady) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(contact, stick, sliding sign) of the steady state, recovered from it."""
     nr = sim._n_ring_coords
     y = steady.state
@@ -174,7 +180,7 @@ def _steady_sets(sim: InPlaneSimulator, steady) -> tuple[np.ndarray, np.ndarray,
 
 
 def rolling_modes(sim: InPlaneSimulator, torque_n_m: float = 0.0,
-                  f_max_hz: float = 200.0) -> RollingModes:
+                  f_max_hz: float = 200.0, sets: tuple | None = None) -> RollingModes:
     """The modes of the tire rolling steadily at ``sim.speed_m_s`` under ``torque_n_m``
     (linearised about :func:`.inplane_contact.steady_rolling`, its sets frozen; module doc),
     the oscillating ones whose natural frequency |λ|/2π is at most ``f_max_hz`` (as
@@ -182,12 +188,13 @@ def rolling_modes(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     out. ``kinds``: "transport" for the transport's eigenvalues (more than
     :data:`TRANSPORT_SHARE` of their energy in the elements' springs), "rotational" for the
     mode of the tire with the largest share of its kinetic energy in turning, of the tread
-    as a whole and of the wheel (as :func:`.inplane_contact.loaded_modes` labels it)."""
+    as a whole and of the wheel (as :func:`.inplane_contact.loaded_modes` labels it).
+    ``sets`` freezes other sets than the steady rolling's (:func:`rolling_system`)."""
     import scipy.linalg
 
     if not (np.isfinite(f_max_hz) and f_max_hz > 0):
         raise ParameterError([Problem("f_max_hz", f_max_hz, "Hz", "> 0 Hz")])
-    system = rolling_system(sim, torque_n_m)
+    system = rolling_system(sim, torque_n_m, sets)
     lam, vectors = scipy.linalg.eig(system.a)
     keep = (lam.imag > 1e-9 * np.abs(lam)) & (np.abs(lam) / (2 * np.pi) <= f_max_hz)
     lam, vectors = lam[keep], vectors[:, keep]
