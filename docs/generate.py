@@ -291,6 +291,44 @@ def inplane_cleat_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-brake-ringing")
+def inplane_brake_ringing_table() -> str:
+    data = record("bench_inplane_brake_ringing")
+    res = data["results"]
+    lines = ["| N | points | step | `rolling_modes`: rotational | run, fit: rotational | "
+             "next modes: `rolling_modes` / run | single damped cosine | periodogram |",
+             "|---|---|---|---|---|---|---|---|"]
+    for case in res["cases"]:
+        eig = case["step_modes"]
+        head = (f"| {case['n_elements']} | {case['spacing_m'] * 1e3:g} mm | "
+                f"{case['step_s'] * 1e6:g} µs | {case['rotational_hz']:.2f} Hz, "
+                f"{case['rotational_decay_1_s']:.1f} 1/s | ")
+        if "run_fit" not in case:
+            lines.append(head + "(linearisation only) | "
+                         + ", ".join(f"{m['frequency_hz']:.2f}" for m in eig[1:3])
+                         + " Hz | | |")
+            continue
+        fit = case["run_fit"]
+        error = (fit[0]["frequency_hz"] / case["rotational_hz"] - 1) * 100
+        lines.append(head + f"{fit[0]['frequency_hz']:.2f} Hz ({error:+.1f} %), "
+                     f"{fit[0]['decay_1_s']:.1f} 1/s | "
+                     + ", ".join(f"{e['frequency_hz']:.2f} / {r['frequency_hz']:.2f}"
+                                 for e, r in zip(eig[1:3], fit[1:3]))
+                     + f" Hz | {case['single_fit_hz']:.2f} Hz, "
+                     f"{case['single_fit_decay_1_s']:.1f} 1/s | {case['periodogram_hz']:.2f} Hz |")
+    rest = res["rest"]
+    lines += ["", f"A {res['torque_n_m']:g} N m brake step at {res['speed_m_s']:g} m/s, wheel "
+              f"free, axle held, {res['load_n'] / 1e3:.1f} kN. The run's Fx from "
+              f"{res['fit_from_s'] * 1e3:g} ms after the step to the end is fitted with "
+              f"{len(res['cases'][0]['step_modes'])} damped cosines seeded by the modes with the "
+              "largest part in the linear step response (`torque_step`). At rest the same step "
+              f"rings at {rest['single_fit_hz']:.2f} Hz against `loaded_modes`' "
+              f"{rest['loaded_modes_hz']:.2f} Hz; `rolling_modes` at "
+              f"{rest['slow_speed_m_s']:g} m/s gives {rest['rolling_modes_slow_hz']:.2f} Hz. "
+              f"Measured with `{data['command']}` on {data['recorded']}."]
+    return "\n".join(lines)
+
+
 @generator("inplane-rolling-resistance")
 def inplane_rolling_resistance_table() -> str:
     data = record("bench_inplane_cleat")
@@ -338,6 +376,86 @@ def inplane_footprint_table() -> str:
               "loaded modes at rest, the steady rolling at 10 m/s; computed by "
               "`docs/generate.py` (`tire-fmu inplane-modes --load 27700 [--rim-free]`, "
               "`core.inplane_contact.steady_rolling`)."]
+    return "\n".join(lines)
+
+
+@generator("inplane-rolling-modes")
+def inplane_rolling_modes_table() -> str:
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_contact import (
+        InPlaneSimulator,
+        deflection_for_load,
+        loaded_modes,
+    )
+    from tire_fmu.core.inplane_rolling_modes import rolling_modes
+
+    model = InPlaneTire()
+    spacing = 0.01
+    deflection = deflection_for_load(model, 27.7e3, 100, point_spacing_m=spacing)
+
+    def rotational(modes):
+        (k,) = [i for i, kind in enumerate(modes.kinds) if kind == "rotational"]
+        return modes.frequencies_hz[k], modes.damping_ratios[k]
+
+    rest = loaded_modes(InPlaneSimulator(model, 100, 0.0, deflection, point_spacing_m=spacing,
+                                         wheel="free"), f_max_hz=100)
+    f, z = rotational(rest)
+    lines = ["| speed | rotational mode, free rolling | rotational mode, -3000 N m | "
+             "sliding points at -3000 N m |", "|---|---|---|---|",
+             f"| at rest (`loaded_modes`) | {f:.2f} Hz, ζ {z:.4f} | | |"]
+    for speed in (0.05, 1.0, 2.0, 5.0, 10.0, 20.0):
+        sim = InPlaneSimulator(model, 100, speed, deflection, point_spacing_m=spacing,
+                               wheel="free")
+        free = rotational(rolling_modes(sim, 0.0, f_max_hz=100))
+        braked_modes = rolling_modes(sim, -3000.0, f_max_hz=100)
+        braked = rotational(braked_modes)
+        lines.append(f"| {speed:g} m/s | {free[0]:.2f} Hz, ζ {free[1]:.4f} | {braked[0]:.2f} Hz, "
+                     f"ζ {braked[1]:.4f} | {braked_modes.sliding_points} |")
+    lines += ["", "Wheel free, axle held, 27.7 kN (deflection "
+              f"{deflection * 1e3:.2f} mm), N = 100, 10 mm points; f the damped frequency, ζ "
+              "= -Re λ/|λ|; computed by `docs/generate.py` (`tire-fmu inplane-modes --load "
+              "27700 --speed V --rim-free [--torque -3000] --point-spacing 0.01`)."]
+    return "\n".join(lines)
+
+
+@generator("inplane-rolling-entry")
+def inplane_rolling_entry_table() -> str:
+    import numpy as np
+
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_contact import (
+        InPlaneSimulator,
+        deflection_for_load,
+        steady_rolling,
+    )
+    from tire_fmu.core.inplane_rolling_modes import rolling_modes, steady_sets
+
+    model = InPlaneTire()
+    spacing, torque = 0.01, -3000.0
+    deflection = deflection_for_load(model, 27.7e3, 100, point_spacing_m=spacing)
+    sim = InPlaneSimulator(model, 100, 10.0, deflection, point_spacing_m=spacing, wheel="free")
+    steady = steady_rolling(sim, torque)
+    contact, stick, sign = steady_sets(sim, steady)
+    first = int(np.flatnonzero(contact)[0])
+    nr = sim._n_ring_coords
+    pressed = float(sim._pen0[first] + sim._jn[first, :nr] @ steady.state[:nr])
+    sliding, off, slide_sign = stick.copy(), contact.copy(), sign.copy()
+    sliding[first] = False
+    off[first] = False
+    # sliding the way its element is deflected, as the run's first point does
+    slide_sign[first] = np.sign(steady.element_deflection_m[first])
+    lines = ["| first point in contact | rotational mode | decay |", "|---|---|---|"]
+    for label, sets in (("sticking (steady_rolling's sets)", None),
+                        ("sliding", (contact, sliding, slide_sign)),
+                        ("off the road", (off, stick, sign))):
+        modes = rolling_modes(sim, torque, 100.0, sets)
+        (k,) = [i for i, kind in enumerate(modes.kinds) if kind == "rotational"]
+        lines.append(f"| {label} | {modes.frequencies_hz[k]:.2f} Hz | "
+                     f"{modes.decay_rates_1_s[k]:.1f} 1/s |")
+    lines += ["", f"{torque:g} N m at 10 m/s, wheel free, 27.7 kN, N = 100, 10 mm points; the "
+              f"first point in contact pressed by {pressed * 1e6:.1f} µm in the steady rolling; "
+              "the other points frozen as in the steady rolling; computed by "
+              "`docs/generate.py` (`rolling_modes(..., sets=...)`)."]
     return "\n".join(lines)
 
 

@@ -69,10 +69,16 @@ def register_modes(subparsers) -> None:
     p.add_argument("--load", metavar="N", type=float,
                    help="press the tire on a flat road with this load in N (at rest): the "
                    "modes of the linearised footprint (points in contact, tread elements "
-                   "sticking), the axle held; with --rim-free the wheel turns freely (no "
+                   "sticking), the axle held; with --rim-free the wheel turns freely; with "
+                   "--speed the modes of the tire rolling steadily (no "
                    f"default: the undeformed tire; {LOAD_ZERO})")
     p.add_argument("--speed", metavar="M_PER_S", type=float, default=0.0,
-                   help="forward speed in m/s: list each order's ground-frame frequencies")
+                   help="forward speed in m/s: list each order's ground-frame frequencies; "
+                   "with --load, the modes of the tire rolling steadily at it (linearised "
+                   "about the steady rolling, the tread elements' transport as states)")
+    p.add_argument("--torque", metavar="N_M", type=float, default=0.0,
+                   help="with --load, --speed and --rim-free: the torque on the wheel in N m "
+                   "(+ driving, - braking) it rolls under (default 0)")
     p.add_argument("--nmax", metavar="N", type=int, default=8,
                    help="highest order listed with --speed (default 8)")
     p.add_argument("--max-frequency", metavar="HZ", type=float, default=200.0,
@@ -260,9 +266,12 @@ def _loaded(args: argparse.Namespace, model) -> Output:
 
     raise_problems([range_problem("--load", args.load, 0.0, 1e6, "N"),
                     range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m")])
-    if args.speed > 0:
-        raise CliError("--load with --speed: the loaded modes are the tire's at rest")
     wheel = "free" if args.rim_free else "held"
+    if args.torque != 0.0 and not (args.speed > 0 and args.rim_free):
+        raise CliError("--torque: only with --load, --speed and --rim-free (a held wheel's "
+                       "torque is what holds it)")
+    if args.speed > 0:
+        return _rolling(args, model, wheel)
     deflection = deflection_for_load(model, args.load, args.elements,
                                      point_spacing_m=args.point_spacing)
     sim = InPlaneSimulator(model, args.elements, 0.0, deflection, wheel=wheel,
@@ -278,3 +287,34 @@ def _loaded(args: argparse.Namespace, model) -> Output:
             "modes": [{"frequency_hz": f, "damping_ratio": z, "kind": k}
                       for _, f, z, k in rows]}
     return Output(text=head + "\n" + table(rows, ["#", "f [Hz]", "zeta", "kind"]), data=data)
+
+
+def _rolling(args: argparse.Namespace, model, wheel: str) -> Output:
+    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load, steady_rolling
+    from ..core.inplane_rolling_modes import rolling_modes
+
+    raise_problems([range_problem("--torque", args.torque, -2e4, 2e4, "N m")])
+    deflection = deflection_for_load(model, args.load, args.elements,
+                                     point_spacing_m=args.point_spacing)
+    sim = InPlaneSimulator(model, args.elements, args.speed, deflection, wheel=wheel,
+                           point_spacing_m=args.point_spacing)
+    steady = steady_rolling(sim, args.torque)
+    result = rolling_modes(sim, args.torque, f_max_hz=args.max_frequency)
+    tire = [i for i, kind in enumerate(result.kinds) if kind != "transport"]
+    rows = [[n + 1, result.frequencies_hz[i], result.decay_rates_1_s[i],
+             result.damping_ratios[i], result.kinds[i]] for n, i in enumerate(tire)]
+    head = (f"{len(rows)} modes of the tire pressed with {args.load:g} N (deflection "
+            f"{deflection * 1e3:.2f} mm) rolling at {args.speed:g} m/s under {args.torque:g} N m "
+            f"(slip {steady.slip_ratio * 100:.3f} %, {result.points_in_contact} points in "
+            f"contact, {result.sliding_points} sliding), natural frequency up to "
+            f"{args.max_frequency:g} Hz; N = {args.elements}, axle held, wheel {wheel}; "
+            "linearised about the steady rolling, f the damped frequency "
+            f"({len(result.kinds) - len(tire)} eigenvalues of the elements' transport left out)")
+    data = {"load_n": args.load, "deflection_m": deflection, "wheel": wheel,
+            "speed_m_s": args.speed, "torque_n_m": args.torque,
+            "slip_ratio": steady.slip_ratio, "points_in_contact": result.points_in_contact,
+            "sliding_points": result.sliding_points,
+            "modes": [{"frequency_hz": f, "decay_rate_1_s": d, "damping_ratio": z, "kind": k}
+                      for _, f, d, z, k in rows]}
+    return Output(text=head + "\n" + table(rows, ["#", "f [Hz]", "decay [1/s]", "zeta",
+                                                    "kind"]), data=data)
