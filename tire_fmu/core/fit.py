@@ -450,11 +450,13 @@ def _minimax(problem: _Problem, x, low, high) -> np.ndarray:
     return x
 
 
-def _report(problem: _Problem, x, low, high, criterion, confidence, determined_within,
-            success, message) -> FitResult:
-    tire = problem.tire(x)
-    residuals = problem.residuals(x)
-    jac = problem.jacobian(x, low, high)
+def jacobian_statistics(jac: np.ndarray, residuals: np.ndarray, names: Sequence[str],
+                        values: np.ndarray, confidence: float,
+                        determined_within: float) -> dict:
+    """What the Jacobian in ln(parameter) at a solution says about the parameters: the
+    covariance s²(JᵀJ)⁺ on the directions the data see, Student-t intervals, the numerical
+    rank, the unseen directions, weak parameters and correlated pairs (FitResult's fields of
+    those names). Shared by every fit."""
     m, p = jac.shape
     # the full V: with fewer data than free parameters the null space is the rows of Vᵀ
     # past the data's count, which the economy SVD leaves out
@@ -469,7 +471,6 @@ def _report(problem: _Problem, x, low, high, criterion, confidence, determined_w
     log_var = np.diag(inverse) * variance
     log_std = np.where(unseen, np.inf, np.sqrt(np.abs(log_var)))
     t = st.t.ppf(0.5 * (1.0 + confidence), dof) if dof > 0 else math.nan
-    values = np.array([getattr(tire, name) for name in problem.free])
     with np.errstate(over="ignore", invalid="ignore"):
         interval_low = values * np.exp(-t * log_std)
         interval_high = values * np.exp(t * log_std)
@@ -477,7 +478,7 @@ def _report(problem: _Problem, x, low, high, criterion, confidence, determined_w
     with np.errstate(divide="ignore", invalid="ignore"):
         correlation = inverse / np.outer(scale, scale)
     correlation = np.where(np.outer(~unseen, ~unseen), correlation, np.nan)
-    names = problem.free
+    names = tuple(names)
     undetermined = tuple(n for n, u in zip(names, unseen) if u)
     directions = tuple({n: float(v) for n, v in zip(names, row) if abs(v) > NULL_SHARE}
                        for row in null)
@@ -487,20 +488,30 @@ def _report(problem: _Problem, x, low, high, criterion, confidence, determined_w
     pairs = tuple((names[i], names[j], float(correlation[i, j]))
                   for i in range(p) for j in range(i + 1, p)
                   if abs(correlation[i, j]) > CORRELATION_LIMIT)
+    return dict(interval_low=interval_low, interval_high=interval_high, log_std=log_std,
+                singular_values=s, rank=rank, correlation=correlation,
+                undetermined=undetermined, null_directions=directions,
+                weakly_determined=weak, correlated_pairs=pairs, degrees_of_freedom=dof,
+                residual_rms=float(np.sqrt(np.mean(residuals**2))))
+
+
+def _report(problem: _Problem, x, low, high, criterion, confidence, determined_within,
+            success, message) -> FitResult:
+    tire = problem.tire(x)
+    residuals = problem.residuals(x)
+    jac = problem.jacobian(x, low, high)
+    values = np.array([getattr(tire, name) for name in problem.free])
+    stats = jacobian_statistics(jac, residuals, problem.free, values, confidence,
+                                determined_within)
     frequencies, damping, statics = problem.predictions(tire)
     fitted_damping = np.full(len(problem.modes), np.nan)
     fitted_damping[problem.damped] = damping
     return FitResult(
-        tire=tire, start=problem.start, free=names, n_elements=problem.n_elements,
+        tire=tire, start=problem.start, free=problem.free, n_elements=problem.n_elements,
         criterion=criterion, modes=problem.modes, fitted_hz=frequencies,
         fitted_damping_ratio=fitted_damping, static=problem.static, fitted_static=statics,
-        confidence=confidence, determined_within=determined_within,
-        interval_low=interval_low, interval_high=interval_high, log_std=log_std,
-        singular_values=s, rank=rank, correlation=correlation, undetermined=undetermined,
-        null_directions=directions,
-        weakly_determined=weak, correlated_pairs=pairs, degrees_of_freedom=dof,
-        residual_rms=float(np.sqrt(np.mean(residuals**2))), success=success,
-        message=message, evaluations=problem.evaluations)
+        confidence=confidence, determined_within=determined_within, success=success,
+        message=message, evaluations=problem.evaluations, **stats)
 
 
 def modes_of(tire: TireParameters, orders, branches=BRANCHES, n_elements: int | None = None,
