@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import sys
 import warnings
-from dataclasses import dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -213,8 +213,10 @@ def _same_unit(given: Any, expected: str) -> bool:
 # -- writing --------------------------------------------------------------------------------
 
 def tire_file_text(tire: TireParameters, name: str = "", description: str = "",
-                   source: str = "", metadata: dict | None = None) -> str:
-    """The TOML text of a tire file (a small emitter: strings, numbers, flat arrays, tables)."""
+                   source: str = "", metadata: dict | None = None,
+                   tangential: TangentialParameters | None = None) -> str:
+    """The TOML text of a tire file (a small emitter: strings, numbers, flat arrays, tables);
+    ``tangential`` adds the in-plane ring's [tangential] and [tangential_units] tables."""
     lines = ["# tire_fmu tire data file: SI values in [parameters], their units in [units].",
              f"format = {_toml(FORMAT)}"]
     for key, value in (("name", name), ("description", description), ("source", source)):
@@ -227,6 +229,13 @@ def tire_file_text(tire: TireParameters, name: str = "", description: str = "",
     lines += ["", "[units]"]
     lines += [f"{f.name} = {_toml(TIRE_FIELDS[f.name].unit or '1')}"
               for f in fields(TireParameters)]
+    if tangential is not None:
+        lines += ["", "[tangential]"]
+        lines += [f"{f.name} = {_toml(getattr(tangential, f.name))}"
+                  for f in fields(TangentialParameters)]
+        lines += ["", "[tangential_units]"]
+        lines += [f"{f.name} = {_toml(TANGENTIAL_RANGES[f.name][2] or '1')}"
+                  for f in fields(TangentialParameters)]
     for table, content in (metadata or {}).items():
         if table not in METADATA_TABLES:
             raise TireFileError(f"metadata table {table!r}: allowed are {list(METADATA_TABLES)}")
@@ -235,13 +244,15 @@ def tire_file_text(tire: TireParameters, name: str = "", description: str = "",
 
 
 def write_tire_file(path: str | Path, tire: TireParameters, name: str = "",
-                    description: str = "", source: str = "", metadata: dict | None = None
-                    ) -> Path:
+                    description: str = "", source: str = "", metadata: dict | None = None,
+                    tangential: TangentialParameters | None = None) -> Path:
     """Write a tire file and check that it reads back to the same tire."""
     path = Path(path)
-    text = tire_file_text(tire, name, description, source, metadata)
+    text = tire_file_text(tire, name, description, source, metadata, tangential)
     try:  # the emitter's own guarantee: the text reads back to the same tire
-        same = tomllib.loads(text)["parameters"] == tire.as_dict()
+        document = tomllib.loads(text)
+        same = document["parameters"] == tire.as_dict() and (
+            tangential is None or document["tangential"] == asdict(tangential))
     except tomllib.TOMLDecodeError as error:
         same, text = False, f"{error}"
     if not same:

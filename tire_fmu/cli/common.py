@@ -340,8 +340,8 @@ def positive_problem(option: str, value: Any, unit: str) -> str | None:
     return None
 
 
-def elements_problem(value: int) -> str | None:
-    return range_problem("--elements", value, MIN_ELEMENTS, MAX_ELEMENTS, integer=True)
+def elements_problem(value: int, option: str = "--elements") -> str | None:
+    return range_problem(option, value, MIN_ELEMENTS, MAX_ELEMENTS, integer=True)
 
 
 def raise_problems(problems: Sequence[str | None]) -> None:

@@ -7,6 +7,8 @@ import math
 from pathlib import Path
 
 from ..core.fit import CRITERIA, FitError, StaticMeasurement, fit_tire
+from ..core.fit_inplane import FITTABLE
+from ..core.parameters import DEFAULT_LOAD_N
 from .common import (
     CliError,
     Output,
@@ -36,8 +38,9 @@ def register(subparsers) -> None:
         "fitted values with confidence intervals from the Jacobian, the residual of every "
         "mode, and the parameters the data cannot determine.",
     )
-    p.add_argument("measured", metavar="MEASURED", type=Path,
-                   help="CSV table of measured modes")
+    p.add_argument("measured", metavar="MEASURED", type=Path, nargs="?",
+                   help="CSV table of measured modes (optional when only in-plane data are "
+                   "given below)")
     p.add_argument("--free", metavar="NAME,...", default=DEFAULT_FREE,
                    help=f"parameters to fit, comma separated (default {DEFAULT_FREE}: tread "
                    "mass, geometry and pressure are taken as measured)")
@@ -60,6 +63,29 @@ def register(subparsers) -> None:
                    help="weight of the static residuals (default 1, as one mode)")
     g.add_argument("--static-elements", metavar="N", type=int, default=100,
                    help="mesh of the static contact model (default 100)")
+    g = p.add_argument_group(
+        "in-plane data (the tangential ring of tire-fmu inplane-modes)",
+        "fitted after the radial data, with the radial tire fixed at its fit (or its "
+        "given values); the other tangential data are the tire file's [tangential] table")
+    g.add_argument("--tangential-mode", metavar="N=HZ", action="append", default=[],
+                   help="measured frequency in Hz of order N's tangential branch, rim held "
+                   "(N = 0: the rotational mode, rim held); repeat for more orders")
+    g.add_argument("--rotational-free", metavar="HZ", type=float,
+                   help="measured rotational mode in Hz with the rim free (the wheel's "
+                   "inertia of the tire file)")
+    g.add_argument("--slip-stiffness", metavar="N", type=float,
+                   help="measured longitudinal slip stiffness dFx/dκ at small slip, N per "
+                   "unit slip")
+    g.add_argument("--slip-load", metavar="N", type=float, default=DEFAULT_LOAD_N,
+                   help=f"load of the slip stiffness in N (default {DEFAULT_LOAD_N:g})")
+    g.add_argument("--slip-speed", metavar="M_PER_S", type=float, default=10.0,
+                   help="speed of the slip stiffness in m/s (default 10)")
+    g.add_argument("--free-tangential", metavar="NAME,...",
+                   help=f"tangential parameters to fit, of {','.join(FITTABLE)} (default: "
+                   "k_t1,k_t2 with modes, EA with a mode of order >= 1, k_tx with a slip "
+                   "stiffness)")
+    g.add_argument("--inplane-elements", metavar="N", type=int, default=100,
+                   help="mesh of the in-plane model the data are fitted on (default 100)")
     p.add_argument("--confidence", metavar="P", type=float, default=0.95,
                    help="confidence level of the intervals (default 0.95)")
     p.add_argument("--determined-within", metavar="X", type=float, default=0.05,
@@ -93,46 +119,149 @@ def run_fit(args: argparse.Namespace) -> Output:
 
     problems = [
         elements_problem(args.elements) if args.elements is not None else None,
-        elements_problem(args.static_elements),
+        elements_problem(args.static_elements, "--static-elements"),
+        elements_problem(args.inplane_elements, "--inplane-elements"),
         range_problem("--confidence", args.confidence, 0.5, 0.9999),
         positive_problem("--determined-within", args.determined_within, ""),
         positive_problem("--static-weight", args.static_weight, ""),
     ]
     if args.out is not None and not args.out.parent.exists():
         problems.append(f"--out {args.out}: folder {args.out.parent} does not exist")
+    targets = _inplane_targets(args, problems)
+    for name in (args.free_tangential or "").split(","):
+        if name.strip() and name.strip() not in FITTABLE:
+            problems.append(f"--free-tangential {name.strip()!r}: must be one of "
+                            f"{', '.join(FITTABLE)}")
+    if args.measured is None and not targets:
+        problems.append("give MEASURED (a CSV table of modes) or in-plane data "
+                        "(--tangential-mode, --rotational-free, --slip-stiffness)")
     start = checked_tire(args, problems)
     static = _static(args)
-    try:
-        modes = read_modes(args.measured)
-    except MeasurementError as error:
-        raise CliError(f"MEASURED {error}") from error
-    free = [name.strip() for name in args.free.split(",") if name.strip()]
-    try:
-        result = fit_tire(modes, free, start, n_elements=args.elements, static=static,
-                          criterion=args.criterion, confidence=args.confidence,
-                          determined_within=args.determined_within)
-    except FitError as error:
-        raise CliError(str(error)) from error
-    output = Output(text=report_text(result), data=result.to_dict())
+    result = None
+    if args.measured is not None:
+        try:
+            modes = read_modes(args.measured)
+        except MeasurementError as error:
+            raise CliError(f"MEASURED {error}") from error
+        free = [name.strip() for name in args.free.split(",") if name.strip()]
+        try:
+            result = fit_tire(modes, free, start, n_elements=args.elements, static=static,
+                              criterion=args.criterion, confidence=args.confidence,
+                              determined_within=args.determined_within)
+        except FitError as error:
+            raise CliError(str(error)) from error
+    inplane = _fit_inplane(args, targets, result.tire if result is not None else start)
+    texts = ([report_text(result)] if result is not None else []) + (
+        [inplane_report_text(inplane)] if inplane is not None else [])
+    data = result.to_dict() if result is not None else {}
+    if inplane is not None:
+        data["inplane"] = inplane.to_dict()
+    output = Output(text="\n\n".join(texts), data=data)
     if args.out is not None:
         from ..tire_files import TireFileError, write_tire_file
 
+        # with in-plane data, the tire the in-plane ring was fitted with (its radial data
+        # with the lumped sidewall the ring has): the file then reads back to that ring
+        tire = (inplane.model.tire if inplane is not None
+                else result.tire if result is not None else start)
+        metadata = {"fit": fit_metadata(result)} if result is not None else None
+        source = "tire-fmu fit" + (f" {args.measured.name}" if args.measured else "")
         try:
-            write_tire_file(args.out, result.tire, name=args.name,
-                            description=args.description or _description(result, args),
-                            source=f"tire-fmu fit {args.measured.name}",
-                            metadata={"fit": fit_metadata(result)})
+            write_tire_file(args.out, tire, name=args.name,
+                            description=args.description or _description(result, inplane,
+                                                                          args),
+                            source=source, metadata=metadata,
+                            tangential=None if inplane is None else inplane.model.tangential)
         except TireFileError as error:
             raise CliError(f"--out: {error}") from error
         output.written.append(args.out)
-    write_plot(args, output, plot_with("plot_fit", result))
+    if result is not None:
+        write_plot(args, output, plot_with("plot_fit", result))
     return output
 
 
-def _description(result, args) -> str:
-    model = "analytic ring" if result.n_elements is None else f"FDM N = {result.n_elements}"
-    return (f"fitted by tire-fmu fit to {args.measured.name}: {', '.join(result.free)} free "
-            f"({model}, {result.criterion})")
+def _inplane_targets(args, problems: list) -> list:
+    from ..core.fit_inplane import InPlaneTarget
+
+    targets = []
+    for item in args.tangential_mode:
+        order, sep, hz = item.partition("=")
+        try:
+            targets.append(InPlaneTarget("tangential", float(hz), order=int(order)))
+        except ValueError:
+            problems.append(f"--tangential-mode {item!r}: expected N=HZ, N an integer order "
+                            "and HZ a frequency in Hz")
+    if args.rotational_free is not None:
+        targets.append(InPlaneTarget("rotational_free", args.rotational_free))
+    if args.slip_stiffness is not None:
+        targets.append(InPlaneTarget("slip_stiffness", args.slip_stiffness,
+                                     load_n=args.slip_load, speed_m_s=args.slip_speed))
+    return targets
+
+
+def _fit_inplane(args, targets, radial_tire):
+    """The tangential fit on the radial tire (fitted or given), or None without data."""
+    if not targets:
+        return None
+    from dataclasses import replace
+
+    from ..core.fit_inplane import fit_inplane
+    from ..core.inplane import InPlaneTire
+    from .inplane import DEFAULT_TIRE_FILE, _tangential
+
+    if args.free_tangential is not None:
+        free = [n.strip() for n in args.free_tangential.split(",") if n.strip()]
+    else:
+        kinds = {t.kind for t in targets}
+        free = (["k_t1", "k_t2"] if kinds & {"tangential", "rotational_free"} else [])
+        if any(t.kind == "tangential" and t.order >= 1 for t in targets):
+            free.append("EA")
+        if "slip_stiffness" in kinds:
+            free.append("k_tx")
+    tangential = _tangential([], args.tire_file or DEFAULT_TIRE_FILE)
+    # the in-plane ring has the paper's lumped radial sidewall (sidewall_max_order = 0)
+    model = InPlaneTire(replace(radial_tire, sidewall_max_order=0.0), tangential)
+    try:
+        return fit_inplane(targets, free, model, n_elements=args.inplane_elements,
+                           confidence=args.confidence,
+                           determined_within=args.determined_within)
+    except FitError as error:
+        raise CliError(str(error)) from error
+
+
+def inplane_report_text(result) -> str:
+    conf = f"{100 * result.confidence:g} %"
+    lines = [f"in-plane fit of {len(result.free)} tangential parameters to "
+             f"{len(result.targets)} measurements on the FDM ring, N = {result.n_elements} "
+             f"({'converged' if result.success else 'NOT converged: ' + result.message})", ""]
+    rows = [[r["name"], r["unit"], r["start"], r["value"], r["interval_low"],
+             r["interval_high"], r["status"]] for r in result.parameter_rows()]
+    lines.append(table(rows, ["parameter", "unit", "start", "fitted", f"{conf} low",
+                              f"{conf} high", "status"]))
+    rows = [[t["label"], t["unit"], t["measured"], t["fitted"], t["residual_percent"]]
+            for t in result.target_rows()]
+    lines += ["", table(rows, ["measurement", "unit", "measured", "fitted", "residual [%]"]),
+              "", f"rank of the Jacobian: {result.rank} of {len(result.free)}; residual rms "
+              f"{result.residual_rms:.3g} with {result.degrees_of_freedom} degrees of freedom"]
+    for direction in result.null_directions:
+        combo = " ".join(f"{v:+.2f}*ln({k})" for k, v in direction.items())
+        lines.append(f"the data cannot see the direction {combo}: fix one of "
+                     f"{', '.join(direction)} at a measured value")
+    return "\n".join(lines)
+
+
+def _description(result, inplane, args) -> str:
+    parts = []
+    if result is not None:
+        model = ("analytic ring" if result.n_elements is None
+                 else f"FDM N = {result.n_elements}")
+        parts.append(f"fitted by tire-fmu fit to {args.measured.name}: "
+                     f"{', '.join(result.free)} free ({model}, {result.criterion})")
+    if inplane is not None:
+        parts.append(f"tangential {', '.join(inplane.free)} fitted to "
+                     f"{', '.join(t.name for t in inplane.targets)} (in-plane ring, "
+                     f"N = {inplane.n_elements})")
+    return "; ".join(parts)
 
 
 def fit_metadata(result) -> dict:
