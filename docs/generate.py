@@ -347,6 +347,23 @@ def inplane_rolling_resistance_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-convergence")
+def inplane_convergence_table() -> str:
+    data = record("bench_inplane_convergence")
+    results = data["results"]
+    lines = ["| N | points | rotational, wheel held | rotational, wheel free "
+             "| rolling resistance |", "|---|---|---|---|---|"]
+    for r in results["rows"]:
+        lines.append(f"| {r['n_elements']} | {r['points']} at {r['point_spacing_m'] * 1e3:g} mm "
+                     f"| {r['rotational_held_hz']:.2f} Hz | {r['rotational_free_hz']:.2f} Hz "
+                     f"| {r['rolling_resistance']:.5f} |")
+    lines += ["", f"The loaded tire at {results['load_n'] / 1e3:.2f} kN: its rotational mode at "
+              f"rest (`loaded_modes`) and the free-rolling resistance coefficient -Fx/Fz at "
+              f"{results['speed_m_s']:g} m/s (`steady_rolling`), by mesh and contact-point "
+              "spacing. " + provenance(data)]
+    return "\n".join(lines)
+
+
 @generator("inplane-footprint")
 def inplane_footprint_table() -> str:
     from tire_fmu.core.inplane import InPlaneTire

@@ -9,8 +9,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tire_fmu.core.inplane import InPlaneTire, TangentialParameters
-from tire_fmu.core.inplane_contact import InPlaneSimulator, deflection_for_load, loaded_modes
+from tire_fmu.core.inplane import InPlaneRing, InPlaneTire, TangentialParameters
+from tire_fmu.core.inplane_contact import (
+    InPlaneSimulator,
+    deflection_for_load,
+    loaded_modes,
+    steady_rolling,
+)
 from tire_fmu.core.obstacles import cleat
 from tire_fmu.core.parameters import DEFAULT_LOAD_N, ParameterError
 
@@ -334,3 +339,84 @@ def test_a_braked_quarter_car_decelerates_as_its_moment_balance_says(deflection)
                                              point_spacing_m=SPACING, f_max_hz=150.0),
                             torque - inertia * decel / t.R)
     assert slip.mean() == pytest.approx(steady.slip_ratio, rel=0.1)
+
+
+# -- the rim moved by the host ------------------------------------------------------------------
+
+def smooth_motion(axis: int, amplitude_m: float, rise_s: float):
+    """rim_motion moving the rim along x (axis 0) or z (axis 3) to ``amplitude_m`` with a
+    smoothstep over ``rise_s`` (position, velocity and acceleration exact)."""
+    def motion(t):
+        x = min(t / rise_s, 1.0)
+        out = [0.0] * 6
+        out[axis] = amplitude_m * x * x * (3 - 2 * x)
+        out[axis + 1] = amplitude_m * 6 * x * (1 - x) / rise_s
+        out[axis + 2] = amplitude_m * (6 - 12 * x) / rise_s**2 if t < rise_s else 0.0
+        return tuple(out)
+
+    return motion
+
+
+@pytest.mark.parametrize("speed_m_s, wheel", [(0.0, "held"), (10.0, "free")])
+@pytest.mark.parametrize("axis", [0, 3])
+def test_a_rim_accelerating_in_the_air_carries_the_tires_inertia(speed_m_s, wheel, axis):
+    """Off the road, a rim accelerating at a steadily (fore-aft or up): once the ringing has
+    decayed the tire moves with it and pulls on it with -m a, m the tire's mass without the
+    wheel (from the ring's mass matrix: the rigid translation's kinetic energy)."""
+    n, a = 60, 5.0
+    ring = InPlaneRing(MODEL, n, rim_free=True)
+    pattern = ring.rigid_motion(z_m=1.0)
+    tire_mass = pattern @ ring.mass @ pattern - MODEL.tangential.wheel_mass_kg
+    sim = InPlaneSimulator(MODEL, n, speed_m_s, 0.0, wheel=wheel)
+
+    def motion(t):
+        out = [0.0] * 6
+        out[3] = 0.005  # held 5 mm clear of the road (a step in position only)
+        out[axis] += 0.5 * a * t * t
+        out[axis + 1], out[axis + 2] = a * t, a
+        return tuple(out)
+
+    run = sim.run(0.8, rim_motion=motion, record_every=10)
+    assert run.contact_fz_n.max() == 0.0
+    late = run.time_s > 0.7
+    force = (run.rim_fx_n if axis == 0 else run.rim_fz_n)[late].mean()
+    assert force == pytest.approx(-tire_mass * a, rel=5e-3)
+    other = (run.rim_fz_n if axis == 0 else run.rim_fx_n)[late].mean()
+    assert abs(other) < 1e-3 * tire_mass * a
+
+
+def test_a_rim_raised_slowly_unloads_the_tire_as_the_static_solve_says():
+    """At rest the rim raised 3 mm over 0.1 s: the footprint settles at the static state of
+    the tire pressed 3 mm less, solved directly."""
+    n, lift = 60, 0.003
+    deflection = deflection_for_load(MODEL, DEFAULT_LOAD_N, n, point_spacing_m=SPACING)
+    sim = InPlaneSimulator(MODEL, n, 0.0, deflection, point_spacing_m=SPACING, wheel="held")
+    run = sim.run(0.6, rim_motion=smooth_motion(3, lift, 0.1), record_every=10)
+    lower = InPlaneSimulator(MODEL, n, 0.0, deflection - lift, point_spacing_m=SPACING,
+                             wheel="held")
+    settled = run.time_s > 0.5
+    assert run.rim_fz_n[settled].mean() == pytest.approx(lower.static_load_n(), rel=2e-3)
+    assert lower.static_load_n() < 0.95 * DEFAULT_LOAD_N
+
+
+def test_a_rim_moving_forward_rolls_as_the_tire_on_a_faster_road():
+    """Rolling at 10 m/s, the rim speeds up by 0.5 m/s (axle moving forward): the free wheel
+    settles at the spin and drag of the tire on a 10.5 m/s road (its steady solve)."""
+    n, extra = 60, 0.5
+    deflection = deflection_for_load(MODEL, DEFAULT_LOAD_N, n, point_spacing_m=SPACING)
+    sim = InPlaneSimulator(MODEL, n, 10.0, deflection, point_spacing_m=SPACING)
+
+    def motion(t):  # the rim's speed rises smoothly by `extra` over 0.05 s, then holds
+        x = min(t / 0.05, 1.0)
+        v = extra * x * x * (3 - 2 * x)
+        a = extra * 6 * x * (1 - x) / 0.05 if t < 0.05 else 0.0
+        distance = extra * 0.05 * (x**3 - x**4 / 2) if t < 0.05 else (
+            extra * 0.025 + extra * (t - 0.05))
+        return (distance, v, a, 0.0, 0.0, 0.0)
+
+    run = sim.run(0.6, rim_motion=motion, record_every=10)
+    faster = steady_rolling(InPlaneSimulator(MODEL, n, 10.0 + extra, deflection,
+                                             point_spacing_m=SPACING), 0.0)
+    settled = run.time_s > 0.45
+    assert run.spin_rad_s[settled].mean() == pytest.approx(faster.spin_rad_s, rel=2e-4)
+    assert run.rim_fx_n[settled].mean() == pytest.approx(faster.rim_fx_n, rel=0.03)

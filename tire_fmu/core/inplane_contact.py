@@ -210,6 +210,11 @@ class InPlaneSimulator:
             to_abs = to_abs @ basis
             ny = basis.shape[1]
         self._ring, self._zone, self._to_abs = ring, zone, to_abs
+        # the rim's translation (x, z) as the host moves it: the whole tire moved rigidly.
+        # Rigid translation stores no force (K and C annihilate it, at any spin), so on the
+        # rim-relative coordinates it enters through the inertia alone: -to_absᵀ M P r̈
+        translation = np.stack([ring.rigid_motion(x_m=1.0), ring.rigid_motion(z_m=1.0)], 1)
+        self._rim_inertia = to_abs.T @ ring.mass @ translation
         # the rim's rows of the tire's forces (InPlaneRing.rim_force), as polynomials in spin
         rows_k = [r.stiffness[-3:] for r in rings]
         rows_c = [r.damping[-3:] for r in rings]
@@ -218,7 +223,8 @@ class InPlaneSimulator:
                                       tang.wheel_inertia_kg_m2])
         rk0, rk1, rk2 = quadratic_in_spin(*rows_k)
         self._rim_rows = {"k0": rk0, "k1": rk1, "k2": rk2,
-                          "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows}
+                          "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows,
+                          "m_translation": mass_rows @ translation}
         self._m, self._spin_terms = mass, spin_terms
         self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
         self._kn = zone.stiffness_n_per_m
@@ -302,8 +308,8 @@ class InPlaneSimulator:
 
     # ----- stepping -----
     def run(self, duration_s: float, torque_n_m=None, record_every: int = 1,
-            progress=None, speed_m_s=None, vehicle_mass_kg: float | None = None
-            ) -> InPlaneRun:
+            progress=None, speed_m_s=None, vehicle_mass_kg: float | None = None,
+            rim_motion=None) -> InPlaneRun:
         """Step from the static state (rolling starts at t = 0) for ``duration_s``.
         ``torque_n_m`` (a constant or a function of time) turns the wheel (+ in the direction
         of rotation; a brake is negative). ``speed_m_s``, a function of time, changes the
@@ -312,13 +318,25 @@ class InPlaneSimulator:
         :data:`SPIN_REBUILD_FRACTION` (every step with the wheel held, whose spin is V/R).
         ``vehicle_mass_kg`` instead lets the road's speed be the vehicle's, which the tire's
         fore-aft force on the axle drives (m dV/dt = Fx, the axle's height held): a braking
-        or driven quarter car in the fore-aft direction."""
+        or driven quarter car in the fore-aft direction.
+
+        ``rim_motion``, a function of time giving (x, vx, ax, z, vz, az) (m, m/s, m/s²; x
+        forward, z up), moves the rim from its held position, as a host moves the axle: the
+        road under the points is then h - z (and its rate h' - vz) along the rays, the road's
+        speed against the axle V + vx, and the tire's inertia loads the ring
+        (-to_absᵀ M P r̈, P the rigid translation); rim_Fx and rim_Fz include it. It should
+        start at rest at 0: the run starts from the static state."""
         if speed_m_s is not None and vehicle_mass_kg is not None:
             raise ValueError("run: give speed_m_s (a road) or vehicle_mass_kg (a vehicle)")
         if vehicle_mass_kg is not None and not (math.isfinite(vehicle_mass_kg)
                                                 and vehicle_mass_kg > 0):
             raise ParameterError([Problem("vehicle_mass_kg", vehicle_mass_kg, "kg", "> 0 kg")])
         h, ny = self.step_s, self._ny
+
+        def rim_at(t):
+            return np.zeros(6) if rim_motion is None else np.asarray(rim_motion(t), float)
+
+        rim = rim_at(0.0)
         self._set_spin(self.spin_rad_s, self.speed_m_s)
         speed_now, distance = self.speed_m_s, 0.0
         steps = int(round(duration_s / h))
@@ -326,8 +344,8 @@ class InPlaneSimulator:
         y = self.static_state()
         yd, ydd = np.zeros(ny), np.zeros(ny)
         e = np.zeros(self._zone.n_points)
-        ring_forces = self._contact_and_rates(y, yd, e, 0.0)
-        ydd = np.linalg.solve(self._m, self._f_ext(0.0, torque) + ring_forces[0]
+        ring_forces = self._contact_and_rates(y, yd, e, 0.0, rim)
+        ydd = np.linalg.solve(self._m, self._f_ext(0.0, torque, rim) + ring_forces[0]
                               - self._c @ yd - self._k @ y)
         contact, stick, slip_sign = ring_forces[1], ring_forces[2], ring_forces[3]
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
@@ -347,23 +365,31 @@ class InPlaneSimulator:
                 yd = self._follow_spin(yd, speed_now)
             else:
                 distance = self.speed_m_s * time
-            height, rate = self.road(time, distance)
+                if rim_motion is not None and self._free_spin:
+                    # the axle's own fore-aft speed changes the free wheel's spin: follow it
+                    yd = self._follow_spin(yd, self.speed_m_s)
+            rim_old, rim = rim, rim_at(time)
+            height, rate = self.road(time, distance + rim[0])
+            height, rate = height - rim[3], rate - rim[4]
             s_old = self._slip(y, yd)
             # the element field carried back by Ωh through the points (zero ahead of them)
             e_conv = self._carry @ e
             r = 2.0 / h * y + yd
             b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
-                  + self._f_ext(time, torque))
+                  + self._f_ext(time, torque, rim))
             pen_const = self._pen0 + height * self._sec
             a_n = self._kn + 2.0 * self._cn / h
             beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
             # e = e_conv + h/2 (s_n + s_{n+1}), s = (the ring part) + s0
-            gamma = e_conv + 0.5 * h * (s_old - self._jxw @ r) + h * self._s0
+            # (the rim's forward speed adds to the road's against the axle)
+            s0_new = self._s0 + rim[1]
+            gamma = (e_conv + 0.5 * h * (s_old - self._jxw @ r)
+                     + 0.5 * h * (self._s0 + rim_old[1] + s0_new))
             # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
             # so each pass solves for the 2P forces only (module doc: point laws)
             z0 = self._a0_inv @ b0
             n_z0 = self._jn @ z0
-            t0 = self._kx * gamma + self._cx * (self._s0 - self._jxw @ r)
+            t0 = self._kx * gamma + self._cx * (s0_new - self._jxw @ r)
             t_z0 = t0 + self._kg @ z0
             for passes in range(MAX_SET_PASSES):
                 f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, n_z0,
@@ -394,18 +420,18 @@ class InPlaneSimulator:
             ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
             y, yd = y_new, yd_new
             if vehicle_mass_kg is not None:
-                fx_axle = self.rim_force(y, yd, ydd)[0]
+                fx_axle = self.rim_force(y, yd, ydd, rim)[0]
             f_n = np.where(contact, f_n, 0.0)
             e = np.where(contact, np.where(stick, e_trial,
                                            slip_sign * limit / np.maximum(self._kx, 1e-300)),
                          0.0)
             if i % record_every == 0:
                 f_x = -self._kx * e
-                rim = self.rim_force(y, yd, ydd)
+                rim_f = self.rim_force(y, yd, ydd, rim)
                 records["time_s"].append(time)
-                records["rim_fx_n"].append(rim[0])
-                records["rim_fz_n"].append(rim[1])
-                records["rim_my_n_m"].append(rim[2])
+                records["rim_fx_n"].append(rim_f[0])
+                records["rim_fz_n"].append(rim_f[1])
+                records["rim_my_n_m"].append(rim_f[2])
                 records["contact_fz_n"].append(f_n.sum())
                 records["contact_fx_n"].append(f_x.sum())
                 records["spin_rad_s"].append(self._spin_now + (yd[-1] if self._free_spin
@@ -466,18 +492,21 @@ class InPlaneSimulator:
             self._s0 = speed - self._spin_now * self.model.tire.R * self._cos
         return yd
 
-    def _f_ext(self, time_s, torque) -> np.ndarray:
+    def _f_ext(self, time_s, torque, rim=None) -> np.ndarray:
         f = np.zeros(self._ny)
         if self._free_spin:
             f[-1] = torque(time_s) if callable(torque) else torque
+        if rim is not None:
+            f -= self._rim_inertia @ rim[[2, 5]]
         return f
 
     def _slip(self, y, yd) -> np.ndarray:
         """Fore-aft velocity of the tread at each point relative to the road, less s0."""
         return self._jxw @ yd + self._spin_now * (self._jl @ y)
 
-    def _contact_and_rates(self, y, yd, e, time_s):
-        height, rate = self.road(time_s)
+    def _contact_and_rates(self, y, yd, e, time_s, rim):
+        height, rate = self.road(time_s, self.speed_m_s * time_s + rim[0])
+        height, rate = height - rim[3], rate - rim[4]
         pen = self._pen0 + height * self._sec + self._jn @ y
         f_n = np.where(pen > 0, np.maximum(self._kn * pen + self._cn * (self._jn @ yd
                                                                         + rate * self._sec),
@@ -486,14 +515,17 @@ class InPlaneSimulator:
         contact = f_n > 0
         return forces, contact, np.ones_like(contact), np.ones(contact.size)
 
-    def rim_force(self, y, yd, ydd=None) -> np.ndarray:
+    def rim_force(self, y, yd, ydd=None, rim=None) -> np.ndarray:
         """(Fx, Fz, My) the tire puts on the rim (N, N, N m): the rim's rows of the tire's
-        forces at the current spin (:meth:`InPlaneRing.rim_force`)."""
+        forces at the current spin (:meth:`InPlaneRing.rim_force`); ``rim`` (x, vx, ax, z, vz,
+        az) adds the inertia of the rim's translation."""
         rows, o = self._rim_rows, self._spin_now
         f = (rows["k0"] + o * rows["k1"] + o**2 * rows["k2"]) @ (self._to_abs @ y)
         f += (rows["c0"] + o * rows["c1"]) @ (self._to_abs @ yd)
         if ydd is not None:
             f += rows["m"] @ (self._to_abs @ ydd)
+        if rim is not None:
+            f += rows["m_translation"] @ rim[[2, 5]]
         return -f
 
     def static_load_n(self) -> float:
