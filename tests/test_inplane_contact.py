@@ -420,3 +420,43 @@ def test_a_rim_moving_forward_rolls_as_the_tire_on_a_faster_road():
     settled = run.time_s > 0.45
     assert run.spin_rad_s[settled].mean() == pytest.approx(faster.spin_rad_s, rel=2e-4)
     assert run.rim_fx_n[settled].mean() == pytest.approx(faster.rim_fx_n, rel=0.03)
+
+
+def test_a_host_stepping_the_tire_gets_the_runs_forces():
+    """InPlaneStepper, given the rim's position and velocity at the end of each 1 ms
+    communication step: on a motion the step's cubic holds exactly (a cubic in time), the
+    same forces as the run told the motion itself, over a cleat with a brake torque; on a
+    smooth motion that is not cubic, within the interpolation's small error."""
+    from tire_fmu.core.inplane_contact import InPlaneStepper
+
+    n = 60
+    deflection = deflection_for_load(MODEL, DEFAULT_LOAD_N, n, point_spacing_m=SPACING)
+
+    def sim():
+        return InPlaneSimulator(MODEL, n, 10.0, deflection, point_spacing_m=SPACING,
+                                obstacle=cleat(0.02, 0.02), obstacle_ahead_m=0.6)
+
+    w = 2 * np.pi * 3.0
+
+    def cubic(t):  # up 3 mm and forward 0.6 mm over 0.15 s, from rest
+        c = 0.003 / 0.15**3
+        return (0.2 * c * t**3, 0.6 * c * t**2, 1.2 * c * t, c * t**3, 3 * c * t**2, 6 * c * t)
+
+    def smooth(t):
+        s, co = np.sin(w * t), np.cos(w * t)
+        z = (0.003 * s**3, 0.009 * w * s * s * co, 0.009 * w * w * (2 * s * co * co - s**3))
+        return (*(0.2 * v for v in z), *z)
+
+    for motion, bound in ((cubic, 1e-9), (smooth, 1e-3)):
+        run = sim().run(0.15, rim_motion=motion, torque_n_m=-1000.0)
+        host = InPlaneStepper(sim(), torque_n_m=-1000.0)
+        outputs = []
+        for k in range(1, 151):
+            m = motion(k * 1e-3)
+            outputs.append(host.advance(1e-3, m[0], m[1], m[3], m[4], torque_n_m=-1000.0))
+        for name in ("rim_fx_n", "rim_fz_n", "rim_my_n_m"):
+            hosted = np.array([getattr(o, name) for o in outputs])
+            told = getattr(run, name)[9::10]
+            assert np.max(np.abs(hosted - told)) < bound * np.ptp(told), (motion, name)
+    with pytest.raises(ParameterError, match="step_s = 0.00015 s"):
+        host.advance(1.5e-4)

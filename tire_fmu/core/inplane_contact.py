@@ -107,6 +107,21 @@ class InPlaneRun:
 
 
 @dataclass
+class StepState:
+    """What a step carries to the next: the ring's coordinates, rates and accelerations, the
+    tread elements' deflections, the contact and stick sets and the points' normal forces."""
+
+    y: np.ndarray
+    yd: np.ndarray
+    ydd: np.ndarray
+    e: np.ndarray
+    contact: np.ndarray
+    stick: np.ndarray
+    slip_sign: np.ndarray
+    f_n: np.ndarray
+
+
+@dataclass
 class InPlaneSimulator:
     """Unreduced in-plane tire on a road moving at ``speed_m_s`` under a held axle.
 
@@ -347,7 +362,7 @@ class InPlaneSimulator:
         ring_forces = self._contact_and_rates(y, yd, e, 0.0, rim)
         ydd = np.linalg.solve(self._m, self._f_ext(0.0, torque, rim) + ring_forces[0]
                               - self._c @ yd - self._k @ y)
-        contact, stick, slip_sign = ring_forces[1], ring_forces[2], ring_forces[3]
+        state = StepState(y, yd, ydd, e, *ring_forces[1:4], np.zeros(e.size))
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
         fx_axle = 0.0
         for i in range(1, steps + 1):
@@ -362,69 +377,20 @@ class InPlaneSimulator:
                                                   "in [0, 150] m/s", f"at t = {time:g} s")])
                 distance += 0.5 * h * (speed_now + speed_new)
                 speed_now = speed_new
-                yd = self._follow_spin(yd, speed_now)
+                state.yd = self._follow_spin(state.yd, speed_now)
             else:
                 distance = self.speed_m_s * time
                 if rim_motion is not None and self._free_spin:
                     # the axle's own fore-aft speed changes the free wheel's spin: follow it
-                    yd = self._follow_spin(yd, self.speed_m_s)
+                    state.yd = self._follow_spin(state.yd, self.speed_m_s)
             rim_old, rim = rim, rim_at(time)
             height, rate = self.road(time, distance + rim[0])
             height, rate = height - rim[3], rate - rim[4]
-            s_old = self._slip(y, yd)
-            # the element field carried back by Ωh through the points (zero ahead of them)
-            e_conv = self._carry @ e
-            r = 2.0 / h * y + yd
-            b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
-                  + self._f_ext(time, torque, rim))
-            pen_const = self._pen0 + height * self._sec
-            a_n = self._kn + 2.0 * self._cn / h
-            beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
-            # e = e_conv + h/2 (s_n + s_{n+1}), s = (the ring part) + s0
-            # (the rim's forward speed adds to the road's against the axle)
-            s0_new = self._s0 + rim[1]
-            gamma = (e_conv + 0.5 * h * (s_old - self._jxw @ r)
-                     + 0.5 * h * (self._s0 + rim_old[1] + s0_new))
-            # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
-            # so each pass solves for the 2P forces only (module doc: point laws)
-            z0 = self._a0_inv @ b0
-            n_z0 = self._jn @ z0
-            t0 = self._kx * gamma + self._cx * (s0_new - self._jxw @ r)
-            t_z0 = t0 + self._kg @ z0
-            for passes in range(MAX_SET_PASSES):
-                f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, n_z0,
-                                              t_z0)
-                y_new = z0 - self._yn @ f_n + self._yx @ f_x
-                pen = pen_const + self._jn @ y_new
-                f_trial = a_n * (self._jn @ y_new) + beta_n
-                e_trial = gamma + self._gain @ y_new
-                tread = t0 + self._kg @ y_new  # the element's pull on the belt, backwards
-                new_contact = (pen > 0) & (f_trial > 0)
-                limit = self._mu * np.maximum(f_trial, 0.0)
-                new_stick = np.abs(tread) <= limit * (1 + 1e-12)
-                new_sign = np.where(new_stick, slip_sign, np.sign(tread))
-                if passes >= SETTLE_PASSES:
-                    # a set that cycles (a point sliding, then sticking at the limit, ...):
-                    # from here a sliding point slides on and a point that let go stays off,
-                    # so the sets can only shrink and the passes end
-                    new_stick &= stick | ~contact
-                    new_contact &= contact
-                if sets_settled((contact, stick, slip_sign), (new_contact, new_stick, new_sign)):
-                    break
-                contact, stick, slip_sign = new_contact, new_stick, new_sign
-            else:
-                raise ContactSetError(f"step at t = {time:g} s: the contact and stick sets "
-                                      f"did not settle in {MAX_SET_PASSES} passes")
-            f_n = f_trial
-            yd_new = 2.0 / h * (y_new - y) - yd
-            ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
-            y, yd = y_new, yd_new
+            state = self._step(state, time, torque, rim_old, rim, height, rate)
+            y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
+            contact, stick, f_n = state.contact, state.stick, state.f_n
             if vehicle_mass_kg is not None:
                 fx_axle = self.rim_force(y, yd, ydd, rim)[0]
-            f_n = np.where(contact, f_n, 0.0)
-            e = np.where(contact, np.where(stick, e_trial,
-                                           slip_sign * limit / np.maximum(self._kx, 1e-300)),
-                         0.0)
             if i % record_every == 0:
                 f_x = -self._kx * e
                 rim_f = self.rim_force(y, yd, ydd, rim)
@@ -442,6 +408,67 @@ class InPlaneSimulator:
                 progress(i, steps)
         self._state = {"y": y, "yd": yd, "e": e}
         return InPlaneRun(**{k: np.asarray(v) for k, v in records.items()})
+
+    def _step(self, state: StepState, time, torque, rim_old, rim, height, rate) -> StepState:
+        """One trapezoidal step to ``time`` from ``state``: the road under the points
+        (``height``, ``rate``, the rim's z already taken off), the rim's motion before and
+        after (x, vx, ax, z, vz, az) and the torque. Returns the new state."""
+        h = self.step_s
+        y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
+        contact, stick, slip_sign = state.contact, state.stick, state.slip_sign
+        s_old = self._slip(y, yd)
+        # the element field carried back by Ωh through the points (zero ahead of them)
+        e_conv = self._carry @ e
+        r = 2.0 / h * y + yd
+        b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
+              + self._f_ext(time, torque, rim))
+        pen_const = self._pen0 + height * self._sec
+        a_n = self._kn + 2.0 * self._cn / h
+        beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
+        # e = e_conv + h/2 (s_n + s_{n+1}), s = (the ring part) + s0
+        # (the rim's forward speed adds to the road's against the axle)
+        s0_new = self._s0 + rim[1]
+        gamma = (e_conv + 0.5 * h * (s_old - self._jxw @ r)
+                 + 0.5 * h * (self._s0 + rim_old[1] + s0_new))
+        # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
+        # so each pass solves for the 2P forces only (module doc: point laws)
+        z0 = self._a0_inv @ b0
+        n_z0 = self._jn @ z0
+        t0 = self._kx * gamma + self._cx * (s0_new - self._jxw @ r)
+        t_z0 = t0 + self._kg @ z0
+        for passes in range(MAX_SET_PASSES):
+            f_n, f_x = self._point_forces(contact, stick, slip_sign, a_n, beta_n, n_z0,
+                                          t_z0)
+            y_new = z0 - self._yn @ f_n + self._yx @ f_x
+            pen = pen_const + self._jn @ y_new
+            f_trial = a_n * (self._jn @ y_new) + beta_n
+            e_trial = gamma + self._gain @ y_new
+            tread = t0 + self._kg @ y_new  # the element's pull on the belt, backwards
+            new_contact = (pen > 0) & (f_trial > 0)
+            limit = self._mu * np.maximum(f_trial, 0.0)
+            new_stick = np.abs(tread) <= limit * (1 + 1e-12)
+            new_sign = np.where(new_stick, slip_sign, np.sign(tread))
+            if passes >= SETTLE_PASSES:
+                # a set that cycles (a point sliding, then sticking at the limit, ...):
+                # from here a sliding point slides on and a point that let go stays off,
+                # so the sets can only shrink and the passes end
+                new_stick &= stick | ~contact
+                new_contact &= contact
+            if sets_settled((contact, stick, slip_sign), (new_contact, new_stick, new_sign)):
+                break
+            contact, stick, slip_sign = new_contact, new_stick, new_sign
+        else:
+            raise ContactSetError(f"step at t = {time:g} s: the contact and stick sets "
+                                  f"did not settle in {MAX_SET_PASSES} passes")
+        f_n = f_trial
+        yd_new = 2.0 / h * (y_new - y) - yd
+        ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
+        y, yd = y_new, yd_new
+        f_n = np.where(contact, f_n, 0.0)
+        e = np.where(contact, np.where(stick, e_trial,
+                                       slip_sign * limit / np.maximum(self._kx, 1e-300)),
+                     0.0)
+        return StepState(y, yd, ydd, e, contact, stick, slip_sign, f_n)
 
     def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, n_z0, t_z0):
         """(f_n, f_x) of the step for given sets: the point laws with y eliminated, solved
@@ -531,6 +558,96 @@ class InPlaneSimulator:
     def static_load_n(self) -> float:
         """The vertical load the deflection carries at rest (N)."""
         return float(self.rim_force(self.static_state(), np.zeros(self._ny))[1])
+
+
+def hermite(p0, v0, p1, v1, duration_s: float, tau: float) -> tuple[float, float, float]:
+    """(position, velocity, acceleration) at ``tau`` into a step of ``duration_s`` on the
+    cubic through the step's end values and rates: exact for cubic motion, and the
+    velocity and acceleration are the position's own derivatives."""
+    u, d = tau / duration_s, duration_s
+    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, (
+        u**3 - u**2)
+    g00, g10, g01, g11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, (
+        3 * u**2 - 2 * u)
+    a00, a10, a01, a11 = 12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2
+    position = h00 * p0 + h10 * d * v0 + h01 * p1 + h11 * d * v1
+    velocity = (g00 * p0 + g10 * d * v0 + g01 * p1 + g11 * d * v1) / d
+    acceleration = (a00 * p0 + a10 * d * v0 + a01 * p1 + a11 * d * v1) / d**2
+    return position, velocity, acceleration
+
+
+@dataclass(frozen=True)
+class InPlaneOutputs:
+    """What a host reads after a step (SI): the forces and moment on the rim, the road's
+    totals on the tread, the wheel's spin and the points sliding."""
+
+    rim_fx_n: float
+    rim_fz_n: float
+    rim_my_n_m: float
+    contact_fz_n: float
+    contact_fx_n: float
+    spin_rad_s: float
+    sliding_points: int
+
+
+class InPlaneStepper:
+    """:class:`InPlaneSimulator` stepped by a host one communication step at a time, as an
+    FMU steps: the host gives the rim's fore-aft and vertical position and velocity (x, vx,
+    z, vz; m, m/s, deviations from the static state, x forward, z up) at the end of each
+    step and the torque on the wheel over it; inside, the simulator's steps follow the cubic
+    through the step's end values (:func:`hermite`), so a motion the host integrates at
+    second order or better is met exactly where it is cubic. The road is the simulator's
+    (its obstacle, at its speed); a free wheel's spin follows the axle's speed."""
+
+    def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0):
+        """Start from the static state, with ``torque_n_m`` on the wheel at t = 0."""
+        self.sim = sim
+        sim._set_spin(sim.spin_rad_s, sim.speed_m_s)
+        ny = sim._ny
+        y = sim.static_state()
+        e = np.zeros(sim._zone.n_points)
+        self._rim = np.zeros(6)
+        forces = sim._contact_and_rates(y, np.zeros(ny), e, 0.0, self._rim)
+        ydd = np.linalg.solve(sim._m, sim._f_ext(0.0, torque_n_m, self._rim) + forces[0]
+                              - sim._k @ y)
+        self.state = StepState(y, np.zeros(ny), ydd, e, *forces[1:4], np.zeros(e.size))
+        self.steps = 0
+        self._end = np.zeros(4)  # x, vx, z, vz at the end of the last step
+
+    @property
+    def time_s(self) -> float:
+        return self.steps * self.sim.step_s
+
+    def advance(self, step_s: float, x_m: float = 0.0, vx_m_s: float = 0.0, z_m: float = 0.0,
+                vz_m_s: float = 0.0, torque_n_m: float = 0.0) -> InPlaneOutputs:
+        """Advance by ``step_s`` (a whole number of the simulator's steps) to the rim's
+        state given for the step's end; returns the outputs there."""
+        sim, h = self.sim, self.sim.step_s
+        count = int(round(step_s / h))
+        if count < 1 or abs(count * h - step_s) > 1e-9 * max(step_s, h):
+            raise ParameterError([Problem("step_s", step_s, "s",
+                                          f"a whole multiple of the simulator's step {h:g} s")])
+        start, end = self._end, np.array([x_m, vx_m_s, z_m, vz_m_s], dtype=float)
+        rim = self._rim
+        for k in range(1, count + 1):
+            self.steps += 1
+            time = self.steps * h
+            x = hermite(start[0], start[1], end[0], end[1], step_s, k * h)
+            z = hermite(start[2], start[3], end[2], end[3], step_s, k * h)
+            rim_old, rim = rim, np.array([*x, *z])
+            if sim._free_spin:
+                self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
+            height, rate = sim.road(time, sim.speed_m_s * time + rim[0])
+            self.state = sim._step(self.state, time, torque_n_m, rim_old, rim,
+                                   height - rim[3], rate - rim[4])
+        self._rim, self._end = rim, end
+        st = self.state
+        fx, fz, my = sim.rim_force(st.y, st.yd, st.ydd, rim)
+        return InPlaneOutputs(
+            float(fx), float(fz), float(my), float(st.f_n.sum()),
+            float(-(sim._kx * st.e).sum()),
+            float(sim._spin_now + (st.yd[-1] if sim._free_spin else 0.0)),
+            int(np.sum(st.contact & ~st.stick)))
 
 
 @dataclass(frozen=True, eq=False)
