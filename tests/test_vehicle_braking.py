@@ -1,5 +1,5 @@
-"""vehicle_demo braking: the fore-aft quarter car with the in-plane tire, and the sampled road
-profile it runs on.
+"""vehicle_demo braking: the quarter car hosting the in-plane tire step by step, and the
+sampled road profile it runs on.
 
 The run is checked against the laws it is built from, written here apart from the code: the
 vehicle's momentum (m ΔV = ∫ Fx dt) and the wheel's angular momentum (I_w dω/dt = T + My,
@@ -82,10 +82,12 @@ def test_braking_on_a_level_road_slips_where_the_steady_solve_says(braking):
     settings, summary = braking
     level = summary.runs[0].summary(summary.settled_after_s)
     # the steady solve rolls at a constant speed; decelerating, the turning tread and wheel
-    # take a share of the torque, so the run's drag and slip are a few % smaller
+    # take a share of the torque and the rim's Fx leaves out the force that slows the tire's
+    # own mass, so the run's drag and slip are a few % to about 10 % smaller
     assert level["mean_slip_ratio"] < 0 and summary.steady_slip_ratio < 0
     assert level["mean_slip_ratio"] == pytest.approx(summary.steady_slip_ratio, rel=0.2)
-    assert level["mean_fx_n"] == pytest.approx(summary.steady_fx_n, rel=0.08)
+    assert abs(level["mean_fx_n"]) < abs(summary.steady_fx_n)
+    assert level["mean_fx_n"] == pytest.approx(summary.steady_fx_n, rel=0.12)
     # the cleat shakes Fz far beyond the level road's, the rough road in between
     spans = [s["fz_max_n"] - s["fz_min_n"] for s in
              (run.summary(summary.settled_after_s) for run in summary.runs)]

@@ -1,11 +1,12 @@
 """The braking quarter car with the in-plane tire: ``python -m vehicle_demo braking``.
 
-The wheel is a body that turns (its inertia, the tire's moment about the axle and a brake
-torque) and the vehicle a mass that the tire's fore-aft force at the axle slows
-(m dV/dt = Fx): :meth:`tire_fmu.core.inplane_contact.InPlaneSimulator.run` with
-``vehicle_mass_kg``. The axle's height is held at the static deflection of the load (the
-vertical suspension is the ride demo's, ``python -m vehicle_demo``): this is the fore-aft
-quarter car, the one a brake or an ABS controller sees.
+The ride demo's corner (body, wheel and suspension; :class:`QuarterCarParameters`) rolling
+and braking on the in-plane tire, run as an FMU host runs a tire: every communication step
+the host integrates the body and the wheel under the tire's last vertical force and the
+vehicle's speed under its last fore-aft force (m dV/dt = Fx, m = load/g), then advances the
+tire (:class:`tire_fmu.core.inplane_contact.InPlaneStepper`) with the wheel's height and the
+axle's fore-aft motion at the step's end and the brake torque. The wheel's rotation is the
+tire's (the wheel's inertia, the tire's moment and the torque); its spin comes back.
 
 Three braking runs from the same speed, the brake torque ramped in after rolling settles:
 on a level road (the slip it settles at beside :func:`.steady_rolling`'s solve for the same
@@ -57,6 +58,8 @@ class BrakingSettings:
     cleat_length_m: float = 0.02
     cleat_at_s: float = 0.7  # when the cleat meets the contact centre, about
     cleat_test_speed_m_s: float = 10.0
+    #: the host's communication step with the tire
+    communication_step_s: float = 1e-3
     n_elements: int = 100
     point_spacing_m: float = 0.01
     step_s: float = 1e-4
@@ -70,6 +73,13 @@ class BrakingSettings:
         values = dict(n_elements=60, duration_s=0.6, cleat_at_s=0.4, road_fade_in_m=1.0)
         values.update(overrides)
         return cls(**values)
+
+    @property
+    def quarter_car(self):
+        """The ride demo's corner (vehicle_demo's QuarterCarParameters) carrying load_n."""
+        from .vehicle_demo_quarter_car_dynamics import QuarterCarParameters
+
+        return QuarterCarParameters().with_static_load(self.load_n)
 
     @property
     def mass_kg(self) -> float:
@@ -109,6 +119,11 @@ class BrakingSettings:
         within("cleat_test_speed_m_s", 0.5, 60.0, "m/s")
         within("point_spacing_m", 1e-3, 0.05, "m")
         within("step_s", 1e-6, 1e-3, "s")
+        within("communication_step_s", 1e-5, 1e-2, "s")
+        if not found:  # a communication step a whole number of the tire's steps
+            ratio = self.communication_step_s / self.step_s
+            check("communication_step_s", abs(ratio - round(ratio)) < 1e-9 * ratio, "s",
+                  f"a whole multiple of step_s = {self.step_s:g} s")
         within("f_max_hz", 50.0, 1e5, "Hz")
         from vehicle_demo.road import ISO_8608_GD_N0_M3
 
@@ -200,14 +215,49 @@ def rough_road(settings: BrakingSettings):
 
 
 def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
-    run = sim.run(settings.duration_s, torque_n_m=torque, vehicle_mass_kg=settings.mass_kg,
-                  progress=bar)
+    """The quarter car as an FMU host runs a tire: each communication step it integrates the
+    body and wheel (their exact discrete map over the step, the tire's last Fz held) and the
+    vehicle's speed (the tire's last Fx), then advances the tire with the wheel's height and
+    the axle's fore-aft motion at the step's end and the brake torque
+    (:class:`tire_fmu.core.inplane_contact.InPlaneStepper`)."""
+    from scipy.linalg import expm
+
+    from tire_fmu.core.inplane_contact import InPlaneStepper
+
+    from .vehicle_demo_quarter_car_dynamics import two_mass_state_space
+
+    car, dt = settings.quarter_car, settings.communication_step_s
+    a, b = two_mass_state_space(car.body_mass_kg, car.wheel_mass_kg,
+                                car.suspension_stiffness_n_per_m,
+                                car.suspension_damping_n_s_per_m)
+    block = np.zeros((5, 5))
+    block[:4, :4], block[:4, 4] = a, b
+    exact = expm(block * dt)  # x(t + dt) = Φ x + Γ ΔF for ΔF held over the step
+    phi, gamma = exact[:4, :4], exact[:4, 4]
+    host = InPlaneStepper(sim, torque(0.0))
+    steps = int(round(settings.duration_s / dt))
     radius = sim.model.tire.R
-    wheel = run.spin_rad_s * radius
+    x = np.zeros(4)  # body and wheel: z_b, ż_b, z_w, ż_w from the static equilibrium
+    v0 = speed = settings.speed_m_s
+    ahead = 0.0  # the axle's travel beyond v0 t
+    fz, fx = settings.load_n, 0.0
+    rows = []
+    for k in range(1, steps + 1):
+        x = phi @ x + gamma * (fz - settings.load_n)
+        new_speed = speed + dt * fx / settings.mass_kg
+        ahead += dt * (0.5 * (speed + new_speed) - v0)
+        speed = new_speed
+        if speed < 0.5:
+            break  # the vehicle has (nearly) stopped: slip is undefined from here
+        out = host.advance(dt, ahead, speed - v0, x[2], x[3], torque(k * dt))
+        fz, fx = out.rim_fz_n, out.rim_fx_n
+        rows.append((k * dt, fx, fz, out.rim_my_n_m, out.spin_rad_s * radius, speed,
+                     torque(k * dt), out.sliding_points, x[1], x[2]))
+        bar(k, steps)
+    t, fx_, fz_, my, wheel, vehicle, applied, sliding, _, _ = (np.array(c) for c in zip(*rows))
     road = "level road" if sim.obstacle is None else sim.obstacle.label
-    return BrakingRun(name, road, run.time_s, run.rim_fx_n, run.rim_fz_n, run.rim_my_n_m,
-                      wheel / run.speed_m_s - 1.0, wheel, run.speed_m_s,
-                      np.array([torque(t) for t in run.time_s]), run.sliding_points)
+    return BrakingRun(name, road, t, fx_, fz_, my, wheel / vehicle - 1.0, wheel, vehicle,
+                      applied, sliding.astype(int))
 
 
 def run_braking(settings: BrakingSettings | None = None, log=print,
@@ -243,7 +293,7 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     cases = [("level road", None, ROAD_AHEAD_M),
              (f"ISO 8608 class {settings.road_class}", rough_road(settings), ROAD_AHEAD_M),
              ("cleat", cleat(settings.cleat_height_m, settings.cleat_length_m), cleat_ahead)]
-    steps = int(round(settings.duration_s / settings.step_s))
+    steps = int(round(settings.duration_s / settings.communication_step_s))
     runs = []
     for name, road, ahead in cases:
         sim = _simulator(settings, model, deflection, settings.speed_m_s, road, ahead)

@@ -319,5 +319,5 @@ def plot_braking(runs, steady_slip_ratio: float, path) -> Path:
     slip.legend(loc="lower left", fontsize=8)
     for ax in axes:
         ax.grid(alpha=0.3)
-    fx.set_title("Braking quarter car (fore-aft), in-plane tire, axle height held")
+    fx.set_title("Braking quarter car, in-plane tire")
     return _save(fig, path)

@@ -277,17 +277,18 @@ class InPlaneSimulator:
         self._kgn, self._kgx = self._kg @ self._yn, self._kg @ self._yx
         self._carry = carry_matrix(self._zone.point_theta, o * h)
 
-    def road(self, time_s: float, distance_m: float | None = None
-             ) -> tuple[np.ndarray, np.ndarray]:
+    def road(self, time_s: float, distance_m: float | None = None,
+             speed_m_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(height, rate) of the road under each point: the obstacle moves back from
-        ``obstacle_ahead_m`` in front of the contact centre by the road's travel,
-        ``distance_m`` (V t at a constant speed), at the current road speed."""
+        ``obstacle_ahead_m`` in front of the contact centre by the road's travel against the
+        axle, ``distance_m`` (V t at a constant speed), at ``speed_m_s`` (default: the
+        current road speed; a moving rim adds its own)."""
         zero = np.zeros(self._zone.n_points)
         if self.obstacle is None:
             return zero, zero
         travelled = self.speed_m_s * time_s if distance_m is None else distance_m
         edge = self.obstacle_ahead_m - travelled
-        speed = self._speed_now
+        speed = self._speed_now if speed_m_s is None else speed_m_s
 
         def height(at_edge):
             return self.obstacle.mean_height(self._x_lo - at_edge, self._x_hi - at_edge)
@@ -384,7 +385,7 @@ class InPlaneSimulator:
                     # the axle's own fore-aft speed changes the free wheel's spin: follow it
                     state.yd = self._follow_spin(state.yd, self.speed_m_s)
             rim_old, rim = rim, rim_at(time)
-            height, rate = self.road(time, distance + rim[0])
+            height, rate = self.road(time, distance + rim[0], self._speed_now + rim[1])
             height, rate = height - rim[3], rate - rim[4]
             state = self._step(state, time, torque, rim_old, rim, height, rate)
             y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
@@ -532,7 +533,8 @@ class InPlaneSimulator:
         return self._jxw @ yd + self._spin_now * (self._jl @ y)
 
     def _contact_and_rates(self, y, yd, e, time_s, rim):
-        height, rate = self.road(time_s, self.speed_m_s * time_s + rim[0])
+        height, rate = self.road(time_s, self.speed_m_s * time_s + rim[0],
+                                 self._speed_now + rim[1])
         height, rate = height - rim[3], rate - rim[4]
         pen = self._pen0 + height * self._sec + self._jn @ y
         f_n = np.where(pen > 0, np.maximum(self._kn * pen + self._cn * (self._jn @ yd
@@ -637,7 +639,8 @@ class InPlaneStepper:
             rim_old, rim = rim, np.array([*x, *z])
             if sim._free_spin:
                 self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
-            height, rate = sim.road(time, sim.speed_m_s * time + rim[0])
+            height, rate = sim.road(time, sim.speed_m_s * time + rim[0],
+                                    sim._speed_now + rim[1])
             self.state = sim._step(self.state, time, torque_n_m, rim_old, rim,
                                    height - rim[3], rate - rim[4])
         self._rim, self._end = rim, end
