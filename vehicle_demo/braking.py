@@ -271,6 +271,7 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     from tire_fmu.plots import plot_inplane_cleat
 
     from .plots import plot_braking
+    from .progress import advance, step_bar
 
     settings = settings or BrakingSettings()
     found = settings.problems(names)
@@ -297,16 +298,16 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     runs = []
     for name, road, ahead in cases:
         sim = _simulator(settings, model, deflection, settings.speed_m_s, road, ahead)
-        with _bar(steps, settings.progress, f"braking, {name}") as bar:
-            runs.append(_braking_run(name, sim, settings, torque, _advance(bar)))
+        with step_bar(steps, settings.progress, f"braking, {name}") as bar:
+            runs.append(_braking_run(name, sim, settings, torque, advance(bar)))
     # the classic cleat test: the axle held, the wheel free, the road's speed constant
     speed = settings.cleat_test_speed_m_s
     ahead = 0.4
     sim = _simulator(settings, model, deflection, speed,
                      cleat(settings.cleat_height_m, settings.cleat_length_m), ahead)
     duration = (ahead + 0.3 + settings.cleat_length_m) / speed + 0.1
-    with _bar(int(round(duration / settings.step_s)), settings.progress, "cleat test") as bar:
-        test = sim.run(duration, progress=_advance(bar))
+    with step_bar(int(round(duration / settings.step_s)), settings.progress, "cleat test") as bar:
+        test = sim.run(duration, progress=advance(bar))
     on = test.time_s > 0.5 * ahead / speed
 
     def dominant_hz(signal):
@@ -352,19 +353,3 @@ def format_braking(summary: BrakingSummary) -> str:
     lines += [f"wrote {p}" for p in summary.figures]
     lines.append(f"({summary.wall_s:.1f} s)")
     return "\n".join(lines)
-
-
-def _bar(total, enabled, what):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, disable=not enabled, desc=what, unit="step", unit_scale=True,
-                mininterval=0.5)
-
-
-def _advance(bar):
-    def progress(i, steps):
-        bar.n = i
-        if i == steps or i % 500 == 0:
-            bar.refresh()
-
-    return progress

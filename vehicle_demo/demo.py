@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .cosim import FmuPaths, QuarterCarCoSimulation
+from .progress import step_bar
 from .quarter_car import QuarterCarParameters
 from .road import cleat, iso8608_road, pothole
 from .transfer import Multisine
@@ -155,11 +156,6 @@ def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
     return paths
 
 
-def _step_bar(total: int, enabled: bool, what: str):
-    from tqdm.auto import tqdm
-
-    return tqdm(total=total, disable=not enabled, desc=what, unit="step", unit_scale=True,
-                mininterval=0.5)
 
 
 @dataclass(frozen=True)
@@ -301,7 +297,7 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
     # -- transfer functions by co-simulation ------------------------------------------------
     tire_parameters = {"n_elements": settings.n_elements, "speed": settings.tf_speed_m_s}
     _, height, velocity = ex.road(h)
-    with _step_bar(height.size - 1, settings.progress, "transfer functions") as bar, \
+    with step_bar(height.size - 1, settings.progress, "transfer functions") as bar, \
             QuarterCarCoSimulation(fmus, car, tire_parameters, h) as sim:
         tf_run = sim.run(height, velocity, progress=bar.update)
     estimate = estimate_frf(height, ride_outputs(tf_run), ex, h)
@@ -336,7 +332,7 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
     def road_run(profile, speed_m_s, what, figure):
         """Co-simulate one road profile at its speed and plot rim load and contact force."""
         parameters = {"n_elements": settings.n_elements, "speed": speed_m_s}
-        with _step_bar(profile.time_s.size - 1, settings.progress, what) as bar, \
+        with step_bar(profile.time_s.size - 1, settings.progress, what) as bar, \
                 QuarterCarCoSimulation(fmus, car, parameters, h) as sim:
             run = sim.run(profile.height_m, profile.velocity_m_s, progress=bar.update)
         figures.append(plots.plot_road_run(
@@ -364,7 +360,7 @@ def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:
         for law, linear in (("unilateral", False), ("linear", True)):
             parameters = {"n_elements": settings.n_elements, "speed": v,
                           "linear_contact": linear}
-            with _step_bar(profile.time_s.size - 1, settings.progress,
+            with step_bar(profile.time_s.size - 1, settings.progress,
                            f"{name}, {law}") as bar, \
                     QuarterCarCoSimulation(fmus, car, parameters, h) as sim:
                 event_runs[(name, law)] = sim.run(profile.height_m, profile.velocity_m_s,
