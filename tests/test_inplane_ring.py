@@ -249,3 +249,31 @@ def test_command_refuses_bad_tangential_data_in_one_line(capsys):
     assert err.count("\n") == 1 and "EA = -3 N" in err and "k_t2 = 0 N/m^2" in err
     assert main(["inplane-modes", "--tangential", "EA"]) == 2
     assert "expected NAME=VALUE" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("n_elements", [60, 100])
+def test_the_critical_speed_is_where_a_wave_stands_still(n_elements):
+    """inplane_modes.critical_speed solves K_n(Ω) singular exactly. Checked on the rolling
+    ring built at the speed itself (no polynomial in the spin): below it every order has as
+    many ground-frame waves against θ as with it (each frequency of the ring at rest, shifted
+    but not through zero); just above it one wave of the critical order has passed through
+    zero, so it stands still in between. With the lumped radial sidewall it is the radial
+    ring's mesh-bound critical speed (its sidewall band standing still), which the tangential
+    motion barely moves."""
+    from tire_fmu.core.inplane_modes import critical_speed, quadratic_eigenvalues
+    from tire_fmu.core.standing_waves import critical_speed as radial_critical_speed
+
+    model = InPlaneTire()
+    found = critical_speed(model, n_elements)
+    assert found.branch == "radial"
+    assert found.speed_m_s == pytest.approx(
+        radial_critical_speed(model.tire, n_elements).speed_m_s, rel=0.01)
+    undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
+
+    def against_theta(ring, n):
+        return int(np.sum(quadratic_eigenvalues(*order_matrices(ring, n)).imag > 0))
+
+    below, above = (InPlaneRing(undamped, n_elements, spin_rad_s=f * found.spin_rad_s)
+                    for f in (0.99, 1.01))
+    assert all(against_theta(below, n) == below.n_fields for n in range(n_elements // 2 + 1))
+    assert against_theta(above, found.order) != above.n_fields

@@ -214,6 +214,7 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
     import numpy as np
 
     from ..core.inplane import InPlaneRing, InPlaneTire
+    from ..core.inplane_modes import critical_speed as inplane_critical_speed
     from ..core.inplane_modes import order_frequencies_hz, tire_modes
 
     raise_problems([elements_problem(args.elements),
@@ -242,11 +243,16 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
                          ", ".join(f"{x:.2f}" for x in forward)])
             data.append({"order": n, "against_rotation_hz": backward.tolist(),
                          "with_rotation_hz": forward.tolist()})
+        critical = inplane_critical_speed(model, args.elements)
         head = (f"ground-frame frequencies per order at {args.speed:g} m/s, rim held, "
                 f"N = {args.elements}")
+        foot = (f"critical (standing-wave) speed of this mesh, undamped: "
+                f"{critical.speed_m_s:.4g} m/s (order {critical.order}, {critical.branch})"
+                + (": this speed is above it" if args.speed >= critical.speed_m_s else ""))
         return Output(text=head + "\n" + table(rows, ["n", "waves against θ [Hz]",
-                                                       "waves with θ [Hz]"]),
-                      data={"speed_m_s": args.speed, "orders": data})
+                                                       "waves with θ [Hz]"]) + "\n" + foot,
+                      data={"speed_m_s": args.speed, "orders": data,
+                            "critical_speed": critical.to_dict()})
     ring = InPlaneRing(model, args.elements, rim_free=args.rim_free)
     result = tire_modes(ring, f_max_hz=args.max_frequency)
     rows = [[i + 1, m.frequency_hz, m.order, m.kind, m.phase, m.tangential_share]

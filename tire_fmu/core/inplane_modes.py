@@ -10,6 +10,7 @@ and, with a sidewall mass, whether tread and sidewall move in or out of phase.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,3 +128,49 @@ def tire_modes(ring: InPlaneRing, f_max_hz: float | None = None) -> InPlaneModes
     freq, vec = freq[keep], vec[:, keep]
     return InPlaneModes(ring, tuple(_label(ring, vec[:, i], freq[i]) for i in range(len(freq))),
                         vec)
+
+
+def critical_speed(model, n_elements: int):
+    """The lowest speed (m/s) at which a ground-frame frequency of the undamped in-plane ring
+    on this mesh reaches zero: a standing wave under the footprint (the radial ring's
+    :func:`.standing_waves.critical_speed`, here with the tangential motion).
+
+    A root s = 0 of order n means K_n(Ω) singular. K is quadratic in the spin, so the
+    critical spins of order n are the real positive eigenvalues Ω of the quadratic problem
+    (K0 + Ω K1 + Ω² K2) q = 0, solved exactly (generalised companion form, which takes a
+    singular K2); the lowest over the orders is the critical spin. Damping is left out: it
+    makes the crossing a divergence rather than a zero, at the same speed for light damping.
+    Returns a :class:`.standing_waves.CriticalSpeed` whose ``branch`` is the standing
+    wave's kind, "radial" or "tangential" (its kinetic energy's larger part)."""
+    from dataclasses import replace
+
+    from .inplane import InPlaneRing
+    from .standing_waves import CriticalSpeed
+
+    undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
+    rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s) for s in (0.0, 1.0, 2.0)]
+    best = (math.inf, None, None)
+    for n in range(n_elements // 2 + 1):
+        k_at = [order_matrices(r, n)[2] for r in rings]
+        k0, k1, k2 = k_at[0], 0.5 * (4 * k_at[1] - k_at[2] - 3 * k_at[0]), 0.5 * (
+            k_at[2] - 2 * k_at[1] + k_at[0])
+        size = k0.shape[0]
+        left = np.block([[np.zeros((size, size)), np.eye(size)], [-k0, -k1]])
+        right = np.block([[np.eye(size), np.zeros((size, size))],
+                          [np.zeros((size, size)), k2]])
+        spins, vectors = scipy.linalg.eig(left, right)
+        real = np.isfinite(spins) & (np.abs(spins.imag) <= 1e-9 * np.abs(spins)) & (
+            spins.real > 0)
+        for index in np.flatnonzero(real):
+            spin = float(spins[index].real)
+            if spin < best[0]:
+                mode = vectors[:size, index]
+                masses = np.real(np.diag(order_matrices(rings[0], n)[0]))
+                energy = masses * np.abs(mode) ** 2
+                tangential = sum(energy[i] for i, name in enumerate(rings[0].fields)
+                                 if name.startswith("v"))
+                best = (spin, n, "tangential" if tangential > 0.5 * energy.sum()
+                        else "radial")
+    spin, order, kind = best
+    radius = model.tire.R
+    return CriticalSpeed(spin * radius, spin, order, kind, int(n_elements))
