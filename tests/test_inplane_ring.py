@@ -239,6 +239,14 @@ def test_command_reports_the_modes_the_core_computes(capsys):
     held, free = torsion_closed_form_hz(InPlaneTire())
     (rotational,) = [m for m in data["modes"] if m["kind"] == "rotational"]
     assert rotational["frequency_hz"] == pytest.approx(free, rel=1e-9)
+    # at speed: the per-order waves and the mesh's critical speed
+    from tire_fmu.core.inplane_modes import critical_speed
+
+    assert main(["inplane-modes", "--elements", "40", "--speed", "10", "--nmax", "2",
+                 "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["critical_speed"]["critical_speed_m_s"] == pytest.approx(
+        critical_speed(InPlaneTire(), 40).speed_m_s, rel=1e-12)
 
 
 def test_command_refuses_bad_tangential_data_in_one_line(capsys):
