@@ -252,9 +252,9 @@ def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
         out = host.advance(dt, ahead, speed - v0, x[2], x[3], torque(k * dt))
         fz, fx = out.rim_fz_n, out.rim_fx_n
         rows.append((k * dt, fx, fz, out.rim_my_n_m, out.spin_rad_s * radius, speed,
-                     torque(k * dt), out.sliding_points, x[1], x[2]))
+                     torque(k * dt), out.sliding_points))
         bar(k, steps)
-    t, fx_, fz_, my, wheel, vehicle, applied, sliding, _, _ = (np.array(c) for c in zip(*rows))
+    t, fx_, fz_, my, wheel, vehicle, applied, sliding = (np.array(c) for c in zip(*rows))
     road = "level road" if sim.obstacle is None else sim.obstacle.label
     return BrakingRun(name, road, t, fx_, fz_, my, wheel / vehicle - 1.0, wheel, vehicle,
                       applied, sliding.astype(int))

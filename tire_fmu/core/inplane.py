@@ -185,6 +185,13 @@ def _circulant(n: int, stencil: dict[int, float]) -> np.ndarray:
     return a
 
 
+
+def quadratic_in_spin(at_0, at_1, at_2) -> tuple:
+    """(a0, a1, a2) with a(Ω) = a0 + Ω a1 + Ω² a2 from its values at Ω = 0, 1, 2 rad/s: the
+    ring's C is linear and K quadratic in the spin, so three rings give them at any spin."""
+    a2 = 0.5 * (at_2 - 2.0 * at_1 + at_0)
+    return at_0, at_1 - at_0 - a2, a2
+
 @dataclass(frozen=True, eq=False)
 class InPlaneRing:
     """Mass, damping (with the gyroscopic part) and stiffness of the in-plane ring at spin Ω

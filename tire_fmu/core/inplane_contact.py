@@ -55,7 +55,7 @@ import numpy as np
 
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
-from .inplane import InPlaneRing, InPlaneTire
+from .inplane import InPlaneRing, InPlaneTire, quadratic_in_spin
 from .obstacles import Obstacle
 from .parameters import ParameterError, Problem
 
@@ -80,12 +80,6 @@ def sets_settled(old, new) -> bool:
     return bool(np.array_equal(new_contact, contact)
                 and np.array_equal(new_stick | ~new_contact, stick | ~contact)
                 and np.array_equal(new_sign[new_contact & ~new_stick], sign[contact & ~stick]))
-
-
-def quadratic_in_spin(at_0, at_1, at_2) -> tuple:
-    """(a0, a1, a2) with a(Ω) = a0 + Ω a1 + Ω² a2 from its values at Ω = 0, 1, 2 rad/s."""
-    a2 = 0.5 * (at_2 - 2.0 * at_1 + at_0)
-    return at_0, at_1 - at_0 - a2, a2
 
 
 @dataclass(frozen=True)
@@ -524,7 +518,7 @@ class InPlaneSimulator:
         f = np.zeros(self._ny)
         if self._free_spin:
             f[-1] = torque(time_s) if callable(torque) else torque
-        if rim is not None:
+        if rim is not None and (rim[2] or rim[5]):  # a still rim adds nothing
             f -= self._rim_inertia @ rim[[2, 5]]
         return f
 

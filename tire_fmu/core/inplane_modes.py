@@ -144,16 +144,16 @@ def critical_speed(model, n_elements: int):
     wave's kind, "radial" or "tangential" (its kinetic energy's larger part)."""
     from dataclasses import replace
 
-    from .inplane import InPlaneRing
+    from .inplane import InPlaneRing, quadratic_in_spin
     from .standing_waves import CriticalSpeed
 
     undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
     rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s) for s in (0.0, 1.0, 2.0)]
+    masses = np.real(np.diag(rings[0].ring_mass))[:: n_elements]  # per field, per node
+    tangential_field = np.array([name.startswith("v") for name in rings[0].fields])
     best = (math.inf, None, None)
     for n in range(n_elements // 2 + 1):
-        k_at = [order_matrices(r, n)[2] for r in rings]
-        k0, k1, k2 = k_at[0], 0.5 * (4 * k_at[1] - k_at[2] - 3 * k_at[0]), 0.5 * (
-            k_at[2] - 2 * k_at[1] + k_at[0])
+        k0, k1, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings))
         size = k0.shape[0]
         left = np.block([[np.zeros((size, size)), np.eye(size)], [-k0, -k1]])
         right = np.block([[np.eye(size), np.zeros((size, size))],
@@ -164,13 +164,10 @@ def critical_speed(model, n_elements: int):
         for index in np.flatnonzero(real):
             spin = float(spins[index].real)
             if spin < best[0]:
-                mode = vectors[:size, index]
-                masses = np.real(np.diag(order_matrices(rings[0], n)[0]))
-                energy = masses * np.abs(mode) ** 2
-                tangential = sum(energy[i] for i, name in enumerate(rings[0].fields)
-                                 if name.startswith("v"))
-                best = (spin, n, "tangential" if tangential > 0.5 * energy.sum()
+                energy = masses * np.abs(vectors[:size, index]) ** 2
+                kind = ("tangential" if energy[tangential_field].sum() > 0.5 * energy.sum()
                         else "radial")
+                best = (spin, n, kind)
     spin, order, kind = best
     radius = model.tire.R
     return CriticalSpeed(spin * radius, spin, order, kind, int(n_elements))
