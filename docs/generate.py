@@ -131,6 +131,50 @@ def fmu_variables_table() -> str:
     return "\n".join(lines)
 
 
+@generator("inplane-fmu-variables")
+def inplane_fmu_variables_table() -> str:
+    from tire_fmu.fmu.interface import inplane_fmu_variables
+
+    lines = ["| name | causality | type | unit | start | meaning |", "|---|---|---|---|---|---|"]
+    for v in inplane_fmu_variables():
+        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | "
+                     f"{_start_text(v)} | {v.description} |")
+    return "\n".join(lines)
+
+
+@value("inplane-critical-fraction")
+def _inplane_critical_fraction() -> str:
+    from tire_fmu.core.inplane_host import CRITICAL_SPEED_FRACTION
+
+    return f"{CRITICAL_SPEED_FRACTION:g}"
+
+
+@value("inplane-default-step")
+def _inplane_default_step() -> str:
+    from tire_fmu.core.inplane_host import DEFAULT_HOST_STEP_S
+
+    return f"{DEFAULT_HOST_STEP_S * 1e3:g} ms"
+
+
+@generator("inplane-fmu-cost")
+def inplane_fmu_cost_table() -> str:
+    data = record("bench_inplane_fmu")
+    costs, inits = data["results"]["step_us"], data["results"]["init_s"]
+    names = list(next(iter(costs.values())))
+    lines = ["| per communication step through fmpy, h = 0.1 ms, µs | " + " | ".join(names)
+             + " | (a)/(d) |", "|---" * (len(names) + 2) + "|"]
+    for regime, row in costs.items():
+        lines.append(f"| {regime} | " + " | ".join(f"{row[n]:.1f}" for n in names)
+                     + f" | {row[names[0]] / row[names[3]]:.0f} |")
+    labels = list(next(iter(inits.values())))
+    lines += ["", "| initialisation, warm process, s | " + " | ".join(labels) + " |",
+              "|---" * (len(labels) + 1) + "|"]
+    for name, row in inits.items():
+        lines.append(f"| {name} | " + " | ".join(f"{row[k]:.2f}" for k in labels) + " |")
+    lines += ["", provenance(data)]
+    return "\n".join(lines)
+
+
 @generator("contact-footprint")
 def contact_footprint_table() -> str:
     from tire_fmu.core import OperatingPoint, TireParameters, build_model

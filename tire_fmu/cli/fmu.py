@@ -1,4 +1,5 @@
-"""FMU command: build-fmu (TireModal.fmu with the core inside, validated by fmpy)."""
+"""FMU command: build-fmu (TireModal.fmu, or with --inplane TireInPlane.fmu, with the core
+inside, validated by fmpy)."""
 
 from __future__ import annotations
 
@@ -33,24 +34,54 @@ def register(subparsers) -> None:
                    help="file to write (ending in .fmu), or a folder for TireModal.fmu (a name "
                    "without an extension: created if missing)")
     add_tire_options(p)  # the tire the FMU's parameters start from
+    p.add_argument("--inplane", action="store_true",
+                   help="build TireInPlane.fmu instead: the in-plane tire (tangential tread "
+                   "motion, the wheel's rotation, friction in the footprint) with inputs "
+                   "rim_x, rim_vx and wheel_torque besides the radial FMU's and outputs "
+                   "rim_Fx, rim_My and wheel_spin; its tire data default to the tire file "
+                   "GL073A_inplane")
+    p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
+                   help="with --inplane: override a tangential parameter of the tire file "
+                   "(repeatable), as tire-fmu inplane-modes takes them")
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_build_fmu)
 
 
 def run_build_fmu(args: argparse.Namespace) -> Output:
-    from ..fmu.builder import MODEL_IDENTIFIER, FmuBuildError, build_fmu
+    from ..fmu.builder import (
+        INPLANE_MODEL_IDENTIFIER,
+        MODEL_IDENTIFIER,
+        FmuBuildError,
+        build_fmu,
+        build_inplane_fmu,
+    )
 
-    out = output_file("OUT", args.out, ".fmu", f"{MODEL_IDENTIFIER}.fmu")
-    tire = checked_tire(args)
+    if args.tangential and not args.inplane:
+        raise CliError("--tangential: only with --inplane (the radial FMU has no tangential "
+                       "data)")
+    identifier = INPLANE_MODEL_IDENTIFIER if args.inplane else MODEL_IDENTIFIER
+    out = output_file("OUT", args.out, ".fmu", f"{identifier}.fmu")
+    if args.inplane:
+        from ..core.inplane import InPlaneTire
+        from .inplane import DEFAULT_TIRE_FILE, _tangential
+
+        if args.tire_file is None:
+            args.tire_file = DEFAULT_TIRE_FILE
+        model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
+        tire_data = {**model.tire.as_dict(), **model.tangential.as_dict()}
+    else:
+        tire = checked_tire(args)
+        tire_data = tire.as_dict()
     make_folder("OUT", out)
     try:
         with writing("OUT", out):
-            path = build_fmu(out, tire=tire)
+            path = (build_inplane_fmu(out, tire=model) if args.inplane
+                    else build_fmu(out, tire=tire))
     except FmuBuildError as error:
         raise CliError(str(error)) from error
-    validated = _fmpy_installed()  # build_fmu validated, and raised on any problem
+    validated = _fmpy_installed()  # the build validated, and raised on any problem
     data = {"path": path, "size_bytes": path.stat().st_size, "validated_with_fmpy": validated,
-            "tire": tire.as_dict()}
+            "tire": tire_data}
     check = "fmpy validate: no problems" if validated else "not validated (fmpy not installed)"
     output = Output(text=f"{path} ({data['size_bytes'] / 1e3:.0f} kB; {check})", data=data)
     output.written.append(path)

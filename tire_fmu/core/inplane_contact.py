@@ -49,6 +49,7 @@ trapezoidal rule).
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,7 +57,7 @@ import numpy as np
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
 from .inplane import InPlaneRing, InPlaneTire, quadratic_in_spin
-from .obstacles import Obstacle
+from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
 
 #: Most active-set passes one step may take before it is refused.
@@ -293,18 +294,21 @@ class InPlaneSimulator:
         return height(edge), rate
 
     # ----- static state -----
-    def static_state(self) -> np.ndarray:
-        """The tire pressed onto the flat road at the deflection, frictionless, at rest."""
+    def static_state(self, deflection_m: float | None = None) -> np.ndarray:
+        """The tire pressed onto the flat road at the deflection (default: the simulator's),
+        frictionless, at rest."""
         nr = self._n_ring_coords
         k = self._k[:nr, :nr]
         jn = self._jn[:, :nr]
-        active = self._pen0 > 0
+        pen0 = self._pen0 if deflection_m is None else (
+            self.model.tire.R - (self.model.tire.R - deflection_m) * self._sec)
+        active = pen0 > 0
         y = np.zeros(nr)
         for _ in range(MAX_SET_PASSES):
             a = k + jn[active].T @ (self._kn[active, None] * jn[active])
-            b = -jn[active].T @ (self._kn[active] * self._pen0[active])
+            b = -jn[active].T @ (self._kn[active] * pen0[active])
             y = np.linalg.solve(a, b)
-            pen = self._pen0 + jn @ y
+            pen = pen0 + jn @ y
             force = self._kn * pen
             new = np.where(active, force > 0, pen > 0)
             if np.array_equal(new, active):
@@ -357,7 +361,7 @@ class InPlaneSimulator:
         ring_forces = self._contact_and_rates(y, yd, e, 0.0, rim)
         ydd = np.linalg.solve(self._m, self._f_ext(0.0, torque, rim) + ring_forces[0]
                               - self._c @ yd - self._k @ y)
-        state = StepState(y, yd, ydd, e, *ring_forces[1:4], np.zeros(e.size))
+        state = StepState(y, yd, ydd, e, *ring_forces[1:5])
         records = {k: [] for k in InPlaneRun.__dataclass_fields__}
         fx_axle = 0.0
         for i in range(1, steps + 1):
@@ -536,7 +540,7 @@ class InPlaneSimulator:
                                            0.0), 0.0)
         forces = -self._jnw.T @ f_n - self._jxw.T @ (self._kx * e)
         contact = f_n > 0
-        return forces, contact, np.ones_like(contact), np.ones(contact.size)
+        return forces, contact, np.ones_like(contact), np.ones(contact.size), f_n
 
     def rim_force(self, y, yd, ydd=None, rim=None) -> np.ndarray:
         """(Fx, Fz, My) the tire puts on the rim (N, N, N m): the rim's rows of the tire's
@@ -551,9 +555,9 @@ class InPlaneSimulator:
             f += rows["m_translation"] @ rim[[2, 5]]
         return -f
 
-    def static_load_n(self) -> float:
-        """The vertical load the deflection carries at rest (N)."""
-        return float(self.rim_force(self.static_state(), np.zeros(self._ny))[1])
+    def static_load_n(self, deflection_m: float | None = None) -> float:
+        """The vertical load a deflection (default: the simulator's) carries at rest (N)."""
+        return float(self.rim_force(self.static_state(deflection_m), np.zeros(self._ny))[1])
 
 
 def hermite(p0, v0, p1, v1, duration_s: float, tau: float) -> tuple[float, float, float]:
@@ -592,12 +596,29 @@ class InPlaneStepper:
     z, vz; m, m/s, deviations from the static state, x forward, z up) at the end of each
     step and the torque on the wheel over it; inside, the simulator's steps follow the cubic
     through the step's end values (:func:`hermite`), so a motion the host integrates at
-    second order or better is met exactly where it is cubic. The road is the simulator's
-    (its obstacle, at its speed); a free wheel's spin follows the axle's speed."""
+    second order or better is met exactly where it is cubic. A free wheel's spin follows the
+    axle's speed.
 
-    def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0):
+    The road is the simulator's (its obstacle, at its speed), or with ``host_road`` the one
+    the host gives: ``road_z`` and ``road_vz`` at the front of the contact zone, as the radial
+    FMU takes them (cubic in time between communication points, kept along the road as it
+    passes, :class:`~.obstacles.HostRoad`). At rest (``sim.speed_m_s`` = 0) the road
+    does not pass, and the host's road moves under every point at once, a shaker plate."""
+
+    def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0, host_road: bool = False):
         """Start from the static state, with ``torque_n_m`` on the wheel at t = 0."""
         self.sim = sim
+        self.road: HostRoad | None = None
+        if host_road:
+            if sim.obstacle is not None:
+                raise ValueError("InPlaneStepper(host_road=True): the simulator already has "
+                                 "a road (its obstacle); build it without one")
+            front, rear = float(sim._x_hi.max()), float(sim._x_lo.min())
+            # the windows reach back to the zone's rear; the rim may move back by the
+            # largest displacement a host may give
+            self.road = HostRoad(front, front - rear + HOST_ROAD_MARGIN_M)
+            self.road.record(0.0, 0.0)
+            sim.obstacle, sim.obstacle_ahead_m = self.road, 0.0  # the road travels from here
         sim._set_spin(sim.spin_rad_s, sim.speed_m_s)
         ny = sim._ny
         y = sim.static_state()
@@ -606,25 +627,25 @@ class InPlaneStepper:
         forces = sim._contact_and_rates(y, np.zeros(ny), e, 0.0, self._rim)
         ydd = np.linalg.solve(sim._m, sim._f_ext(0.0, torque_n_m, self._rim) + forces[0]
                               - sim._k @ y)
-        self.state = StepState(y, np.zeros(ny), ydd, e, *forces[1:4], np.zeros(e.size))
+        self.state = StepState(y, np.zeros(ny), ydd, e, *forces[1:5])
         self.steps = 0
-        self._end = np.zeros(4)  # x, vx, z, vz at the end of the last step
+        self._end = np.zeros(6)  # x, vx, z, vz, road z, road vz at the end of the last step
 
     @property
     def time_s(self) -> float:
         return self.steps * self.sim.step_s
 
     def advance(self, step_s: float, x_m: float = 0.0, vx_m_s: float = 0.0, z_m: float = 0.0,
-                vz_m_s: float = 0.0, torque_n_m: float = 0.0) -> InPlaneOutputs:
+                vz_m_s: float = 0.0, torque_n_m: float = 0.0, road_z_m: float = 0.0,
+                road_vz_m_s: float = 0.0) -> InPlaneOutputs:
         """Advance by ``step_s`` (a whole number of the simulator's steps) to the rim's
-        state given for the step's end; returns the outputs there."""
+        state (and with ``host_road`` the road's at the zone front) given for the step's end;
+        returns the outputs there."""
         sim, h = self.sim, self.sim.step_s
-        count = int(round(step_s / h))
-        if count < 1 or abs(count * h - step_s) > 1e-9 * max(step_s, h):
-            raise ParameterError([Problem("step_s", step_s, "s",
-                                          f"a whole multiple of the simulator's step {h:g} s")])
-        start, end = self._end, np.array([x_m, vx_m_s, z_m, vz_m_s], dtype=float)
-        rim = self._rim
+        count = steps_in(step_s, h)
+        start = self._end
+        end = np.array([x_m, vx_m_s, z_m, vz_m_s, road_z_m, road_vz_m_s], dtype=float)
+        rim, road, plate = self._rim, self.road, sim.speed_m_s == 0.0
         for k in range(1, count + 1):
             self.steps += 1
             time = self.steps * h
@@ -633,18 +654,115 @@ class InPlaneStepper:
             rim_old, rim = rim, np.array([*x, *z])
             if sim._free_spin:
                 self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
-            height, rate = sim.road(time, sim.speed_m_s * time + rim[0],
-                                    sim._speed_now + rim[1])
+            distance = sim.speed_m_s * time + rim[0]
+            if road is not None:
+                front, front_rate, _ = hermite(start[4], start[5], end[4], end[5], step_s,
+                                               k * h)
+                if plate:
+                    height = np.full(sim._zone.n_points, front)
+                    rate = np.full(sim._zone.n_points, front_rate)
+                else:
+                    road.record(distance, front)
+                    height, rate = road.window_reads(sim._x_lo + distance, sim._x_hi + distance,
+                                                     sim._speed_now + rim[1])
+            else:
+                height, rate = sim.road(time, distance, sim._speed_now + rim[1])
             self.state = sim._step(self.state, time, torque_n_m, rim_old, rim,
                                    height - rim[3], rate - rim[4])
         self._rim, self._end = rim, end
-        st = self.state
-        fx, fz, my = sim.rim_force(st.y, st.yd, st.ydd, rim)
+        return self.outputs()
+
+    def outputs(self) -> InPlaneOutputs:
+        """What the host reads at the last step's end."""
+        sim, st = self.sim, self.state
+        fx, fz, my = sim.rim_force(st.y, st.yd, st.ydd, self._rim)
         return InPlaneOutputs(
             float(fx), float(fz), float(my), float(st.f_n.sum()),
             float(-(sim._kx * st.e).sum()),
             float(sim._spin_now + (st.yd[-1] if sim._free_spin else 0.0)),
             int(np.sum(st.contact & ~st.stick)))
+
+    # -- the stepper's state as bytes (an FMU's state): everything a step reads ---------------
+    def state_bytes(self) -> bytes:
+        """The stepper's state: :data:`STEPPER_STATE_HEAD`, then the doubles and flags."""
+        st, sim = self.state, self.sim
+        road = self.road.state() if self.road is not None else np.zeros((0, 3))
+        head = struct.pack(STEPPER_STATE_HEAD, STEPPER_STATE_MAGIC, st.y.size, st.e.size,
+                           road.shape[0], self.steps)
+        doubles = np.concatenate([self._end, self._rim, [sim._spin_now, sim._speed_now],
+                                  st.y, st.yd, st.ydd, st.e, st.f_n, road.ravel()])
+        flags = np.concatenate([st.contact, st.stick]).astype(np.int8)
+        return head + doubles.astype("<f8").tobytes() + flags.tobytes() + np.asarray(
+            st.slip_sign, dtype=np.int8).tobytes()
+
+    def state_problem(self, data: bytes) -> str | None:
+        """Why ``data`` is no state of this stepper, or None."""
+        head = struct.calcsize(STEPPER_STATE_HEAD)
+        if len(data) < head:
+            return f"its stepper part is {len(data)} bytes, shorter than its header"
+        magic, ny, points, samples, steps = struct.unpack_from(STEPPER_STATE_HEAD, data)
+        if magic != STEPPER_STATE_MAGIC:
+            return "its stepper part is not an in-plane tire's"
+        if ny != self.state.y.size or points != self.state.e.size:
+            return (f"its stepper part has {ny} coordinates and {points} points, this tire "
+                    f"{self.state.y.size} and {self.state.e.size}")
+        if (samples > 0) != (self.road is not None) or steps < 0:
+            return "its stepper part's road or step count does not fit this tire"
+        doubles = 14 + 3 * ny + 2 * points + 3 * samples
+        if len(data) != head + 8 * doubles + 3 * points:
+            return "its stepper part has the wrong size"
+        values = np.frombuffer(data, "<f8", doubles, head)
+        if not np.all(np.isfinite(values)):
+            return "its stepper part holds values that are not finite"
+        flags = np.frombuffer(data, np.int8, 3 * points, head + 8 * doubles)
+        if np.any((flags[:2 * points] != 0) & (flags[:2 * points] != 1)) or np.any(
+                np.abs(flags[2 * points:]) > 1):
+            return "its stepper part's contact flags are not flags"
+        spin, speed = values[12], values[13]
+        if speed != self.sim.speed_m_s:
+            return f"its road speed {speed!r} m/s is not this tire's {self.sim.speed_m_s!r}"
+        if not abs(spin) <= 10.0 * max(self.sim.spin_rad_s, 1.0):
+            return f"its wheel spin {spin!r} rad/s is beyond what this tire can hold"
+        return None
+
+    def set_state_bytes(self, data: bytes) -> None:
+        """Take back a state :meth:`state_bytes` wrote (checked with :meth:`state_problem`)."""
+        problem = self.state_problem(data)
+        if problem:
+            raise ValueError(problem)
+        head = struct.calcsize(STEPPER_STATE_HEAD)
+        _, ny, p, samples, steps = struct.unpack_from(STEPPER_STATE_HEAD, data)
+        doubles = 14 + 3 * ny + 2 * p + 3 * samples
+        values = np.frombuffer(data, "<f8", doubles, head).copy()
+        flags = np.frombuffer(data, np.int8, 3 * p, head + 8 * doubles)
+        cut = np.cumsum([6, 6, 2, ny, ny, ny, p, p])
+        end, rim, spin_speed, y, yd, ydd, e, f_n, road = np.split(values, cut)
+        if spin_speed[0] != self.sim._spin_now:
+            self.sim._set_spin(float(spin_speed[0]), float(spin_speed[1]))
+        self.state = StepState(y, yd, ydd, e, flags[:p] == 1, flags[p:2 * p] == 1,
+                               flags[2 * p:].astype(float), f_n)
+        self._end, self._rim, self.steps = end, rim, int(steps)
+        if self.road is not None:
+            self.road.restore(road)
+
+
+#: A host's road is kept this far behind the zone's rear (m): the rim may move back by up to
+#: the largest displacement an FMU input takes.
+HOST_ROAD_MARGIN_M = 1.0
+#: The stepper's state: magic, coordinates, points, road samples, steps taken.
+STEPPER_STATE_HEAD = "<8sIIIq"
+STEPPER_STATE_MAGIC = b"INPLANE1"
+
+
+def steps_in(step_s: float, simulator_step_s: float) -> int:
+    """How many simulator steps make a host's step; refused unless a whole number."""
+    count = int(round(step_s / simulator_step_s)) if math.isfinite(step_s) else 0
+    if count < 1 or abs(count * simulator_step_s - step_s) > 1e-9 * max(step_s,
+                                                                        simulator_step_s):
+        raise ParameterError([Problem("step_s", step_s, "s",
+                                      f"a whole multiple of the simulator's step "
+                                      f"{simulator_step_s:g} s")])
+    return count
 
 
 @dataclass(frozen=True, eq=False)
@@ -870,8 +988,12 @@ def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100
                         **options) -> float:
     """The rim deflection (m) that carries ``load_n`` at rest, by the secant method on the
     piecewise linear static footprint."""
+    # the static footprint at rest does not depend on the simulator's own deflection
+    # (only its penetrations do): one simulator serves every trial
+    sim = InPlaneSimulator(model, n_elements, 0.0, 0.0, **options)
+
     def load(deflection):
-        return InPlaneSimulator(model, n_elements, 0.0, deflection, **options).static_load_n()
+        return sim.static_load_n(deflection)
 
     lo, hi = 0.005, 0.04
     f_lo, f_hi = load(lo), load(hi)

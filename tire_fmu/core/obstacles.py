@@ -191,3 +191,94 @@ def cleat(height_m: float, length_m: float, shape: str = "rectangular") -> Obsta
 
 def pothole(depth_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:
     return Obstacle(-float(depth_m), float(length_m), shape)
+
+
+class HostRoad(_WindowMeans):
+    """The road a host gives at one place ahead of the tire, kept along the road as it passes.
+
+    The host gives the height at ``front_m`` ahead of the contact centre (the contact zone's
+    front, where an FMU's ``road_z`` is measured) each time the tire has travelled to
+    ``distance_m`` along the road; the profile is linear between those samples (at a step of
+    1e-4 s and 20 m/s, 2 mm apart), level at the first sample before it and at the newest one
+    ahead of it (nothing the points read lies ahead of the front). Samples further behind the
+    front than ``keep_m`` are forgotten. A sample at a distance not beyond the newest (the
+    tire at rest, or the host giving one point again) replaces it: the road under a tire that
+    does not roll is not rewritten behind it, so this is a rolling road (at rest, a shaker
+    plate moves every point at once, which the stepper does itself)."""
+
+    label = "the host's road"
+
+    def __init__(self, front_m: float, keep_m: float):
+        self.front_m, self.keep_m = float(front_m), float(keep_m)
+        self.s = np.zeros(0)
+        self.z = np.zeros(0)
+        self._at = np.zeros(0)  # the integral from the first sample to each sample
+
+    def record(self, distance_m: float, height_m: float) -> None:
+        """The host's height at the front when the tire has travelled ``distance_m``."""
+        s = distance_m + self.front_m
+        if self.s.size and s <= self.s[-1] + 1e-12 * max(1.0, abs(s)):
+            self.z[-1] = height_m
+            if self.s.size > 1:
+                self._at[-1] = self._at[-2] + 0.5 * (self.s[-1] - self.s[-2]) * (
+                    self.z[-1] + self.z[-2])
+            return
+        keep = max(int(np.searchsorted(self.s, s - self.keep_m, side="right")) - 1, 0)
+        at = self._at[-1] + 0.5 * (s - self.s[-1]) * (height_m + self.z[-1]) if self.s.size \
+            else 0.0
+        self.s = np.append(self.s[keep:], s)
+        self.z = np.append(self.z[keep:], height_m)
+        self._at = np.append(self._at[keep:], at)
+
+    def state(self) -> np.ndarray:
+        """(samples, 3): distances, heights and the running integral, what :meth:`restore`
+        takes back (the integral too, so that a restored road reads the same bits)."""
+        return np.stack([self.s, self.z, self._at], axis=1)
+
+    def restore(self, samples: np.ndarray) -> None:
+        samples = np.asarray(samples, dtype=float).reshape(-1, 3)
+        self.s, self.z, self._at = (samples[:, i].copy() for i in range(3))
+
+    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
+        ``speed_m_s``: the rate of a window mean is the speed times the difference of the
+        heights at its ends over its width (the profile is continuous, so this is exact)."""
+        both = np.concatenate([s_lo, s_hi])
+        at, (height, _) = self.integral(both), self.profile(both)
+        n = len(s_lo)
+        width = np.asarray(s_hi) - np.asarray(s_lo)
+        safe = np.where(width > 0, width, 1.0)
+        mean = np.where(width > 0, (at[n:] - at[:n]) / safe, height[:n])
+        return mean, speed_m_s * (height[n:] - height[:n]) / safe
+
+    def _segment(self, s):
+        s = np.asarray(s, dtype=float)
+        k = np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, max(self.s.size - 2, 0))
+        return s, k
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at ``s`` (m)."""
+        s = np.asarray(s, dtype=float)
+        if self.s.size < 2:
+            level = self.z[0] if self.s.size else 0.0
+            return np.full(s.shape, level), np.zeros(s.shape)
+        s, k = self._segment(s)
+        slope = (self.z[k + 1] - self.z[k]) / (self.s[k + 1] - self.s[k])
+        inside = (s >= self.s[0]) & (s <= self.s[-1])
+        height = np.where(s < self.s[0], self.z[0],
+                          np.where(s > self.s[-1], self.z[-1],
+                                   self.z[k] + slope * (s - self.s[k])))
+        return height, np.where(inside, slope, 0.0)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first sample to ``s`` (m²; level outside the samples)."""
+        s = np.asarray(s, dtype=float)
+        if self.s.size < 2:
+            level = self.z[0] if self.s.size else 0.0
+            return level * (s - (self.s[0] if self.s.size else 0.0))
+        s, k = self._segment(s)
+        past = np.clip(s, self.s[0], self.s[-1]) - self.s[k]
+        slope = (self.z[k + 1] - self.z[k]) / (self.s[k + 1] - self.s[k])
+        inside = self._at[k] + self.z[k] * past + 0.5 * slope * past**2
+        return (inside + np.minimum(s - self.s[0], 0.0) * self.z[0]
+                + np.maximum(s - self.s[-1], 0.0) * self.z[-1])

@@ -99,6 +99,35 @@ def build_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
             real_starts=None if tire is None else tire.as_dict(), kernel=True)
 
 
+INPLANE_MODEL_IDENTIFIER = "TireInPlane"
+INPLANE_SLAVE_MODULE = "tire_fmu_inplane_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
+_INPLANE_SLAVE_SOURCE = Path(__file__).with_name("inplane_slave.py")
+
+
+def build_inplane_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
+    """Write ``TireInPlane.fmu`` (the in-plane tire: Fx, Fz and My, the wheel's rotation,
+    friction) to ``out``, as :func:`build_fmu` writes TireModal.fmu. Its slave is
+    :class:`~tire_fmu.fmu.inplane_slave.TireInPlane`, whose FMI layer is TireModal's, so the
+    package staged into its resources carries ``fmu/slave.py`` too. ``tire`` (an
+    :class:`~tire_fmu.core.inplane.InPlaneTire`) gives the parameters' start values, radial
+    and tangential (default: GL073A with the shipped tangential estimates)."""
+    from .interface import inplane_fmu_variables
+
+    with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
+        project = _stage_project(Path(staging) / "project", with_slave=True)
+        starts = None
+        if tire is not None:
+            starts = {**tire.tire.as_dict(), **tire.tangential.as_dict()}
+            baked = Path(staging) / "project" / BAKED_PARAMETERS_FILE
+            baked.write_text(json.dumps(starts, indent=1) + "\n")
+            project.append(baked)
+        return build_pythonfmu(
+            _INPLANE_SLAVE_SOURCE, fmu_destination(out, INPLANE_MODEL_IDENTIFIER),
+            INPLANE_SLAVE_MODULE, project_files=project, capabilities=CAPABILITIES,
+            units={v.name: v.unit for v in inplane_fmu_variables() if v.unit},
+            validate=validate, real_starts=starts)
+
+
 def fmu_destination(out: str | Path, model_identifier: str) -> Path:
     """``out`` itself when it names a ``.fmu`` file, else ``out/<model_identifier>.fmu``."""
     out = Path(out)
@@ -159,8 +188,9 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
     return dest
 
 
-def _stage_project(folder: Path) -> list[Path]:
-    """The package the slave imports (no CLI, plots or caches) and the host requirements."""
+def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
+    """The package the slave imports (no CLI, plots or caches) and the host requirements;
+    ``with_slave`` adds the radial slave, whose FMI layer the in-plane slave extends."""
     package = folder / "tire_fmu"
     (package / "core").mkdir(parents=True)
     (package / "fmu").mkdir()
@@ -168,7 +198,8 @@ def _stage_project(folder: Path) -> list[Path]:
     shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
     for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
         shutil.copyfile(source, package / "core" / source.name)
-    for name in ("__init__.py", "interface.py", "spec.py"):  # the table and wording it uses
+    names = ("__init__.py", "interface.py", "spec.py") + (("slave.py",) if with_slave else ())
+    for name in names:  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
     for name in ("__init__.py", "kernel.py", "contract.py"):  # the compiled kernel's ctypes
         shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)

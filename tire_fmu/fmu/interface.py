@@ -77,6 +77,9 @@ BASE_UNITS = {
     "N.s/m": {"kg": 1, "s": -1},
     "m/s2": {"m": 1, "s": -2},
     "N/s": {"kg": 1, "m": 1, "s": -3},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "rad/s": {"s": -1},
+    "kg*m^2": {"kg": 1, "m": 2},
 }
 
 
@@ -222,3 +225,113 @@ def unit_definitions(units) -> ElementTree.Element:
             ElementTree.SubElement(element, "BaseUnit",
                                    {k: str(v) for k, v in BASE_UNITS[unit].items()})
     return definitions
+
+
+# -- the in-plane tire's FMU (TireInPlane): the ring with tangential motion, friction, Fx, My --
+
+def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVariable, ...]:
+    """Every variable of TireInPlane.fmu in value-reference order: the radial FMU's four
+    inputs first (same names, same meaning), then the rim's fore-aft motion and the torque;
+    outputs; in_contact; parameters (the tire data, radial and tangential, and the operating
+    point). ``parameter_values`` replaces the parameters' start values."""
+    from ..core.inplane import TANGENTIAL_RANGES, TangentialParameters
+    from ..core.inplane_host import (
+        CRITICAL_SPEED_FRACTION,
+        DEFAULT_HOST_F_MAX_HZ,
+        DEFAULT_HOST_POINT_SPACING_M,
+        DEFAULT_HOST_STEP_S,
+        HOST_RANGES,
+    )
+
+    def allowed(name):
+        low, high, unit = HOST_RANGES[name]
+        return f"allowed [{low:g}, {high:g}] {unit}".rstrip()
+
+    radial_signals = _signals()[:4]
+    table = radial_signals + [
+        FmuVariable("rim_x", "Real", "input", 0.0, "m",
+                    "rim fore-aft displacement from its steady travel at speed (x forward): "
+                    "the axle ahead of where speed * t puts it"),
+        FmuVariable("rim_vx", "Real", "input", 0.0, "m/s",
+                    "rim fore-aft velocity relative to speed (x forward): the axle's speed "
+                    "over the road is speed + rim_vx (braking to rest: rim_vx = -speed)"),
+        FmuVariable("wheel_torque", "Real", "input", 0.0, "N.m",
+                    "drive (+) or brake (-) torque on the wheel about the axle, in the sense "
+                    "of its rolling; with wheel_free = false the wheel's spin is held and "
+                    "this is ignored"),
+        FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, "N",
+                    "vertical force of the tire on the rim, total (static load + dynamic)"),
+        FmuVariable("rim_Fx", "Real", "output", 0.0, "N",
+                    "fore-aft force of the tire on the rim (x forward), total: braking "
+                    "negative, the rolling resistance and the fore-aft cleat force in it"),
+        FmuVariable("rim_My", "Real", "output", 0.0, "N.m",
+                    "moment of the tire on the rim about the axle, in the sense of rolling "
+                    "(a brake torque is met by a positive one as the tread drags)"),
+        FmuVariable("contact_Fz", "Real", "output", DEFAULT_LOAD_N, "N",
+                    "vertical force of the road on the tread (positive pushing up), summed "
+                    "over the contact points"),
+        FmuVariable("contact_Fx", "Real", "output", 0.0, "N",
+                    "fore-aft force of the road on the tread (x forward), summed over the "
+                    "contact points' tread elements"),
+        FmuVariable("wheel_spin", "Real", "output", 0.0, "rad/s",
+                    "the wheel's spin (speed / R at free rolling; its own with wheel_free)"),
+        FmuVariable("sliding_points", "Real", "output", 0.0, "",
+                    "how many contact points slide (Coulomb friction at its limit); 0 while "
+                    "the whole footprint sticks"),
+        FmuVariable("in_contact", "Boolean", "output", True, "",
+                    "true while at least one contact point pushes on the road"),
+        FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
+                    "static vertical load the footprint is built for; allowed (0, "
+                    f"{HOST_RANGES['load_n'][1]:g}] N", "--load"),
+        FmuVariable("speed", "Real", "parameter", 0.0, "m/s",
+                    "forward speed the reduced step is built at (the road passes at speed + "
+                    f"rim_vx); allowed [0, {CRITICAL_SPEED_FRACTION:g} of the mesh's critical "
+                    "speed]", "--speed"),
+        FmuVariable("n_elements", "Integer", "parameter", 100, "",
+                    f"nodes around the ring; {allowed('n_elements')} (the lumped sidewall's "
+                    "critical speed falls as the mesh is refined)",
+                    "--elements"),
+        FmuVariable("f_max", "Real", "parameter", DEFAULT_HOST_F_MAX_HZ, "Hz",
+                    "highest natural frequency of the free ring's modes the reduced step "
+                    f"keeps (with every contact-zone node's static shapes); {allowed('f_max_hz')}",
+                    "--f-max"),
+        FmuVariable("contact_zone_length", "Real", "parameter", DEFAULT_ZONE_LENGTH_M, "m",
+                    "length of road under the contact points, centred on the contact centre "
+                    f"(road_z is measured at its front); {allowed('zone_length_m')}",
+                    "--zone-length"),
+        FmuVariable("contact_point_spacing", "Real", "parameter",
+                    DEFAULT_HOST_POINT_SPACING_M, "m",
+                    "spacing of the contact points, each with its tread element and "
+                    f"friction; {allowed('point_spacing_m')}", "--point-spacing"),
+        FmuVariable("step_size", "Real", "parameter", DEFAULT_HOST_STEP_S, "s",
+                    "the tire's own step: every communication step must be a whole multiple "
+                    f"of it; {allowed('step_s')}", "--step"),
+        FmuVariable("wheel_free", "Boolean", "parameter", True, "",
+                    "the wheel turns under wheel_torque and the tread's drag (its inertia "
+                    "wheel_inertia_kg_m2); false holds its spin at speed / R", "--wheel-held"),
+    ]
+    for f in fields(TireParameters):
+        spec = TIRE_FIELDS[f.name]
+        start = 0.0 if f.name == "sidewall_max_order" else getattr(TireParameters(), f.name)
+        table.append(FmuVariable(f.name, "Real", "parameter", start, spec.unit,
+                                 f"{spec.description}; allowed {spec.range_text()}"
+                                 + ("; 0 for the in-plane ring" if f.name in (
+                                     "sidewall_max_order", "sidewall_shear") else ""),
+                                 f"--tire {f.name}=VALUE"))
+    defaults = TangentialParameters()
+    for name, (low, high, unit) in TANGENTIAL_RANGES.items():
+        table.append(FmuVariable(name, "Real", "parameter", getattr(defaults, name),
+                                 unit, f"tangential tire data ({name}); allowed [{low:g}, "
+                                 f"{high:g}] {unit}".rstrip(), f"--tire {name}=VALUE"))
+    # no `tire-fmu export` builds this FMU: its parameters have no export option
+    table = [replace(v, export_option="") for v in table]
+    if parameter_values:
+        table = [replace(v, start=parameter_values.get(v.name, v.start))
+                 if v.causality == "parameter" else v for v in table]
+    return tuple(table)
+
+
+#: The in-plane FMU's hot-path blocks: inputs, outputs, in_contact.
+INPLANE_INPUTS = slice(0, 7)
+INPLANE_OUTPUTS = slice(7, 14)
+INPLANE_IN_CONTACT = 14

@@ -84,6 +84,8 @@ from tire_fmu.fmu.spec import (
 )
 
 MODEL_IDENTIFIER = "TireModal"
+#: The largest torque on the wheel an FMU takes (N m): ten times a truck wheel's brake.
+MAX_TORQUE_N_M = 3.0e5
 _REFUSED = -3  # the step kernels' status for a step their rules refuse (kernel.h)
 # the hot path's constants as module globals (cheaper to read than attributes)
 _RUNNING = Phase.RUNNING
@@ -118,14 +120,14 @@ class TireModal(Fmi2Slave):
     def __init__(self, **kwargs):
         # Cheap on purpose: pythonfmu instantiates the slave at build time and on every reset.
         super().__init__(**kwargs)
-        self._table = fmu_variables(parameter_values=_baked_parameter_values(self.resources))
+        self._table = self._variables(_baked_parameter_values(self.resources))
         self._values: list = [v.start for v in self._table]
         self._index = {v.name: vr for vr, v in enumerate(self._table)}
         self._parameter_vrs = [vr for vr, v in enumerate(self._table)
                                if v.causality == "parameter"]
-        self._input_vrs = list(range(INPUTS.start, INPUTS.stop))
-        self._output_vrs = list(range(OUTPUTS.start, OUTPUTS.stop))
-        self._contact_vrs = [IN_CONTACT]
+        self._input_vrs = list(range(self._INPUTS.start, self._INPUTS.stop))
+        self._output_vrs = list(range(self._OUTPUTS.start, self._OUTPUTS.stop))
+        self._contact_vrs = [self._IN_CONTACT]
         self._phase = Phase.INSTANTIATED
         self._error_reason = ""  # in the error phase: why (spec.MESSAGES FAILED, ...)
         self._start_time = 0.0
@@ -142,6 +144,13 @@ class TireModal(Fmi2Slave):
         self._stale = False
         for vr, v in enumerate(self._table):
             self._register(vr, v)
+
+    # the variable table and its hot-path blocks (a subclass with other variables sets them)
+    _INPUTS, _OUTPUTS, _IN_CONTACT = INPUTS, OUTPUTS, IN_CONTACT
+
+    @staticmethod
+    def _variables(parameter_values: dict | None) -> tuple[FmuVariable, ...]:
+        return fmu_variables(parameter_values=parameter_values)
 
     def _register(self, vr: int, v: FmuVariable) -> None:
         kwargs = dict(causality=Fmi2Causality[v.causality], description=v.description,
@@ -533,7 +542,7 @@ class TireModal(Fmi2Slave):
             model = b""
             if self._phase in (Phase.RUNNING, Phase.TERMINATED):
                 model = (struct.pack("<2i", self._contact_warning_armed, self._contact_logged)
-                         + self._simulator.kernel.state_bytes())
+                         + self._model_state_bytes())
             reason = self._error_reason if self._phase == Phase.ERROR else ""
             return state_pack(self._phase, self._guid(), self._now, self._start_time,
                               self._stale, self._values, model, reason)
@@ -571,12 +580,12 @@ class TireModal(Fmi2Slave):
                         _fmu_problems(error)))
                     return
                 built_for = parameters
-            problem = _model_part_problem(simulator, model, values, fields["time"],
-                                          fields["start_time"])
+            problem = self._model_part_problem(simulator, model, values, fields["time"],
+                                               fields["start_time"])
             if problem:
                 self._refuse(call, problem)
                 return
-            simulator.kernel.set_state_bytes(model[4 * STATE_MODEL_FLAGS:])
+            self._set_model_state(simulator, model[4 * STATE_MODEL_FLAGS:])
             self._set_simulator(simulator, built_for)
             self._contact_warning_armed, self._contact_logged = (
                 bool(flag) for flag in struct.unpack_from("<2i", model))
@@ -586,6 +595,19 @@ class TireModal(Fmi2Slave):
         self._error_reason = fields["reason"].decode("utf-8", errors="replace")
         self._start_time, self._now = fields["start_time"], fields["time"]
         self._stale = bool(fields["stale"])
+
+    # the model's part of an FMU state (a subclass with another model replaces these)
+    def _model_state_bytes(self) -> bytes:
+        return self._simulator.kernel.state_bytes()
+
+    @staticmethod
+    def _model_part_problem(simulator, model: bytes, values: list, time_s: float,
+                            start: float) -> str | None:
+        return _model_part_problem(simulator, model, values, time_s, start)
+
+    @staticmethod
+    def _set_model_state(simulator, data: bytes) -> None:
+        simulator.kernel.set_state_bytes(data)
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:
@@ -684,9 +706,13 @@ def _model_part_problem(simulator: ContactSimulator, model: bytes, values: list,
     return "; ".join(problems) or None
 
 
+#: What an input may be, by its unit (beyond it a product inside a step could overflow).
+INPUT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TORQUE_N_M}
+
+
 def _input_problem(v: FmuVariable, value) -> str | None:
     """Why input ``v`` cannot take ``value`` (spec INPUT_RANGE), or None."""
-    limit = MAX_VELOCITY_M_S if v.unit == "m/s" else MAX_DISPLACEMENT_M
+    limit = INPUT_LIMITS.get(v.unit, MAX_DISPLACEMENT_M)
     if abs(value) <= limit:
         return None
     return MESSAGES["INPUT_RANGE"] % (v.name, repr(float(value)), v.unit, limit, limit, v.unit)

@@ -1,0 +1,164 @@
+"""TireInPlane.fmu (the in-plane tire as a pythonfmu FMU) run through fmpy against the core's
+stepper in process: the same numbers, the FMI refusals, parameter problems, FMU states."""
+
+import numpy as np
+import pytest
+
+pytest.importorskip("fmpy")
+pytest.importorskip("pythonfmu")
+
+import fmpy  # noqa: E402
+from fmpy import extract, read_model_description  # noqa: E402
+from fmpy.fmi1 import FMICallException  # noqa: E402
+from fmpy.fmi2 import (  # noqa: E402
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+
+from tire_fmu.core.inplane_host import HostSettings, build_host_stepper  # noqa: E402
+from tire_fmu.core.parameters import TireParameters  # noqa: E402
+from vehicle_demo.cosim import printed  # noqa: E402
+
+pytestmark = pytest.mark.fmu
+
+INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
+OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
+           "sliding_points")
+
+
+@pytest.fixture(scope="module")
+def fmu_path(tmp_path_factory):
+    from tire_fmu.fmu.builder import build_inplane_fmu
+
+    return build_inplane_fmu(tmp_path_factory.mktemp("inplane_fmu"))
+
+
+class Instance:
+    """One TireInPlane instance in fmpy, with its log."""
+
+    def __init__(self, path, **parameters):
+        md = read_model_description(path)
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.types = {v.name: v.type for v in md.modelVariables}
+        self.log = []
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(
+            lambda env, name, status, category, message: self.log.append(
+                (status, printed(message))))
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
+                             modelIdentifier=md.coSimulation.modelIdentifier,
+                             instanceName="inplane")
+        self.fmu.instantiate(loggingOn=True, callbacks=self.callbacks)
+        self.fmu.setupExperiment(startTime=0.0)
+        self.fmu.enterInitializationMode()
+        for name, value in parameters.items():
+            kind = self.types[name]
+            setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
+                      "Boolean": self.fmu.setBoolean}[kind]
+            setter([self.vr[name]], [value])
+        self.t = 0.0
+
+    def start(self):
+        self.fmu.exitInitializationMode()
+        return self
+
+    def step(self, h, **inputs):
+        self.fmu.setReal([self.vr[n] for n in INPUTS], [inputs.get(n, 0.0) for n in INPUTS])
+        self.fmu.doStep(self.t, h)
+        self.t += h
+        return self.outputs()
+
+    def outputs(self):
+        return np.array(self.fmu.getReal([self.vr[n] for n in OUTPUTS]))
+
+    def close(self):
+        self.fmu.terminate()
+        self.fmu.freeInstance()
+
+
+def _drive(k, h):
+    """A brake torque, a wheel bouncing, the axle slowing and a bump in the road."""
+    t = k * h
+    return dict(wheel_torque=-2500.0 if t > 0.01 else 0.0,
+                rim_z=2e-3 * np.sin(60.0 * t), rim_vz=0.12 * np.cos(60.0 * t),
+                rim_x=-0.5 * 0.4 * t**2, rim_vx=-0.4 * t,
+                road_z=8e-3 * np.sin(40.0 * t) ** 2, road_vz=8e-3 * 40.0 * np.sin(80.0 * t))
+
+
+def test_the_fmu_gives_the_cores_numbers(fmu_path):
+    """Through fmpy and in process, the same stepper over the same inputs: the same outputs
+    (one code, so to rounding of the values' round trip: 1e-12 relative)."""
+    h, steps = 1e-3, 40
+    fmu = Instance(fmu_path, speed=10.0).start()
+    core = build_host_stepper(HostSettings(speed_m_s=10.0)).stepper
+    assert fmu.outputs()[0] == pytest.approx(core.outputs().rim_fz_n, rel=1e-12)
+    worst, spread = 0.0, []
+    for k in range(1, steps + 1):
+        inputs = _drive(k, h)
+        got = fmu.step(h, **inputs)
+        o = core.advance(h, inputs["rim_x"], inputs["rim_vx"], inputs["rim_z"],
+                         inputs["rim_vz"], inputs["wheel_torque"], inputs["road_z"],
+                         inputs["road_vz"])
+        want = np.array([o.rim_fz_n, o.rim_fx_n, o.rim_my_n_m, o.contact_fz_n, o.contact_fx_n,
+                         o.spin_rad_s, o.sliding_points])
+        worst = max(worst, float(np.max(np.abs(got - want) / np.maximum(np.abs(want), 1.0))))
+        spread.append(got[1])
+    fmu.close()
+    assert worst < 1e-12
+    assert np.ptp(spread) > 1e3  # Fx moved: the brake and the bump were felt
+
+
+def test_states_round_trip_and_refused_steps_change_nothing(fmu_path):
+    fmu = Instance(fmu_path, speed=10.0).start()
+    for k in range(1, 6):
+        fmu.step(1e-3, **_drive(k, 1e-3))
+    state = fmu.fmu.getFMUstate()
+    serialized = fmu.fmu.serializeFMUstate(state)
+    t = fmu.t
+    first = fmu.step(1e-3, **_drive(6, 1e-3))
+    # a step that is no whole number of the tire's step_size is refused, naming it
+    with pytest.raises(FMICallException):
+        fmu.fmu.doStep(fmu.t, 1.5e-4)
+    assert "must be a whole multiple of the tire's step_size = 0.0001 s" in fmu.log[-1][1]
+    fmu.fmu.setFMUstate(fmu.fmu.deSerializeFMUstate(serialized))
+    fmu.t = t
+    assert np.array_equal(fmu.step(1e-3, **_drive(6, 1e-3)), first)
+    fmu.close()
+
+
+def test_parameter_problems_are_logged_all_at_once(fmu_path):
+    fmu = Instance(fmu_path, n_elements=3, friction_coefficient=-1.0, load=-1.0,
+                   step_size=0.5)
+    with pytest.raises(FMICallException):
+        fmu.start()
+    lines = [message for status, message in fmu.log if "parameter problem" in message]
+    assert len(lines) == 4 and all(m.startswith(f"parameter problem {i}/4: ")
+                                   for i, m in enumerate(lines, 1))
+    text = " ".join(lines)
+    # in the FMU's names, with the value and what is allowed
+    for said in ("load = -1 N", "n_elements = 3", "step_size = 0.5 s",
+                 "friction_coefficient = -1"):
+        assert said in text
+    # and the FMU is in the error state, saying why
+    with pytest.raises(FMICallException):
+        fmu.fmu.doStep(0.0, 1e-3)
+    assert "the parameters were refused" in fmu.log[-1][1]
+    fmu.fmu.freeInstance()
+
+
+def test_the_wheels_spin_and_the_brake_force_build_up(fmu_path):
+    """Free rolling at 10 m/s spins the wheel at about V/R; a brake torque slows it below
+    that and the tire pulls the rim backwards while the axle moment opposes the brake."""
+    fmu = Instance(fmu_path, speed=10.0).start()
+    free = [fmu.step(1e-3) for _ in range(20)][-1]
+    braked = [fmu.step(1e-3, wheel_torque=-3000.0) for _ in range(60)][-1]
+    fmu.close()
+    radius = TireParameters().R
+    assert free[5] == pytest.approx(10.0 / radius, rel=0.02)
+    assert braked[5] < free[5]
+    assert braked[1] < -1000.0 and braked[2] > 1000.0

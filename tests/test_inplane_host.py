@@ -1,0 +1,121 @@
+"""The in-plane tire as a host drives it (core): the road given at the zone front, the
+settings' checks, the stepper's state bytes."""
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+from tire_fmu.core.inplane_contact import InPlaneSimulator, InPlaneStepper
+from tire_fmu.core.inplane_host import HostSettings, build_host_stepper
+from tire_fmu.core.obstacles import HostRoad, cleat
+from tire_fmu.core.parameters import ParameterError
+
+
+def test_host_road_window_means_are_the_profiles_integral():
+    road = HostRoad(front_m=0.3, keep_m=2.0)
+    rng = np.random.default_rng(4)
+    distance = np.cumsum(rng.uniform(1e-3, 4e-3, 400))
+    heights = 0.01 * np.sin(25.0 * distance) + 1e-3 * rng.standard_normal(400)
+    for d, z in zip(distance, heights):
+        road.record(float(d), float(z))
+    s = distance + 0.3
+
+    def profile(x):  # written apart: linear between samples, level outside
+        return float(np.interp(x, s, heights))
+
+    lo = np.linspace(s[-1] - 1.5, s[-1] - 0.02, 9)
+    hi = lo + np.linspace(0.001, 0.02, 9)
+    mean, rate = road.window_reads(lo, hi, 12.0)
+    expected = [quad(profile, a, b, points=s[(s > a) & (s < b)][:50], limit=200)[0] / (b - a)
+                for a, b in zip(lo, hi)]
+    assert np.allclose(mean, expected, rtol=0, atol=1e-12)
+    ends = np.array([[profile(a), profile(b)] for a, b in zip(lo, hi)])
+    assert np.allclose(rate, 12.0 * (ends[:, 1] - ends[:, 0]) / (hi - lo), atol=1e-10)
+    # the same distance again replaces the newest sample, and the state reads back bit for bit
+    road.record(float(distance[-1]), 0.02)
+    assert road.z[-1] == 0.02 and road.s.size <= 400
+    copy = HostRoad(0.3, 2.0)
+    copy.restore(road.state())
+    assert np.array_equal(copy.window_reads(lo, hi, 3.0)[0], road.window_reads(lo, hi, 3.0)[0])
+
+
+@pytest.fixture(scope="module")
+def deflected():
+    model = build_host_stepper(HostSettings(speed_m_s=10.0))
+    return model.stepper.sim.model, model.deflection_m
+
+
+def test_host_road_converges_to_the_simulators_own_obstacle(deflected):
+    """A rounded 20 mm bump given as road_z at the zone front, sampled per communication
+    step, gives the forces of the simulator reading the bump itself; the difference is the
+    host's sampling (cubic in time between communication points, linear along the road
+    between the tire's own steps), and halving the communication step more than halves it."""
+    tire, deflection = deflected
+    bump = cleat(0.02, 0.06, "rounded")
+    options = dict(step_s=1e-4, point_spacing_m=0.01, f_max_hz=300.0)
+    ahead = 0.35
+    errors = []
+    for communication_s in (1e-3, 5e-4):
+        own = InPlaneStepper(InPlaneSimulator(tire, 100, 10.0, deflection, obstacle=bump,
+                                              obstacle_ahead_m=ahead, **options))
+        host = InPlaneStepper(InPlaneSimulator(tire, 100, 10.0, deflection, **options),
+                              host_road=True)
+        front = host.road.front_m
+        worst, span = 0.0, []
+        for k in range(1, int(round(0.1 / communication_s)) + 1):
+            s = 10.0 * k * communication_s + front - ahead
+            z, slope = bump.profile(np.array([s]))
+            a = own.advance(communication_s)
+            b = host.advance(communication_s, road_z_m=float(z[0]),
+                             road_vz_m_s=float(10.0 * slope[0]))
+            worst = max(worst, abs(a.rim_fz_n - b.rim_fz_n), abs(a.rim_fx_n - b.rim_fx_n))
+            span.append(a.rim_fz_n)
+        errors.append(worst / np.ptp(span))
+    assert np.ptp(span) > 5e3  # the bump is felt
+    assert errors[0] < 5e-3
+    assert errors[1] < 0.5 * errors[0]
+
+
+def test_at_rest_the_host_road_is_a_shaker_plate(deflected):
+    """At rest a slow 1 mm rise of the road under the whole tire adds what the static
+    footprint 1 mm deeper carries (two static solves of the same tire)."""
+    tire, _ = deflected
+    model = build_host_stepper(HostSettings(speed_m_s=0.0))
+    stepper, sim = model.stepper, model.stepper.sim
+    rise, duration, h = 1e-3, 0.4, 1e-3
+    for k in range(1, int(round(duration / h)) + 1):
+        u = min(k * h / 0.3, 1.0)
+        z = rise * (3 * u**2 - 2 * u**3)
+        vz = rise * (6 * u - 6 * u**2) / 0.3 if u < 1 else 0.0
+        out = stepper.advance(h, road_z_m=z, road_vz_m_s=vz)
+    expected = sim.static_load_n(model.deflection_m + rise) - sim.static_load_n(
+        model.deflection_m)
+    assert out.rim_fz_n - sim.static_load_n() == pytest.approx(expected, rel=2e-3)
+
+
+def test_the_stepper_state_reads_back_to_the_same_bits(deflected):
+    model = build_host_stepper(HostSettings(speed_m_s=10.0))
+    stepper = model.stepper
+    for k in range(5):
+        stepper.advance(1e-3, torque_n_m=-2000.0, road_z_m=1e-3 * k, road_vz_m_s=0.01)
+    saved = stepper.state_bytes()
+    assert stepper.state_problem(saved) is None
+    first = stepper.advance(1e-3, torque_n_m=-2000.0, road_z_m=6e-3)
+    stepper.set_state_bytes(saved)
+    assert stepper.advance(1e-3, torque_n_m=-2000.0, road_z_m=6e-3) == first
+    assert "wrong size" in stepper.state_problem(saved[:-1])
+    assert "not an in-plane" in stepper.state_problem(b"X" * len(saved))
+
+
+def test_every_bad_setting_is_named_at_once():
+    with pytest.raises(ParameterError) as caught:
+        build_host_stepper(HostSettings(load_n=-5.0, n_elements=3, step_s=1.0,
+                                        tangential={"friction_coefficient": -1.0, "mu": 2.0},
+                                        tire={"EI": -1.0}))
+    named = {p.field for p in caught.value.details}
+    assert {"load_n", "n_elements", "step_s", "friction_coefficient", "mu", "EI"} <= named
+
+
+def test_a_speed_near_the_meshs_critical_speed_is_refused():
+    with pytest.raises(ParameterError, match=r"critical speed 42\.6\d m/s"):
+        build_host_stepper(HostSettings(speed_m_s=41.0))

@@ -1,0 +1,170 @@
+"""The in-plane tire as an FMU builds it: every setting checked at once, the footprint for the
+load, the reduced step for the speed, a stepper the host advances.
+
+:class:`HostSettings` holds what an FMU's parameters give (the tire data, radial and
+tangential, and the operating point); :func:`build_host_stepper` validates them all, reporting
+every problem in one :class:`~.parameters.ParameterError`, and returns the
+:class:`~.inplane_contact.InPlaneStepper` with the host's road
+(:class:`~.obstacles.HostRoad`) and a summary for the log. The speed must stay below the
+mesh's critical speed (:func:`.inplane_modes.critical_speed`): with the paper's lumped
+sidewall a finer mesh lowers it (42.6 m/s at N = 100, under 11 m/s at N = 400), and above it
+the rolling ring's standing waves grow without bound.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+
+from .contact import DEFAULT_ZONE_LENGTH_M
+from .inplane import InPlaneTire, TangentialParameters, tangential_problems
+from .inplane_contact import InPlaneSimulator, InPlaneStepper, deflection_for_load
+from .parameters import (
+    DEFAULT_LOAD_N,
+    MAX_ELEMENTS,
+    MIN_ELEMENTS,
+    ParameterError,
+    Problem,
+    TireParameters,
+    tire_problems,
+)
+
+#: The simulator's step the host's steps are whole multiples of (s).
+DEFAULT_HOST_STEP_S = 1e-4
+#: The highest natural frequency of the free ring's modes the reduced step keeps (Hz).
+DEFAULT_HOST_F_MAX_HZ = 300.0
+#: The in-plane tire's default contact points (m): 10 mm, where its cleat forces converge
+#: within a few per cent (docs/theory.md section 13).
+DEFAULT_HOST_POINT_SPACING_M = 0.01
+#: Loads the in-plane FMU takes (N): above, the static deflection leaves the linear ring.
+MAX_HOST_LOAD_N = 1.0e5
+#: The speed may be at most this fraction of the mesh's critical speed.
+CRITICAL_SPEED_FRACTION = 0.95
+#: The operating point's ranges (inclusive): (low, high, unit) by HostSettings field.
+HOST_RANGES = {
+    "load_n": (0.0, MAX_HOST_LOAD_N, "N"),
+    "speed_m_s": (0.0, 150.0, "m/s"),
+    "n_elements": (MIN_ELEMENTS, MAX_ELEMENTS, ""),
+    "f_max_hz": (1.0, 1e5, "Hz"),
+    "zone_length_m": (0.01, 2.0, "m"),
+    "point_spacing_m": (1e-4, 0.1, "m"),
+    "step_s": (1e-6, 1e-3, "s"),
+}
+
+
+@dataclass(frozen=True)
+class HostSettings:
+    """What the in-plane FMU's parameters give (SI). ``tire`` and ``tangential`` are plain
+    values by field name (the radial ones of :class:`~.parameters.TireParameters`, the
+    tangential ones of :class:`~.inplane.TangentialParameters`); missing ones take the
+    in-plane defaults (GL073A with the paper's lumped sidewall)."""
+
+    tire: dict = field(default_factory=dict)
+    tangential: dict = field(default_factory=dict)
+    load_n: float = DEFAULT_LOAD_N
+    speed_m_s: float = 0.0
+    n_elements: int = 100
+    f_max_hz: float = DEFAULT_HOST_F_MAX_HZ
+    zone_length_m: float = DEFAULT_ZONE_LENGTH_M
+    point_spacing_m: float = DEFAULT_HOST_POINT_SPACING_M
+    step_s: float = DEFAULT_HOST_STEP_S
+    wheel_free: bool = True
+
+
+@dataclass(frozen=True)
+class HostModel:
+    """The stepper an FMU advances and what its log says about it."""
+
+    stepper: InPlaneStepper
+    deflection_m: float
+    critical_speed_m_s: float  # nan at rest (not computed)
+    points_in_contact: int
+
+    def summary(self) -> dict:
+        sim = self.stepper.sim
+        return {"n_elements": sim.n_elements, "coordinates": sim._ny,
+                "contact_points": sim._zone.n_points,
+                "points_in_contact": self.points_in_contact,
+                "deflection_m": self.deflection_m,
+                "critical_speed_m_s": self.critical_speed_m_s}
+
+
+def _number_problem(name, value, unit, low, high, integer=False) -> Problem | None:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
+        value) and low <= value <= high and (not integer or float(value).is_integer())
+    if ok:
+        return None
+    kind = "an integer" if integer else "a number"
+    return Problem(name, value, unit, f"{kind} in [{low:g}, {high:g}] {unit}".rstrip())
+
+
+def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTire | None]:
+    """Every problem with the settings on their own, and the tire if its data are sound."""
+    problems = []
+    tire_values = {"sidewall_max_order": 0.0, **settings.tire}
+    problems += tire_problems(tire_values)
+    known = {f.name for f in fields(TangentialParameters)}
+    for name in sorted(set(settings.tangential) - known):
+        problems.append(Problem(name, settings.tangential[name], "",
+                                f"one of the tangential parameters {', '.join(sorted(known))}",
+                                "unknown tangential parameter"))
+    tangential = TangentialParameters(**{k: v for k, v in settings.tangential.items()
+                                         if k in known})
+    radius = tire_values.get("R", TireParameters().R)
+    problems += tangential_problems(tangential, radius if isinstance(radius, (int, float))
+                                    else TireParameters().R)
+    for name, (low, high, unit) in HOST_RANGES.items():
+        problem = _number_problem(name, getattr(settings, name), unit, low, high,
+                                  integer=name == "n_elements")
+        if problem:
+            problems.append(problem)
+    if isinstance(settings.load_n, (int, float)) and settings.load_n == 0:
+        problems.append(Problem("load_n", settings.load_n, "N", "> 0 N",
+                                "the in-plane tire is built pressed onto the road"))
+    tire = None
+    if not problems:
+        try:
+            tire = InPlaneTire(TireParameters(**tire_values), tangential)
+        except ParameterError as error:
+            problems += error.details
+    return problems, tire
+
+
+def build_host_stepper(settings: HostSettings) -> HostModel:
+    """The stepper for these settings, or a ParameterError naming every problem."""
+    from .inplane_modes import critical_speed
+
+    problems, tire = settings_problems(settings)
+    if problems:
+        raise ParameterError(problems)
+    n = int(settings.n_elements)
+    critical = math.nan
+    if settings.speed_m_s > 0:
+        critical = critical_speed(tire, n).speed_m_s
+        if settings.speed_m_s > CRITICAL_SPEED_FRACTION * critical:
+            raise ParameterError([Problem(
+                "speed_m_s", settings.speed_m_s, "m/s",
+                f"at most {CRITICAL_SPEED_FRACTION:g} of the mesh's critical speed "
+                f"{critical:.4g} m/s (n_elements = {n})",
+                "with the paper's lumped sidewall a finer mesh lowers it: use fewer elements")])
+    options = {"zone_length_m": settings.zone_length_m,
+               "point_spacing_m": settings.point_spacing_m}
+    # the footprint of the reduced tire the step runs (its static shapes make it the full
+    # tire's to a fraction of a per cent), so that rim_Fz starts at the load
+    deflection = deflection_for_load(tire, settings.load_n, n, f_max_hz=settings.f_max_hz,
+                                     **options)
+    if not 0.0 < deflection < 0.2 * tire.tire.R:
+        raise ParameterError([Problem("load_n", settings.load_n, "N",
+                                      f"a load the tire carries below {0.2 * tire.tire.R:g} m "
+                                      "of deflection")])
+    sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
+                           wheel="free" if settings.wheel_free else "held",
+                           f_max_hz=settings.f_max_hz, **options)
+    stepper = InPlaneStepper(sim, host_road=True)
+    contact = stepper.state.contact
+    if contact.size and (contact[0] or contact[-1]):
+        raise ParameterError([Problem(
+            "zone_length_m", settings.zone_length_m, "m",
+            f"longer than the footprint at {settings.load_n:g} N",
+            "the static footprint reaches the end of the contact zone")])
+    return HostModel(stepper, deflection, critical, int(contact.sum()))
