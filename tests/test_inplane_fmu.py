@@ -111,6 +111,9 @@ def test_the_fmu_gives_the_cores_numbers(fmu_path):
     fmu.close()
     assert worst < 1e-12
     assert np.ptp(spread) > 1e3  # Fx moved: the brake and the bump were felt
+    # both ran the C step: the FMU its own library, the core the package's
+    assert core.sim.stepping_with == "compiled"
+    assert any("stepping with the compiled in-plane step" in m for _, m in fmu.log)
 
 
 def test_states_round_trip_and_refused_steps_change_nothing(fmu_path):

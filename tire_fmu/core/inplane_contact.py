@@ -60,6 +60,9 @@ from .inplane import InPlaneRing, InPlaneTire, quadratic_in_spin
 from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
 
+#: The arithmetic a step runs on: the C of native/c/inplane_step.c, numpy's (the readable
+#: reference), or the C when it can be had.
+BACKENDS = ("numpy", "compiled", "auto")
 #: Most active-set passes one step may take before it is refused.
 MAX_SET_PASSES = 50
 #: Passes after which the sets may only shrink (see the step).
@@ -138,6 +141,8 @@ class InPlaneSimulator:
     obstacle_ahead_m: float = 0.5
     torque_n_m: float = 0.0
     f_max_hz: float | None = None
+    backend: str = "numpy"
+    library: object = field(default=None, repr=False)
     _state: dict = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
@@ -156,9 +161,42 @@ class InPlaneSimulator:
                 self.model.tire.R):
             problems.append(Problem("deflection_m", self.deflection_m, "m",
                                     f"in [0, {0.2 * self.model.tire.R:g}) m"))
+        if self.backend not in BACKENDS:
+            problems.append(Problem("backend", self.backend, "", f"one of {', '.join(BACKENDS)}"))
         if problems:
             raise ParameterError(problems)
         self._build()
+        self._kernel = self._compiled_kernel()
+
+    def _compiled_kernel(self):
+        """The C step (``native/c/inplane_step.c``) for backend "compiled" or "auto" (when
+        it can be had: else numpy, with a warning), or None for numpy's."""
+        if self.backend == "numpy":
+            return None
+        try:  # outside the core (ctypes and a C compiler): imported only when asked for
+            from ..native.inplane_kernel import InPlaneKernel
+            from ..native.kernel import KernelUnavailable
+        except ImportError:
+            if self.backend == "compiled":
+                raise
+            return None
+        try:
+            return InPlaneKernel(self, self.library)
+        except KernelUnavailable as error:
+            if self.backend == "compiled":
+                raise
+            import warnings
+
+            from .simulator import KernelFallbackWarning
+
+            warnings.warn(f"{error}; the in-plane tire steps with numpy", KernelFallbackWarning,
+                          stacklevel=3)
+            return None
+
+    @property
+    def stepping_with(self) -> str:
+        """"compiled" or "numpy": which arithmetic steps this simulator."""
+        return "numpy" if self._kernel is None else "compiled"
 
     # ----- set-up -----
     @property
@@ -412,6 +450,14 @@ class InPlaneSimulator:
         """One trapezoidal step to ``time`` from ``state``: the road under the points
         (``height``, ``rate``, the rim's z already taken off), the rim's motion before and
         after (x, vx, ax, z, vz, az) and the torque. Returns the new state."""
+        if self._kernel is not None:
+            value = torque(time) if callable(torque) else torque
+            status, new = self._kernel.step(state, height, rate, value, rim_old, rim)
+            if status == 0:
+                return new
+            raise ContactSetError(f"step at t = {time:g} s: the contact and stick sets did "
+                                  + (f"not settle in {MAX_SET_PASSES} passes" if status == 1
+                                     else "not give a solvable point solve"))
         h = self.step_s
         y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
         contact, stick, slip_sign = state.contact, state.stick, state.slip_sign

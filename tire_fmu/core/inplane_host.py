@@ -83,6 +83,7 @@ class HostModel:
     def summary(self) -> dict:
         sim = self.stepper.sim
         return {"n_elements": sim.n_elements, "coordinates": sim._ny,
+                "stepping_with": sim.stepping_with,
                 "contact_points": sim._zone.n_points,
                 "points_in_contact": self.points_in_contact,
                 "deflection_m": self.deflection_m,
@@ -130,8 +131,12 @@ def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTir
     return problems, tire
 
 
-def build_host_stepper(settings: HostSettings) -> HostModel:
-    """The stepper for these settings, or a ParameterError naming every problem."""
+def build_host_stepper(settings: HostSettings, backend: str = "auto",
+                       library=None) -> HostModel:
+    """The stepper for these settings, or a ParameterError naming every problem. ``backend``
+    is the step's arithmetic (:data:`~.inplane_contact.BACKENDS`: "auto" steps with the C of
+    ``native/c/inplane_step.c`` when it can be had, ``library`` being a loaded kernel library
+    to use, else numpy)."""
     from .inplane_modes import critical_speed
 
     problems, tire = settings_problems(settings)
@@ -159,7 +164,8 @@ def build_host_stepper(settings: HostSettings) -> HostModel:
                                       "of deflection")])
     sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
                            wheel="free" if settings.wheel_free else "held",
-                           f_max_hz=settings.f_max_hz, **options)
+                           f_max_hz=settings.f_max_hz, backend=backend, library=library,
+                           **options)
     stepper = InPlaneStepper(sim, host_road=True)
     contact = stepper.state.contact
     if contact.size and (contact[0] or contact[-1]):

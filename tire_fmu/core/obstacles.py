@@ -210,75 +210,95 @@ class HostRoad(_WindowMeans):
 
     def __init__(self, front_m: float, keep_m: float):
         self.front_m, self.keep_m = float(front_m), float(keep_m)
-        self.s = np.zeros(0)
-        self.z = np.zeros(0)
-        self._at = np.zeros(0)  # the integral from the first sample to each sample
+        # distances, heights and the running integral, live in rows [lo, hi) of a buffer
+        # that grows by doubling (a sample a step: no copy of the history per sample)
+        self._buffer = np.zeros((3, 64))
+        self._lo = self._hi = 0
+
+    @property
+    def s(self) -> np.ndarray:
+        return self._buffer[0, self._lo:self._hi]
+
+    @property
+    def z(self) -> np.ndarray:
+        return self._buffer[1, self._lo:self._hi]
+
+    @property
+    def _at(self) -> np.ndarray:
+        return self._buffer[2, self._lo:self._hi]
 
     def record(self, distance_m: float, height_m: float) -> None:
         """The host's height at the front when the tire has travelled ``distance_m``."""
         s = distance_m + self.front_m
-        if self.s.size and s <= self.s[-1] + 1e-12 * max(1.0, abs(s)):
-            self.z[-1] = height_m
-            if self.s.size > 1:
-                self._at[-1] = self._at[-2] + 0.5 * (self.s[-1] - self.s[-2]) * (
-                    self.z[-1] + self.z[-2])
+        b, lo, hi = self._buffer, self._lo, self._hi
+        if hi > lo and s <= b[0, hi - 1] + 1e-12 * max(1.0, abs(s)):
+            b[1, hi - 1] = height_m
+            if hi - lo > 1:
+                b[2, hi - 1] = b[2, hi - 2] + 0.5 * (b[0, hi - 1] - b[0, hi - 2]) * (
+                    b[1, hi - 1] + b[1, hi - 2])
             return
-        keep = max(int(np.searchsorted(self.s, s - self.keep_m, side="right")) - 1, 0)
-        at = self._at[-1] + 0.5 * (s - self.s[-1]) * (height_m + self.z[-1]) if self.s.size \
-            else 0.0
-        self.s = np.append(self.s[keep:], s)
-        self.z = np.append(self.z[keep:], height_m)
-        self._at = np.append(self._at[keep:], at)
+        # forget what lies behind the reach, keeping the sample just before it
+        lo = max(int(np.searchsorted(b[0, lo:hi], s - self.keep_m, side="right")) - 1, 0) + lo
+        if hi == b.shape[1]:
+            live = hi - lo
+            grown = np.zeros((3, max(64, 2 * live + 2)))
+            grown[:, :live] = b[:, lo:hi]
+            self._buffer, b, lo, hi = grown, grown, 0, live
+        b[0, hi], b[1, hi] = s, height_m
+        b[2, hi] = b[2, hi - 1] + 0.5 * (s - b[0, hi - 1]) * (height_m + b[1, hi - 1]) \
+            if hi > lo else 0.0
+        self._lo, self._hi = lo, hi + 1
 
     def state(self) -> np.ndarray:
         """(samples, 3): distances, heights and the running integral, what :meth:`restore`
         takes back (the integral too, so that a restored road reads the same bits)."""
-        return np.stack([self.s, self.z, self._at], axis=1)
+        return self._buffer[:, self._lo:self._hi].T.copy()
 
     def restore(self, samples: np.ndarray) -> None:
         samples = np.asarray(samples, dtype=float).reshape(-1, 3)
-        self.s, self.z, self._at = (samples[:, i].copy() for i in range(3))
+        n = samples.shape[0]
+        self._buffer = np.zeros((3, max(64, 2 * n + 2)))
+        self._buffer[:, :n] = samples.T
+        self._lo, self._hi = 0, n
+
+    def _reads(self, x):
+        """(height, integral) at each x: one search for both."""
+        s, z, at = self.s, self.z, self._at
+        n = s.size
+        if n < 2:
+            level = z[0] if n else 0.0
+            return np.full(x.shape, level), level * (x - (s[0] if n else 0.0))
+        k = np.searchsorted(s, x, side="right") - 1
+        np.clip(k, 0, n - 2, out=k)
+        s_k, z_k = s[k], z[k]
+        slope = (z[k + 1] - z_k) / (s[k + 1] - s_k)
+        inside = np.clip(x, s[0], s[-1])
+        past = inside - s_k
+        height = z_k + slope * past  # level at the end values outside the samples
+        return height, at[k] + (z_k + 0.5 * slope * past) * past + (x - inside) * height
 
     def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
         """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
         ``speed_m_s``: the rate of a window mean is the speed times the difference of the
         heights at its ends over its width (the profile is continuous, so this is exact)."""
-        both = np.concatenate([s_lo, s_hi])
-        at, (height, _) = self.integral(both), self.profile(both)
         n = len(s_lo)
+        height, at = self._reads(np.concatenate([s_lo, s_hi]))
         width = np.asarray(s_hi) - np.asarray(s_lo)
         safe = np.where(width > 0, width, 1.0)
         mean = np.where(width > 0, (at[n:] - at[:n]) / safe, height[:n])
         return mean, speed_m_s * (height[n:] - height[:n]) / safe
 
-    def _segment(self, s):
-        s = np.asarray(s, dtype=float)
-        k = np.clip(np.searchsorted(self.s, s, side="right") - 1, 0, max(self.s.size - 2, 0))
-        return s, k
-
     def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
         """(height, slope dz/ds) at ``s`` (m)."""
-        s = np.asarray(s, dtype=float)
+        x = np.asarray(s, dtype=float)
+        height, _ = self._reads(x)
         if self.s.size < 2:
-            level = self.z[0] if self.s.size else 0.0
-            return np.full(s.shape, level), np.zeros(s.shape)
-        s, k = self._segment(s)
-        slope = (self.z[k + 1] - self.z[k]) / (self.s[k + 1] - self.s[k])
-        inside = (s >= self.s[0]) & (s <= self.s[-1])
-        height = np.where(s < self.s[0], self.z[0],
-                          np.where(s > self.s[-1], self.z[-1],
-                                   self.z[k] + slope * (s - self.s[k])))
-        return height, np.where(inside, slope, 0.0)
+            return height, np.zeros(x.shape)
+        gap = np.diff(self.s)
+        k = np.clip(np.searchsorted(self.s, x, side="right") - 1, 0, self.s.size - 2)
+        inside = (x >= self.s[0]) & (x <= self.s[-1])
+        return height, np.where(inside, np.diff(self.z)[k] / gap[k], 0.0)
 
     def integral(self, s) -> np.ndarray:
-        """∫ of the height from the first sample to ``s`` (m²; level outside the samples)."""
-        s = np.asarray(s, dtype=float)
-        if self.s.size < 2:
-            level = self.z[0] if self.s.size else 0.0
-            return level * (s - (self.s[0] if self.s.size else 0.0))
-        s, k = self._segment(s)
-        past = np.clip(s, self.s[0], self.s[-1]) - self.s[k]
-        slope = (self.z[k + 1] - self.z[k]) / (self.s[k + 1] - self.s[k])
-        inside = self._at[k] + self.z[k] * past + 0.5 * slope * past**2
-        return (inside + np.minimum(s - self.s[0], 0.0) * self.z[0]
-                + np.maximum(s - self.s[-1], 0.0) * self.z[-1])
+        """∫ of the height from the first sample kept to ``s`` (m²; level outside)."""
+        return self._reads(np.asarray(s, dtype=float))[1]

@@ -125,7 +125,7 @@ def build_inplane_fmu(out: str | Path = ".", validate: bool = True, tire=None) -
             _INPLANE_SLAVE_SOURCE, fmu_destination(out, INPLANE_MODEL_IDENTIFIER),
             INPLANE_SLAVE_MODULE, project_files=project, capabilities=CAPABILITIES,
             units={v.name: v.unit for v in inplane_fmu_variables() if v.unit},
-            validate=validate, real_starts=starts)
+            validate=validate, real_starts=starts, kernel=True)
 
 
 def fmu_destination(out: str | Path, model_identifier: str) -> Path:
@@ -201,7 +201,8 @@ def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
     names = ("__init__.py", "interface.py", "spec.py") + (("slave.py",) if with_slave else ())
     for name in names:  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
-    for name in ("__init__.py", "kernel.py", "contract.py"):  # the compiled kernel's ctypes
+    # the compiled kernels' ctypes (the radial step's and the in-plane step's)
+    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py"):
         shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"

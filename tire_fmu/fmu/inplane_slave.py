@@ -74,7 +74,9 @@ class TireInPlane(TireModal):
             zone_length_m=named["contact_zone_length"],
             point_spacing_m=named["contact_point_spacing"], step_s=named["step_size"],
             wheel_free=bool(named["wheel_free"]))
-        return build_host_stepper(settings), None, []
+        library, why = self._kernel_library()
+        self._kernel_note = why or "stepping with the compiled in-plane step"
+        return build_host_stepper(settings, "compiled" if library else "numpy", library), None, []
 
     def _set_simulator(self, simulator, built_for) -> None:
         self._simulator, self._built_for = simulator, built_for
@@ -107,8 +109,8 @@ class TireInPlane(TireModal):
             f"{summary['n_elements']}, {summary['coordinates']} coordinates, "
             f"{summary['contact_points']} contact points ({summary['points_in_contact']} on "
             f"the road), deflection {summary['deflection_m'] * 1e3:.4g} mm, critical speed "
-            f"{summary['critical_speed_m_s']:.4g} m/s; core tire_fmu {tire_fmu.__version__} "
-            f"from {tire_fmu.__file__}")
+            f"{summary['critical_speed_m_s']:.4g} m/s, {self._kernel_note}; core tire_fmu "
+            f"{tire_fmu.__version__} from {tire_fmu.__file__}")
 
     def _show_outputs(self, out) -> None:
         values = self._values

@@ -25,7 +25,7 @@ from ..core.contract import StepContract
 from .contract import to_ctypes
 
 #: The C files of the kernel library, and what they include.
-KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c")
+KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c", "inplane_step.c")
 KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h")
 KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
 LIBRARY_NAME = "tire_kernel"
