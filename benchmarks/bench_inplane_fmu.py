@@ -4,14 +4,15 @@
    of the inputs, doStep, getReal of the outputs, at N = 100, in four regimes: at rest (a
    1 mm, 10 Hz road undulation), free rolling at 10 m/s, braking at 10 m/s (-3 kN m on the
    wheel) and at 10 m/s over 20 mm x 20 mm cleats read at the zone front (one every 0.5 m).
-       (a) TireInPlane.fmu, the in-plane tire (Python FMU: the numpy step),
+       (a) TireInPlane.fmu, the in-plane tire (Python FMU, its step in C: inplane_step.c),
        (b) TireModal.fmu, the radial Python FMU (its compiled kernel), same regime without
            the torque,
        (c) TireModalNative.fmu, the radial native FMU,
        (d) a minimal pythonfmu slave (benchmarks/bench_fmu.py's), the floor of a Python FMU,
        (e) a trivial C FMU (benchmarks/trivial_fmu), the floor of a C FMU.
    Rounds alternate, medians. The in-plane tire has no native FMU yet: (a)/(d) is the
-   figure to watch.
+   figure to watch. ``--numpy`` also runs the in-plane FMU with its numpy step (the FMU
+   without its compiled library).
 2. Initialisation (instantiate -> exitInitializationMode, warm process) of TireInPlane at
    N = 100 and 400, at rest and rolling at 5 m/s (below N = 400's critical speed), beside
    TireModal's.
@@ -27,6 +28,7 @@ import statistics
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -69,7 +71,8 @@ def over_cleats(t):
 
 REGIMES = {"at rest": (0.0, undulation), "10 m/s, free rolling": (10.0, rolling),
            "10 m/s, braking -3 kN m": (10.0, braking), "10 m/s, over cleats": (10.0, over_cleats)}
-NAMES = {"inplane": "(a) TireInPlane (Python FMU, numpy step)",
+NAMES = {"inplane": "(a) TireInPlane (Python FMU, C step)",
+         "inplane_numpy": "(a') TireInPlane, numpy step (its C library taken out)",
          "python": "(b) TireModal (radial Python FMU)",
          "native": "(c) TireModalNative (radial native FMU)",
          "minimal": "(d) minimal pythonfmu slave", "trivial": "(e) trivial C FMU"}
@@ -77,10 +80,11 @@ NAMES = {"inplane": "(a) TireInPlane (Python FMU, numpy step)",
 
 class Case:
     def __init__(self, fmu: Opened, kind: str, speed: float, signal, steps: int):
-        self.slave = fmu.initialised({"speed": speed} if kind in ("inplane", "python",
-                                                                  "native") else {})
-        inputs = INPLANE_INPUTS if kind == "inplane" else RADIAL_INPUTS
-        outputs = INPLANE_OUTPUTS if kind == "inplane" else RADIAL_OUTPUTS
+        tire = kind not in ("minimal", "trivial")
+        self.slave = fmu.initialised({"speed": speed} if tire else {})
+        inplane = kind.startswith("inplane")
+        inputs = INPLANE_INPUTS if inplane else RADIAL_INPUTS
+        outputs = INPLANE_OUTPUTS if inplane else RADIAL_OUTPUTS
         self.inputs = [fmu.vr[n] for n in inputs]
         self.outputs = [fmu.vr[n] for n in outputs]
         self.values = [signal(k * H)[:len(inputs)] for k in range(steps)]
@@ -103,6 +107,15 @@ class Case:
         self.slave.freeInstance()
 
 
+def without_kernel(fmu: Path, dest: Path) -> Path:
+    """A copy of the FMU without its compiled kernel libraries: it steps with numpy."""
+    with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(dest, "w") as copy:
+        for item in source.infolist():
+            if Path(item.filename).stem != "tire_kernel":
+                copy.writestr(item, source.read(item.filename))
+    return dest
+
+
 def init_time(fmu: Opened, parameters: dict, repeats: int) -> float:
     times = []
     for _ in range(repeats):
@@ -120,6 +133,8 @@ def main(argv=None) -> None:
     parser.add_argument("--steps", type=int, default=200, help="steps per round (200)")
     parser.add_argument("--init-repeats", type=int, default=1,
                         help="warm initialisations per case (1)")
+    parser.add_argument("--numpy", action="store_true",
+                        help="also run the in-plane FMU with its numpy step")
     parser.add_argument("--record", metavar="JSON", help="also write the results there")
     args = parser.parse_args(argv)
     from record import load_average, write_record
@@ -133,10 +148,15 @@ def main(argv=None) -> None:
                                             platforms=("linux64",)),
                  "minimal": build_minimal(folder / "minimal"),
                  "trivial": build_trivial(folder / "trivial")}
+        names = dict(NAMES)
+        if args.numpy:
+            paths["inplane_numpy"] = without_kernel(paths["inplane"], folder / "numpy.fmu")
+        else:
+            del names["inplane_numpy"]
         fmus = {kind: Opened(path) for kind, path in paths.items()}
         horizon = 2000
         cases = {(regime, kind): Case(fmus[kind], kind, speed, signal, horizon)
-                 for regime, (speed, signal) in REGIMES.items() for kind in NAMES}
+                 for regime, (speed, signal) in REGIMES.items() for kind in names}
         for case in cases.values():
             case.run(50)  # past the first steps' transient
         times = {key: [] for key in cases}
@@ -154,18 +174,18 @@ def main(argv=None) -> None:
 
     print(f"1. Cost per communication step through fmpy, h = {H:g} s, N = 100 (median of "
           f"{args.rounds} alternating rounds of {args.steps} steps), µs")
-    print(f"   {'regime':<26}" + "".join(f" {key[:3]:>9}" for key in NAMES.values())
+    print(f"   {'regime':<26}" + "".join(f" {key.split()[0]:>9}" for key in names.values())
           + f" {'(a)/(b)':>8} {'(a)/(d)':>8} {'(b)/(d)':>8}")
     rows = {}
     for regime in REGIMES:
-        c = {kind: costs[regime, kind] for kind in NAMES}
-        rows[regime] = {NAMES[kind]: c[kind] for kind in NAMES}
-        print(f"   {regime:<26}" + "".join(f" {c[kind]:9.1f}" for kind in NAMES)
+        c = {kind: costs[regime, kind] for kind in names}
+        rows[regime] = {names[kind]: c[kind] for kind in names}
+        print(f"   {regime:<26}" + "".join(f" {c[kind]:9.1f}" for kind in names)
               + f" {c['inplane'] / c['python']:8.1f} {c['inplane'] / c['minimal']:8.1f} "
               f"{c['python'] / c['minimal']:8.2f}")
-    for name in NAMES.values():
+    for name in names.values():
         print(f"   {name}")
-    worst = max(r[NAMES["inplane"]] for r in rows.values())
+    worst = max(r[names["inplane"]] for r in rows.values())
     print(f"   the in-plane tire at its slowest: {worst * 1e-6 / H:.1f} s of wall time per "
           f"simulated second at h = {H:g} s")
     print(f"\n2. Initialisation, instantiate -> exitInitializationMode, warm process "
@@ -173,11 +193,11 @@ def main(argv=None) -> None:
     labels = list(inits["inplane"])
     print(f"   {'FMU':<44}" + "".join(f" {label:>16}" for label in labels))
     for kind in ("inplane", "python"):
-        print(f"   {NAMES[kind]:<44}" + "".join(f" {inits[kind][label]:16.2f}"
+        print(f"   {names[kind]:<44}" + "".join(f" {inits[kind][label]:16.2f}"
                                                   for label in labels))
     print(f"\nPython {sys.version.split()[0]}; each FMU's defaults otherwise.")
     if args.record:
-        write_record(args.record, {"step_us": rows, "init_s": {NAMES[k]: v
+        write_record(args.record, {"step_us": rows, "init_s": {names[k]: v
                                                               for k, v in inits.items()}},
                      load_at_start)
 

@@ -161,11 +161,12 @@ def inplane_fmu_cost_table() -> str:
     data = record("bench_inplane_fmu")
     costs, inits = data["results"]["step_us"], data["results"]["init_s"]
     names = list(next(iter(costs.values())))
+    tire, floor = (next(n for n in names if n.startswith(key)) for key in ("(a) ", "(d) "))
     lines = ["| per communication step through fmpy, h = 0.1 ms, µs | " + " | ".join(names)
              + " | (a)/(d) |", "|---" * (len(names) + 2) + "|"]
     for regime, row in costs.items():
         lines.append(f"| {regime} | " + " | ".join(f"{row[n]:.1f}" for n in names)
-                     + f" | {row[names[0]] / row[names[3]]:.0f} |")
+                     + f" | {row[tire] / row[floor]:.0f} |")
     labels = list(next(iter(inits.values())))
     lines += ["", "| initialisation, warm process, s | " + " | ".join(labels) + " |",
               "|---" * (len(labels) + 1) + "|"]

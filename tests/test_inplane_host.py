@@ -147,3 +147,23 @@ def test_the_compiled_step_is_the_numpy_step(deflected):
         sliding = max(sliding, a.sliding_points)
     assert worst < 1e-9
     assert sliding > 0  # friction's limit was reached: the slide branch ran too
+
+
+def test_a_rolled_back_stepper_steps_as_if_nothing_had_happened():
+    """A host's failed step is undone (the FMU refuses it and changes nothing): the steps
+    after a rollback give the bits of the same steps taken without the detour, the road
+    rewritten and a spin rebuild included."""
+    steppers = [build_host_stepper(HostSettings(speed_m_s=10.0)).stepper for _ in range(2)]
+    for stepper in steppers:
+        for k in range(5):
+            stepper.advance(1e-3, torque_n_m=-3000.0, road_z_m=1e-3 * k)
+    detour = steppers[1]
+    mark = detour.checkpoint()
+    spin = detour.sim._spin_now
+    for _ in range(40):  # a hard brake: the wheel's spin moves and the step is rebuilt
+        detour.advance(1e-3, torque_n_m=-2e4, road_z_m=0.02)
+    assert detour.sim._spin_now != spin
+    detour.rollback(mark)
+    a, b = (s.advance(1e-3, torque_n_m=-3000.0, road_z_m=6e-3) for s in steppers)
+    assert a == b
+    assert steppers[0].state_bytes() == detour.state_bytes()

@@ -274,6 +274,7 @@ class InPlaneSimulator:
                           "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows,
                           "m_translation": mass_rows @ translation}
         self._m, self._spin_terms = mass, spin_terms
+        self._rim_on_y = None
         self._jn, self._jx, self._jnw, self._jxw, self._jl = jn, jx, jn_work, jx_work, jl
         self._kn = zone.stiffness_n_per_m
         self._cn = zone.damping_n_s_per_m
@@ -592,14 +593,24 @@ class InPlaneSimulator:
         """(Fx, Fz, My) the tire puts on the rim (N, N, N m): the rim's rows of the tire's
         forces at the current spin (:meth:`InPlaneRing.rim_force`); ``rim`` (x, vx, ax, z, vz,
         az) adds the inertia of the rim's translation."""
-        rows, o = self._rim_rows, self._spin_now
-        f = (rows["k0"] + o * rows["k1"] + o**2 * rows["k2"]) @ (self._to_abs @ y)
-        f += (rows["c0"] + o * rows["c1"]) @ (self._to_abs @ yd)
+        k, c, m = self.rim_force_rows()
+        f = k @ y + c @ yd
         if ydd is not None:
-            f += rows["m"] @ (self._to_abs @ ydd)
+            f += m @ ydd
         if rim is not None:
-            f += rows["m_translation"] @ rim[[2, 5]]
+            f += self._rim_rows["m_translation"] @ rim[[2, 5]]
         return -f
+
+    def rim_force_rows(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(K, C, M), each (3, coordinates): the rim's rows of the tire's stiffness, damping
+        and mass on the simulator's coordinates at the current spin, so that the force on the
+        rim is -(K y + C ẏ + M ÿ) (made once per spin: a host reads it every step)."""
+        if self._rim_on_y is None or self._rim_on_y[0] != self._spin_now:
+            rows, o = self._rim_rows, self._spin_now
+            self._rim_on_y = (o, (rows["k0"] + o * rows["k1"] + o**2 * rows["k2"]) @ self._to_abs,
+                              (rows["c0"] + o * rows["c1"]) @ self._to_abs,
+                              rows["m"] @ self._to_abs)
+        return self._rim_on_y[1:]
 
     def static_load_n(self, deflection_m: float | None = None) -> float:
         """The vertical load a deflection (default: the simulator's) carries at rest (N)."""
@@ -727,6 +738,32 @@ class InPlaneStepper:
             float(-(sim._kx * st.e).sum()),
             float(sim._spin_now + (st.yd[-1] if sim._free_spin else 0.0)),
             int(np.sum(st.contact & ~st.stick)))
+
+    def checkpoint(self) -> tuple:
+        """What :meth:`rollback` needs to undo the steps after it (cheap: a step makes a new
+        StepState, and the host's road only appends or rewrites its newest sample)."""
+        sim, road = self.sim, self.road
+        kept_road = None
+        if road is not None:
+            last = road._buffer[:, road._hi - 1].copy() if road._hi > road._lo else None
+            kept_road = (road._buffer, road._lo, road._hi, last)
+        return (self.state, self.steps, self._end, self._rim, sim._spin_now, sim._speed_now,
+                sim._s0, kept_road)
+
+    def rollback(self, checkpoint: tuple) -> None:
+        """Back to the :meth:`checkpoint` (a step that failed leaves the stepper as it was)."""
+        state, steps, end, rim, spin, speed, s0, kept_road = checkpoint
+        sim = self.sim
+        if sim._spin_now != spin:
+            sim._set_spin(spin, speed)
+        sim._speed_now, sim._s0 = speed, s0
+        self.state, self.steps, self._end, self._rim = state, steps, end, rim
+        if kept_road is not None:
+            buffer, lo, hi, last = kept_road
+            road = self.road
+            road._buffer, road._lo, road._hi = buffer, lo, hi
+            if last is not None:
+                buffer[:, hi - 1] = last
 
     # -- the stepper's state as bytes (an FMU's state): everything a step reads ---------------
     def state_bytes(self) -> bytes:

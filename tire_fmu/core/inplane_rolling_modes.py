@@ -259,10 +259,7 @@ def fx_rows(sim: InPlaneSimulator, system: RollingSystem) -> tuple[np.ndarray, f
     """(c, c0) with the rim's Fx = c·x + c0 on the system's trajectories (the rim's rows of
     :meth:`.inplane_contact.InPlaneSimulator.rim_force`, the acceleration from ẋ = A x + b)."""
     nr, ny = system.n_ring, system.n_rate
-    rows, o = sim._rim_rows, sim._spin_now
-    k = -((rows["k0"] + o * rows["k1"] + o**2 * rows["k2"]) @ sim._to_abs)[0]
-    c = -((rows["c0"] + o * rows["c1"]) @ sim._to_abs)[0]
-    m = -(rows["m"] @ sim._to_abs)[0]
+    k, c, m = (-rows[0] for rows in sim.rim_force_rows())
     out = m @ system.a[nr:nr + ny]
     out[:nr] += k[:nr]
     out[nr:nr + ny] += c

@@ -10,8 +10,8 @@ the road at the contact zone's front. The outputs are those at the end of the la
 direct feed-through: a host reading after setting inputs gets the last step's forces).
 
 A step the tire refuses (its contact sets did not settle, a step size that is not a whole
-number of the tire's ``step_size``) leaves the FMU as it was: the stepper's state is taken
-before the step and put back.
+number of the tire's ``step_size``) leaves the FMU as it was: the stepper is checkpointed
+before the step and rolled back.
 """
 
 from __future__ import annotations
@@ -143,15 +143,15 @@ class TireInPlane(TireModal):
                 f"step size h = {float(step_size)!r} s: must be a whole multiple of the tire's "
                 f"step_size = {tire_step:g} s (set step_size to divide the host's step)"))
         z, vz, road_z, road_vz, x, vx, torque = self._values[self._INPUTS]
-        before = stepper.state_bytes()
+        before = stepper.checkpoint()
         try:
             out = stepper.advance(step_size, x, vx, z, vz, torque, road_z, road_vz)
         except ContactSetError as error:
-            stepper.set_state_bytes(before)
+            stepper.rollback(before)
             return self._refuse_step(current_time, step_size, f"{error}; nothing changed "
                                      "(a shorter step_size settles the sets sooner)")
         except Exception as error:  # an escaping exception would be fmi2Fatal
-            stepper.set_state_bytes(before)
+            stepper.rollback(before)
             self._fail(MESSAGES["STEP_FAILED"] % repr(float(current_time)), _cause(error))
             return False
         if not math.isfinite(out.rim_fz_n + out.rim_fx_n + out.rim_my_n_m + out.spin_rad_s):
