@@ -33,7 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from bench_fmu import Opened, build_minimal, build_trivial  # noqa: E402
+from bench_fmu import Opened, build_minimal, build_trivial, init_time  # noqa: E402
 
 from tire_fmu.core.obstacles import cleat  # noqa: E402
 from tire_fmu.fmu.builder import build_fmu, build_inplane_fmu  # noqa: E402
@@ -114,17 +114,6 @@ def without_kernel(fmu: Path, dest: Path) -> Path:
             if Path(item.filename).stem != "tire_kernel":
                 copy.writestr(item, source.read(item.filename))
     return dest
-
-
-def init_time(fmu: Opened, parameters: dict, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        started = time.perf_counter()
-        slave = fmu.initialised(parameters)
-        times.append(time.perf_counter() - started)
-        slave.terminate()
-        slave.freeInstance()
-    return statistics.median(times)
 
 
 def main(argv=None) -> None:

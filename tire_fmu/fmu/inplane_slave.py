@@ -20,8 +20,6 @@ import math
 import struct
 import time
 
-from pythonfmu.enums import Fmi2Status
-
 import tire_fmu
 from tire_fmu.core.inplane_contact import ContactSetError
 from tire_fmu.core.inplane_host import HostSettings, build_host_stepper
@@ -87,14 +85,8 @@ class TireInPlane(TireModal):
         try:
             model = self._build(parameters)[0]
         except ParameterError as error:
-            problems = [fmu_message(text) for text in error.render(INPLANE_FMU_NAMES)]
-            for number, problem in enumerate(problems, 1):
-                self.log(MESSAGES["PROBLEM_LINE"] % (number, len(problems), problem),
-                         Fmi2Status.error)
-            self._phase = Phase.ERROR
-            self._error_reason = MESSAGES["PARAMETERS_REFUSED"] % (len(problems),
-                                                                    "; ".join(problems))
-            self.log(MESSAGES["EXIT_REFUSED"] % self._error_reason, Fmi2Status.error)
+            self._refuse_parameters([fmu_message(text)
+                                     for text in error.render(INPLANE_FMU_NAMES)])
             return
         self._set_simulator(model, parameters)
         self._phase = Phase.RUNNING

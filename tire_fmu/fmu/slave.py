@@ -380,15 +380,7 @@ class TireModal(Fmi2Slave):
         try:
             simulator, contact, said = self._build(parameters)
         except ParameterError as error:
-            problems = _fmu_problems(error)
-            for number, problem in enumerate(problems, 1):
-                self.log(MESSAGES["PROBLEM_LINE"] % (number, len(problems), problem),
-                         Fmi2Status.error)
-            # no model to step: FMI's error state, every later refusal saying why
-            self._phase = Phase.ERROR
-            self._error_reason = MESSAGES["PARAMETERS_REFUSED"] % (len(problems),
-                                                                    "; ".join(problems))
-            self.log(MESSAGES["EXIT_REFUSED"] % self._error_reason, Fmi2Status.error)
+            self._refuse_parameters(_fmu_problems(error))
             return
         for text in said:
             self.log(text, Fmi2Status.warning)
@@ -411,6 +403,17 @@ class TireModal(Fmi2Slave):
             f"{summary['critical_speed_m_s']:.4g} m/s, {contact.settings.law} contact, "
             f"{self._kernel_note}; core "
             f"tire_fmu {tire_fmu.__version__} from {tire_fmu.__file__}")
+
+    def _refuse_parameters(self, problems: list[str]) -> None:
+        """Log every parameter problem, numbered, and go to the error state: there is no
+        model to step, and every later refusal says why."""
+        for number, problem in enumerate(problems, 1):
+            self.log(MESSAGES["PROBLEM_LINE"] % (number, len(problems), problem),
+                     Fmi2Status.error)
+        self._phase = Phase.ERROR
+        self._error_reason = MESSAGES["PARAMETERS_REFUSED"] % (len(problems),
+                                                                "; ".join(problems))
+        self.log(MESSAGES["EXIT_REFUSED"] % self._error_reason, Fmi2Status.error)
 
     def _show(self, outputs: dict, in_contact: bool) -> None:
         for name, value in outputs.items():
