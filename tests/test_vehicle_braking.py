@@ -116,3 +116,39 @@ def test_braking_settings_are_all_reported_at_once(tmp_path, capsys):
     assert main(["braking", "--out", str(tmp_path), "--speed", "-1", "--n-elements", "3"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "--speed = -1.0" in err and "--n-elements = 3" in err
+
+
+@pytest.mark.fmu
+def test_the_braking_car_runs_the_in_plane_fmu_through_fmpy_as_it_runs_the_core(braking,
+                                                                                  tmp_path):
+    """--fmu: the same quarter car stepping TireInPlane.fmu through fmpy. On the level road
+    it is the core's tire (its C step against the core's numpy one: 1e-8 of the load); over
+    the rough road and the cleat the FMU reads the road a host gives it, at the zone front
+    and at the communication points, so the forces follow the core's closely, not exactly."""
+    from dataclasses import replace
+
+    settings, core = braking
+    fmu = run_braking(replace(settings, out_dir=tmp_path, fmu=True), log=lambda text: None)
+    assert (tmp_path / "fmus" / "TireInPlane.fmu").is_file()
+    load = settings.load_n
+    level_core, level_fmu = core.runs[0], fmu.runs[0]
+    assert level_fmu.time_s.size == level_core.time_s.size
+    for a, b in [(level_core.fx_n, level_fmu.fx_n), (level_core.fz_n, level_fmu.fz_n),
+                 (level_core.my_n_m, level_fmu.my_n_m)]:
+        assert np.max(np.abs(a - b)) < 1e-8 * load
+    assert np.max(np.abs(level_core.wheel_speed_m_s - level_fmu.wheel_speed_m_s)) < 1e-9
+    def rms(x):
+        return float(np.sqrt(np.mean(x**2)))
+
+    rough_core, rough_fmu = core.runs[1], fmu.runs[1]
+    assert rms(rough_core.fz_n - rough_fmu.fz_n) < 0.01 * rms(rough_core.fz_n - load)
+    # the 20 mm cleat at about 19 m/s, sampled every 1 ms (19 mm of road): the host's cubic
+    # through those samples rounds its edges, and the peak comes out a few per cent low
+    cleat_core, cleat_fmu = core.runs[2], fmu.runs[2]
+    assert cleat_fmu.fz_n.max() == pytest.approx(cleat_core.fz_n.max(), rel=0.1)
+    assert cleat_fmu.fz_n.max() - load > 0.5 * (cleat_core.fz_n.max() - load)
+    # the cleat test steps the FMU at the tire's own step: the road sampled finely
+    for key in ("fz_max_n", "fx_max_n", "fx_min_n"):
+        assert fmu.cleat_test[key] == pytest.approx(core.cleat_test[key], rel=0.03)
+    assert fmu.cleat_test["fx_dominant_hz"] == pytest.approx(core.cleat_test["fx_dominant_hz"],
+                                                             rel=0.02)

@@ -111,7 +111,8 @@ def _parse_factors(items: list[str]) -> dict:
 def _braking_parser() -> argparse.ArgumentParser:
     p = Parser(
         prog="python -m vehicle_demo braking",
-        description="Braking quarter car with the in-plane tire (core, in process): the wheel "
+        description="Braking quarter car with the in-plane tire (the core in process, or "
+                    "with --fmu TireInPlane.fmu through fmpy): the wheel "
                     "a turning body under a brake torque, the vehicle's fore-aft speed driven "
                     "by Fx, the axle's height held; on a level road, an ISO 8608 road and over "
                     "a cleat, then the classic cleat test (axle held, constant speed). Writes "
@@ -125,6 +126,9 @@ def _braking_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, help="run length in s (default 1.2, quick 0.6)")
     p.add_argument("--road-class", choices=list("ABCDEFGH"), help="ISO 8608 class (default C)")
     p.add_argument("--n-elements", type=int, help="tire mesh (default 100, quick 60)")
+    p.add_argument("--fmu", action="store_true",
+                   help="step TireInPlane.fmu through fmpy (built into OUT/fmus) instead of "
+                   "the core's tire in process")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     return p
 
@@ -141,7 +145,8 @@ def _braking(argv) -> int:
     args = _braking_parser().parse_args(argv)
     given = {"out_dir": args.out, "speed_m_s": args.speed, "brake_torque_n_m": args.torque,
              "duration_s": args.duration, "road_class": args.road_class,
-             "n_elements": args.n_elements, "progress": not args.no_progress}
+             "n_elements": args.n_elements, "progress": not args.no_progress,
+             "fmu": args.fmu or None}
     overrides = {k: v for k, v in given.items() if v is not None}
     settings = (BrakingSettings.quick(**overrides) if args.quick
                 else BrakingSettings(**overrides))

@@ -14,7 +14,11 @@ torque and speed), on an ISO 8608 road of a class, and over a cleat. Then the cl
 test of a drum: axle held, wheel free, constant road speed, Fx and Fz at the axle against
 time and their spectra. Figures and ``summary.json`` go to ``--out``.
 
-The in-plane tire is the core's; it is not in the FMUs yet, so this demo runs it in process.
+The tire is the core's stepper in process by default; with ``fmu`` (``--fmu``) the braking
+runs and the cleat test step TireInPlane.fmu through fmpy instead (built into ``--out``), the
+road given to it as a host gives it: its height and rate at the front of the contact zone,
+sampled at the communication points (over the 20 mm cleat at 1 ms that smooths the cleat's
+edges, which the in-process tire reads exactly).
 """
 
 from __future__ import annotations
@@ -66,6 +70,8 @@ class BrakingSettings:
     f_max_hz: float = 300.0
     progress: bool = True
     tire: object = field(default=None, repr=False)  # an InPlaneTire; None: the default
+    #: step TireInPlane.fmu through fmpy (built into out_dir) instead of the core in process
+    fmu: bool = False
 
     @classmethod
     def quick(cls, **overrides) -> BrakingSettings:
@@ -214,15 +220,81 @@ def rough_road(settings: BrakingSettings):
                        f"ISO 8608 class {settings.road_class} (seed {settings.road_seed})")
 
 
-def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
+class FmuTire:
+    """TireInPlane.fmu through fmpy, advanced as :class:`InPlaneStepper` is: the rim's
+    motion and the torque at each communication step's end, the road (``sim``'s obstacle,
+    ``sim.obstacle_ahead_m`` ahead at t = 0) given at the zone front as a host gives it.
+    ``sim`` is the same tire in process: its zone says where the front is."""
+
+    INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
+    OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
+               "sliding_points")
+
+    def __init__(self, path, sim, settings, wheel_free: bool = True):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        md = read_model_description(str(path))
+        self._vr = {v.name: v.valueReference for v in md.modelVariables}
+        self._folder = extract(str(path))
+        self.slave = FMU2Slave(guid=md.guid, unzipDirectory=self._folder,
+                               modelIdentifier=md.coSimulation.modelIdentifier,
+                               instanceName="braking tire")
+        self.slave.instantiate()
+        self.slave.setupExperiment(startTime=0.0)
+        self.slave.enterInitializationMode()
+        reals = {"load": settings.load_n, "speed": sim.speed_m_s, "f_max": settings.f_max_hz,
+                 "contact_zone_length": sim.zone_length_m,
+                 "contact_point_spacing": settings.point_spacing_m, "step_size": settings.step_s}
+        self.slave.setReal([self._vr[k] for k in reals], list(reals.values()))
+        self.slave.setInteger([self._vr["n_elements"]], [settings.n_elements])
+        self.slave.setBoolean([self._vr["wheel_free"]], [wheel_free])
+        self.slave.exitInitializationMode()
+        self.sim, self.time_s = sim, 0.0
+        self._front = float(sim._x_hi.max())
+        self._inputs = [self._vr[n] for n in self.INPUTS]
+        self._outputs = [self._vr[n] for n in self.OUTPUTS]
+
+    def advance(self, step_s, x_m=0.0, vx_m_s=0.0, z_m=0.0, vz_m_s=0.0, torque_n_m=0.0):
+        from tire_fmu.core.inplane_contact import InPlaneOutputs
+
+        sim, end = self.sim, self.time_s + step_s
+        road_z = road_vz = 0.0
+        if sim.obstacle is not None:  # the road at the zone front, where the FMU reads it
+            at = sim.speed_m_s * end + x_m + self._front - sim.obstacle_ahead_m
+            height, slope = sim.obstacle.profile(np.array([at]))
+            road_z, road_vz = float(height[0]), float(slope[0]) * (sim.speed_m_s + vx_m_s)
+        self.slave.setReal(self._inputs, [z_m, vz_m_s, road_z, road_vz, x_m, vx_m_s,
+                                          torque_n_m])
+        self.slave.doStep(self.time_s, step_s)
+        self.time_s = end
+        fz, fx, my, cfz, cfx, spin, sliding = self.slave.getReal(self._outputs)
+        return InPlaneOutputs(fx, fz, my, cfz, cfx, spin, int(sliding))
+
+    def close(self) -> None:
+        import shutil
+
+        self.slave.terminate()
+        self.slave.freeInstance()
+        shutil.rmtree(self._folder, ignore_errors=True)
+
+
+def _tire_host(sim, settings, torque_n_m, fmu_path):
+    """The tire a run advances: the core's stepper, or the FMU."""
+    from tire_fmu.core.inplane_contact import InPlaneStepper
+
+    if fmu_path is None:
+        return InPlaneStepper(sim, torque_n_m)
+    return FmuTire(fmu_path, sim, settings)
+
+
+def _braking_run(name, sim, settings, torque, bar, fmu_path=None) -> BrakingRun:
     """The quarter car as an FMU host runs a tire: each communication step it integrates the
     body and wheel (their exact discrete map over the step, the tire's last Fz held) and the
     vehicle's speed (the tire's last Fx), then advances the tire with the wheel's height and
     the axle's fore-aft motion at the step's end and the brake torque
     (:class:`tire_fmu.core.inplane_contact.InPlaneStepper`)."""
     from scipy.linalg import expm
-
-    from tire_fmu.core.inplane_contact import InPlaneStepper
 
     from .vehicle_demo_quarter_car_dynamics import two_mass_state_space
 
@@ -234,7 +306,7 @@ def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
     block[:4, :4], block[:4, 4] = a, b
     exact = expm(block * dt)  # x(t + dt) = Φ x + Γ ΔF for ΔF held over the step
     phi, gamma = exact[:4, :4], exact[:4, 4]
-    host = InPlaneStepper(sim, torque(0.0))
+    host = _tire_host(sim, settings, torque(0.0), fmu_path)
     steps = int(round(settings.duration_s / dt))
     radius = sim.model.tire.R
     x = np.zeros(4)  # body and wheel: z_b, ż_b, z_w, ż_w from the static equilibrium
@@ -254,10 +326,29 @@ def _braking_run(name, sim, settings, torque, bar) -> BrakingRun:
         rows.append((k * dt, fx, fz, out.rim_my_n_m, out.spin_rad_s * radius, speed,
                      torque(k * dt), out.sliding_points))
         bar(k, steps)
+    if fmu_path is not None:
+        host.close()
     t, fx_, fz_, my, wheel, vehicle, applied, sliding = (np.array(c) for c in zip(*rows))
     road = "level road" if sim.obstacle is None else sim.obstacle.label
     return BrakingRun(name, road, t, fx_, fz_, my, wheel / vehicle - 1.0, wheel, vehicle,
                       applied, sliding.astype(int))
+
+
+def _fmu_cleat_test(fmu_path, sim, settings, duration_s, bar):
+    """The cleat test (axle held, wheel free) through the FMU, one step of the tire's at a
+    time, recorded as :meth:`InPlaneSimulator.run` records it."""
+    from tire_fmu.core.inplane_contact import InPlaneRun
+
+    tire = FmuTire(fmu_path, sim, settings)
+    steps = int(round(duration_s / settings.step_s))
+    rows = []
+    for k in range(1, steps + 1):
+        o = tire.advance(settings.step_s)
+        rows.append((k * settings.step_s, o.rim_fx_n, o.rim_fz_n, o.rim_my_n_m, o.contact_fz_n,
+                     o.contact_fx_n, o.spin_rad_s, o.sliding_points, sim.speed_m_s))
+        bar(k, steps)
+    tire.close()
+    return InPlaneRun(*(np.array(column) for column in zip(*rows)))
 
 
 def run_braking(settings: BrakingSettings | None = None, log=print,
@@ -280,8 +371,16 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     started = time.perf_counter()
     out = Path(settings.out_dir)
     model = settings.tire or InPlaneTire()
+    # on the reduced tire the runs step, as TireInPlane.fmu solves it: rim_Fz starts at the load
     deflection = deflection_for_load(model, settings.load_n, settings.n_elements,
-                                     point_spacing_m=settings.point_spacing_m)
+                                     point_spacing_m=settings.point_spacing_m,
+                                     f_max_hz=settings.f_max_hz)
+    fmu_path = None
+    if settings.fmu:
+        from tire_fmu.fmu.builder import build_inplane_fmu
+
+        fmu_path = build_inplane_fmu(out / "fmus", tire=model)
+        log(f"stepping {fmu_path} through fmpy")
     log(f"in-plane tire at {settings.load_n:g} N: axle {deflection * 1e3:.2f} mm down, "
         f"N = {settings.n_elements}, {settings.point_spacing_m * 1e3:g} mm points, modes to "
         f"{settings.f_max_hz:g} Hz; vehicle {settings.mass_kg:.0f} kg from "
@@ -299,7 +398,7 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     for name, road, ahead in cases:
         sim = _simulator(settings, model, deflection, settings.speed_m_s, road, ahead)
         with step_bar(steps, settings.progress, f"braking, {name}") as bar:
-            runs.append(_braking_run(name, sim, settings, torque, advance(bar)))
+            runs.append(_braking_run(name, sim, settings, torque, advance(bar), fmu_path))
     # the classic cleat test: the axle held, the wheel free, the road's speed constant
     speed = settings.cleat_test_speed_m_s
     ahead = 0.4
@@ -307,7 +406,8 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
                      cleat(settings.cleat_height_m, settings.cleat_length_m), ahead)
     duration = (ahead + 0.3 + settings.cleat_length_m) / speed + 0.1
     with step_bar(int(round(duration / settings.step_s)), settings.progress, "cleat test") as bar:
-        test = sim.run(duration, progress=advance(bar))
+        test = (sim.run(duration, progress=advance(bar)) if fmu_path is None
+                else _fmu_cleat_test(fmu_path, sim, settings, duration, advance(bar)))
     on = test.time_s > 0.5 * ahead / speed
 
     def dominant_hz(signal):
