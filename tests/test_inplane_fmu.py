@@ -165,3 +165,19 @@ def test_the_wheels_spin_and_the_brake_force_build_up(fmu_path):
     assert free[5] == pytest.approx(10.0 / radius, rel=0.02)
     assert braked[5] < free[5]
     assert braked[1] < -1000.0 and braked[2] > 1000.0
+
+
+def test_a_state_set_into_a_fresh_instance_builds_its_model_and_steps_on(fmu_path):
+    """An FMU state carries the parameters: a new instance given it (no initialisation)
+    builds the same tire and steps on with the first one's bits."""
+    first = Instance(fmu_path, speed=10.0, friction_coefficient=0.6).start()
+    for k in range(1, 8):
+        first.step(1e-3, **_drive(k, 1e-3))
+    data = first.fmu.serializeFMUstate(first.fmu.getFMUstate())
+    expected = first.step(1e-3, **_drive(8, 1e-3))
+    second = Instance(fmu_path)  # in initialisation mode, default parameters
+    second.fmu.setFMUstate(second.fmu.deSerializeFMUstate(data))
+    second.t = first.t - 1e-3
+    assert np.array_equal(second.step(1e-3, **_drive(8, 1e-3)), expected)
+    first.close()
+    second.close()

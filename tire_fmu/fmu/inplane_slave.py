@@ -110,11 +110,6 @@ class TireInPlane(TireModal):
                                  out.contact_fx_n, out.spin_rad_s, float(out.sliding_points)]
         values[self._IN_CONTACT] = out.contact_fz_n > 0.0
 
-    def _show(self, outputs: dict, in_contact: bool) -> None:
-        for name, value in outputs.items():
-            self._values[self._index[name]] = value
-        self._values[self._IN_CONTACT] = in_contact
-
     # -- stepping ----------------------------------------------------------------------------
     def do_step(self, current_time: float, step_size: float) -> bool:
         if self._phase != Phase.RUNNING:

@@ -418,7 +418,7 @@ class TireModal(Fmi2Slave):
     def _show(self, outputs: dict, in_contact: bool) -> None:
         for name, value in outputs.items():
             self._values[self._index[name]] = value
-        self._values[IN_CONTACT] = in_contact
+        self._values[self._IN_CONTACT] = in_contact
 
     # -- variable access: pythonfmu's generic versions cost a lambda per value and raise on
     # a bad reference (fmi2Fatal, see the module doc); these index one list and log instead.
