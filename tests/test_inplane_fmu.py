@@ -181,3 +181,33 @@ def test_a_state_set_into_a_fresh_instance_builds_its_model_and_steps_on(fmu_pat
     assert np.array_equal(second.step(1e-3, **_drive(8, 1e-3)), expected)
     first.close()
     second.close()
+
+
+def test_a_held_wheel_keeps_its_spin_and_a_finer_tire_step_divides_the_hosts(fmu_path):
+    """wheel_free = false holds the spin at speed / R whatever the torque; a tire step that
+    divides the host's runs that many steps per communication step, and the forces converge
+    as it is refined."""
+    radius = TireParameters().R
+    held = Instance(fmu_path, speed=10.0, wheel_free=False).start()
+    outputs = [held.step(1e-3, wheel_torque=-5000.0, road_z=2e-3 * min(k / 20, 1.0))
+               for k in range(30)]
+    held.close()
+    assert all(o[5] == pytest.approx(10.0 / radius, rel=1e-12) for o in outputs)
+    def smooth(t):  # from rest: a 4 mm (1 - cos) rise of the road and the brake ramped in
+        u = min(t / 0.03, 1.0)
+        w = np.pi / 0.03
+        return dict(road_z=2e-3 * (1 - np.cos(np.pi * u)),
+                    road_vz=2e-3 * w * np.sin(np.pi * u) if u < 1 else 0.0,
+                    wheel_torque=-3000.0 * u)
+
+    runs = []
+    for step in (2e-4, 1e-4, 5e-5):
+        fmu = Instance(fmu_path, speed=10.0, step_size=step).start()
+        runs.append(np.array([fmu.step(2e-4, **smooth(k * 2e-4)) for k in range(1, 301)]))
+        fmu.close()
+    errors = [np.max(np.abs(runs[i][:, :2] - runs[2][:, :2])) for i in (0, 1)]
+    assert np.ptp(runs[2][:, 0]) > 2e3 and np.ptp(runs[2][:, 1]) > 1e3
+    # the difference falls as the tire's step is refined (not at second order: the step's
+    # rebuild when the wheel's spin has drifted, and the road's samples, are per step)
+    assert errors[1] < 0.01 * np.ptp(runs[2][:, 0])
+    assert errors[1] < 0.75 * errors[0]
