@@ -148,6 +148,7 @@ class NumpyKernel:
         self._interfaces: dict[float, tuple[int, _Interface]] = {}
         self._instant = _Interface(self, 0.0, instant=True) if self.truncated else None
         self.solver_fallbacks = 0
+        self.fallback_only = False  # tests: every solve by the Gauss-Seidel fallback
         self.reset(start_time)
 
     # -- state ---------------------------------------------------------------------------
@@ -331,7 +332,8 @@ class NumpyKernel:
             f = k.active_forces(self.static_active, base[:p])
             return f, k.combine(base, f)
         active = self.active
-        for _ in range(ACTIVE_SET_PER_NODE * p + ACTIVE_SET_EXTRA):
+        passes = 0 if self.fallback_only else ACTIVE_SET_PER_NODE * p + ACTIVE_SET_EXTRA
+        for _ in range(passes):
             f = k.active_forces(active, base[:p])
             combined = k.combine(base, f)
             new = (combined[p:2 * p] > 0.0) & (combined[:p] > 0.0)
@@ -341,6 +343,11 @@ class NumpyKernel:
             active = new
         f = self._fallback(k, base)
         return f, k.combine(base, f)
+
+    def set_fallback_only(self, on: bool) -> None:
+        """Solve every contact problem by the Gauss-Seidel fallback (to test it: left to itself
+        the active set settles in almost every solve), as the compiled kernel's switch does."""
+        self.fallback_only = bool(on)
 
     def _fallback(self, k: _Interface, base: np.ndarray) -> np.ndarray:
         """Projected Gauss-Seidel on the same law, for an active set that cycles; the rows of

@@ -165,6 +165,8 @@ def _declare(lib: ctypes.CDLL) -> None:
         getattr(lib, name).argtypes = [handle]
     lib.kernel_solver_fallbacks.restype = ctypes.c_long
     lib.kernel_solver_fallbacks.argtypes = [handle]
+    lib.kernel_set_fallback_only.restype = None
+    lib.kernel_set_fallback_only.argtypes = [handle, ctypes.c_int]
     lib.kernel_forces.restype = None
     lib.kernel_forces.argtypes = [handle, p_double]
     lib.kernel_state_size.restype = size
@@ -277,6 +279,11 @@ class CompiledKernel:
     @property
     def solver_fallbacks(self) -> int:
         return int(self._lib.kernel_solver_fallbacks(self._handle))
+
+    def set_fallback_only(self, on: bool) -> None:
+        """Solve every contact problem by the Gauss-Seidel fallback (to test it: left to itself
+        the active set settles in almost every solve)."""
+        self._lib.kernel_set_fallback_only(self._handle, int(on))
 
     def state_bytes(self) -> bytes:
         size = self._lib.kernel_state_size(self._handle)

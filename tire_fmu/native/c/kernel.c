@@ -95,6 +95,7 @@ struct TireKernel {
     double outputs[KERNEL_N_OUTPUTS];
     RoadReader road;
     long solver_fallbacks;
+    int fallback_only;  /* tests: every solve by the Gauss-Seidel fallback */
     /* derived, rebuilt on demand */
     Interface* kernels;
     int n_kernels, next_kernel;
@@ -709,6 +710,7 @@ static int solve(TireKernel* kn, Interface* k, const double* base, double* f, do
         return 0;
     }
     memcpy(active, kn->active, (size_t)P);
+    if (kn->fallback_only) limit = 0;
     for (iteration = 0; iteration < limit; iteration++) {
         int same = 1;
         if (active_solve(kn, k, active, base, f) != 0) return -1;
@@ -1035,6 +1037,7 @@ double kernel_min_step(const TireKernel* kn) { return kn->min_step; }
 double kernel_horizon(const TireKernel* kn) { return kn->windows.horizon; }
 
 long kernel_solver_fallbacks(const TireKernel* kn) { return kn->solver_fallbacks; }
+void kernel_set_fallback_only(TireKernel* kn, int on) { kn->fallback_only = on != 0; }
 
 int kernel_cached_steps(const TireKernel* kn) { return kn->n_kernels; }
 

@@ -65,6 +65,8 @@ double kernel_horizon(const TireKernel* kernel);  /* road delay to the last poin
 int kernel_in_contact(const TireKernel* kernel);
 int kernel_at_zone_edge(const TireKernel* kernel);
 long kernel_solver_fallbacks(const TireKernel* kernel);
+/* tests: solve every contact problem by the projected Gauss-Seidel fallback (its own check) */
+void kernel_set_fallback_only(TireKernel* kernel, int on);
 int kernel_cached_steps(const TireKernel* kernel);   /* step sizes with coefficients kept */
 int kernel_delay_line_on(const TireKernel* kernel);  /* the road read by its delay line */
 /* the forces on each contact point at kernel_time (N), n_points values */
