@@ -21,7 +21,7 @@ import struct
 import time
 
 import tire_fmu
-from tire_fmu.core.inplane_contact import ContactSetError
+from tire_fmu.core.inplane_contact import ContactSetError, steps_in
 from tire_fmu.core.inplane_host import HostSettings, build_host_stepper
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError
 from tire_fmu.fmu.interface import (
@@ -89,6 +89,7 @@ class TireInPlane(TireModal):
                                      for text in error.render(INPLANE_FMU_NAMES)])
             return
         self._set_simulator(model, parameters)
+        self._checked_h = math.nan
         self._phase = Phase.RUNNING
         self._contact_warning_armed = True
         outputs = model.stepper.outputs()
@@ -123,12 +124,15 @@ class TireInPlane(TireModal):
             return self._refuse_step(current_time, step_size, MESSAGES["STEP_RANGE"] % (
                 repr(float(step_size)), MAX_STEP_S))
         stepper = self._simulator.stepper
-        tire_step = stepper.sim.step_s
-        count = round(step_size / tire_step)
-        if count < 1 or abs(count * tire_step - step_size) > 1e-9 * step_size:
-            return self._refuse_step(current_time, step_size, (
-                f"step size h = {float(step_size)!r} s: must be a whole multiple of the tire's "
-                f"step_size = {tire_step:g} s (set step_size to divide the host's step)"))
+        if step_size != self._checked_h:  # the core's rule, checked once per step size
+            try:
+                steps_in(step_size, stepper.sim.step_s)
+            except ParameterError:
+                return self._refuse_step(current_time, step_size, (
+                    f"step size h = {float(step_size)!r} s: must be a whole multiple of the "
+                    f"tire's step_size = {stepper.sim.step_s:g} s (set step_size to divide "
+                    "the host's step)"))
+            self._checked_h = step_size
         z, vz, road_z, road_vz, x, vx, torque = self._values[self._INPUTS]
         before = stepper.checkpoint()
         try:

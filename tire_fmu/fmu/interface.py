@@ -179,14 +179,24 @@ def _parameters() -> list[FmuVariable]:
                     "contact (the linearised tire, for comparison with linear tools)",
                     "--linear-contact"),
     ]
+    table += _tire_data_variables(defaults)
+    return table
+
+
+def _tire_data_variables(defaults: TireParameters, note: dict[str, str] | None = None
+                         ) -> list[FmuVariable]:
+    """A parameter per tire field, starting at ``defaults``, with the field's description and
+    range (and ``note``'s words for a field, if any)."""
+    note = note or {}
+    rows = []
     for f in fields(TireParameters):
         spec = TIRE_FIELDS[f.name]
         option = ("--inflation-pressure" if f.name == "inflation_pressure"
                   else f"--tire {f.name}=VALUE")
-        table.append(FmuVariable(f.name, "Real", "parameter", getattr(defaults, f.name),
-                                 spec.unit, f"{spec.description}; allowed {spec.range_text()}",
-                                 option))
-    return table
+        rows.append(FmuVariable(f.name, "Real", "parameter", getattr(defaults, f.name),
+                                spec.unit, f"{spec.description}; allowed {spec.range_text()}"
+                                + note.get(f.name, ""), option))
+    return rows
 
 
 def fmu_variables(parameter_values: dict | None = None, parameter_note: str = ""
@@ -247,8 +257,8 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         low, high, unit = HOST_RANGES[name]
         return f"allowed [{low:g}, {high:g}] {unit}".rstrip()
 
-    radial_signals = _signals()[:4]
-    table = radial_signals + [
+    radial = {v.name: v for v in _signals()}
+    table = [radial[name] for name in ("rim_z", "rim_vz", "road_z", "road_vz")] + [
         FmuVariable("rim_x", "Real", "input", 0.0, "m",
                     "rim fore-aft displacement from its steady travel at speed (x forward): "
                     "the axle ahead of where speed * t puts it"),
@@ -259,8 +269,7 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                     "drive (+) or brake (-) torque on the wheel about the axle, in the sense "
                     "of its rolling; with wheel_free = false the wheel's spin is held and "
                     "this is ignored"),
-        FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, "N",
-                    "vertical force of the tire on the rim, total (static load + dynamic)"),
+        radial["rim_Fz"],
         FmuVariable("rim_Fx", "Real", "output", 0.0, "N",
                     "fore-aft force of the tire on the rim (x forward), total: braking "
                     "negative, the rolling resistance and the fore-aft cleat force in it"),
@@ -310,14 +319,9 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                     "the wheel turns under wheel_torque and the tread's drag (its inertia "
                     "wheel_inertia_kg_m2); false holds its spin at speed / R", "--wheel-held"),
     ]
-    for f in fields(TireParameters):
-        spec = TIRE_FIELDS[f.name]
-        start = 0.0 if f.name == "sidewall_max_order" else getattr(TireParameters(), f.name)
-        table.append(FmuVariable(f.name, "Real", "parameter", start, spec.unit,
-                                 f"{spec.description}; allowed {spec.range_text()}"
-                                 + ("; 0 for the in-plane ring" if f.name in (
-                                     "sidewall_max_order", "sidewall_shear") else ""),
-                                 f"--tire {f.name}=VALUE"))
+    lumped = "; 0 for the in-plane ring"
+    table += _tire_data_variables(TireParameters(sidewall_max_order=0.0),
+                                  {"sidewall_max_order": lumped, "sidewall_shear": lumped})
     defaults = TangentialParameters()
     for name, (low, high, unit) in TANGENTIAL_RANGES.items():
         table.append(FmuVariable(name, "Real", "parameter", getattr(defaults, name),

@@ -13,6 +13,7 @@ import ctypes
 
 import numpy as np
 
+from ..core.inplane_contact import MAX_SET_PASSES, SETTLE_PASSES, StepState
 from .kernel import load_library
 
 _P = ctypes.POINTER(ctypes.c_double)
@@ -72,8 +73,6 @@ class InPlaneKernel:
         # a buffer C reads; the rest moves with the spin, when the step is rebuilt
         key = (id(sim._a0_inv), sim._spin_now)
         if key != self._built_for:
-            from tire_fmu.core.inplane_contact import MAX_SET_PASSES, SETTLE_PASSES
-
             arrays = {name: _doubles(getattr(sim, "_" + name)) for name in _MATRICES + _VECTORS}
             self._s0 = arrays["s0"] = np.array(sim._s0, dtype=np.float64)
             self._keep = list(arrays.values()) + [sim._a0_inv]
@@ -88,8 +87,6 @@ class InPlaneKernel:
     def step(self, state, height, rate, torque, rim_old, rim):
         """The next StepState, or (status, None): 1 the sets did not settle, 2 a singular
         point solve."""
-        from tire_fmu.core.inplane_contact import StepState
-
         data = self._data()
         if self._buffers is None:
             self._buffers = self._make_buffers(data.ny, data.np)
