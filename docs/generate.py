@@ -120,26 +120,26 @@ def _start_text(v) -> str:
     return f"{v.start:g}"
 
 
+def _variables_table(variables) -> str:
+    lines = ["| name | causality | type | unit | start | meaning |", "|---|---|---|---|---|---|"]
+    for v in variables:
+        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | "
+                     f"{_start_text(v)} | {v.description} |")
+    return "\n".join(lines)
+
+
 @generator("fmu-variables")
 def fmu_variables_table() -> str:
     from tire_fmu.fmu.interface import fmu_variables
 
-    lines = ["| name | causality | type | unit | start | meaning |", "|---|---|---|---|---|---|"]
-    for v in fmu_variables():
-        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | "
-                     f"{_start_text(v)} | {v.description} |")
-    return "\n".join(lines)
+    return _variables_table(fmu_variables())
 
 
 @generator("inplane-fmu-variables")
 def inplane_fmu_variables_table() -> str:
     from tire_fmu.fmu.interface import inplane_fmu_variables
 
-    lines = ["| name | causality | type | unit | start | meaning |", "|---|---|---|---|---|---|"]
-    for v in inplane_fmu_variables():
-        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | "
-                     f"{_start_text(v)} | {v.description} |")
-    return "\n".join(lines)
+    return _variables_table(inplane_fmu_variables())
 
 
 @value("inplane-critical-fraction")
