@@ -149,6 +149,31 @@ def test_the_compiled_step_is_the_numpy_step(deflected):
     assert sliding > 0  # friction's limit was reached: the slide branch ran too
 
 
+def test_the_compiled_road_reads_are_the_numpy_ones(deflected):
+    """The host road's window means and rates in C (native/c/inplane_step.c) against
+    HostRoad.window_reads: windows behind, across and ahead of the samples, one and two
+    samples, a window of zero width."""
+    tire, deflection = deflected
+    sim = InPlaneSimulator(tire, 100, 10.0, deflection, step_s=1e-4, point_spacing_m=0.01,
+                           f_max_hz=300.0, backend="compiled")
+    lo, hi = sim._x_lo.copy(), sim._x_hi.copy()
+    hi[3] = lo[3]
+    sim._x_lo, sim._x_hi = lo, hi
+    road = HostRoad(front_m=float(hi.max()), keep_m=1.0)
+    rng = np.random.default_rng(7)
+    distance, checked = 0.0, 0
+    for _ in range(300):
+        for shift in (distance - 0.4, distance, distance + 0.05):
+            mean, rate = sim._kernel.window_reads(road, shift, 11.0)
+            expected = road.window_reads(lo + shift, hi + shift, 11.0)
+            np.testing.assert_allclose(mean, expected[0], rtol=1e-14, atol=1e-17)
+            np.testing.assert_allclose(rate, expected[1], rtol=1e-14, atol=1e-15)
+            checked += 1
+        road.record(distance, float(0.01 * np.sin(30 * distance) + 1e-3 * rng.standard_normal()))
+        distance += float(rng.uniform(0.0, 3e-3))
+    assert checked == 900 and road.s.size > 100
+
+
 def test_a_rolled_back_stepper_steps_as_if_nothing_had_happened():
     """A host's failed step is undone (the FMU refuses it and changes nothing): the steps
     after a rollback give the bits of the same steps taken without the detour, the road
@@ -167,3 +192,51 @@ def test_a_rolled_back_stepper_steps_as_if_nothing_had_happened():
     a, b = (s.advance(1e-3, torque_n_m=-3000.0, road_z_m=6e-3) for s in steppers)
     assert a == b
     assert steppers[0].state_bytes() == detour.state_bytes()
+
+
+def _braking_axle(stepper, steps, deceleration_m_s2=20.0, torque_n_m=-3000.0):
+    """A free wheel braked while the axle slows (the road's speed against it falls by a
+    third in 0.15 s): (rim_Fx, rim_Fz, rim_My, spin) per step."""
+    out, x, v = [], 0.0, 0.0
+    for i in range(steps):
+        v_new = -deceleration_m_s2 * max(i * 1e-4 - 0.005, 0.0)
+        x, v = x + 0.5e-4 * (v + v_new), v_new
+        o = stepper.advance(1e-4, x_m=x, vx_m_s=v, torque_n_m=torque_n_m if i > 20 else 0.0)
+        out.append((o.rim_fx_n, o.rim_fz_n, o.rim_my_n_m, o.spin_rad_s))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_the_ring_follows_the_spin_between_rebuilds(monkeypatch, backend):
+    """Between rebuilds of the ring's step (an inverse of the coordinates' size) the step adds
+    the terms of the spin's difference explicitly. Braking while the axle slows (spin from 15
+    to 11 rad/s): against the step rebuilt at the wheel's exact spin every step (the model's
+    definition) it agrees to 1e-4 of the load on Fx and Fz, where leaving the difference out
+    is off by more, and the ring is rebuilt every 5 % of spin instead of every step."""
+    import tire_fmu.core.inplane_contact as ic
+
+    settings = HostSettings(speed_m_s=10.0, n_elements=48, f_max_hz=300.0)
+    steps = 1500
+    tread_fraction, ring_fraction = ic.SPIN_REBUILD_FRACTION, ic.RING_REBUILD_FRACTION
+
+    def run(tread, ring, correct=True):
+        monkeypatch.setattr(ic, "SPIN_REBUILD_FRACTION", tread)
+        monkeypatch.setattr(ic, "RING_REBUILD_FRACTION", ring)
+        if not correct:
+            monkeypatch.setattr(ic.InPlaneSimulator, "_ring_offset", lambda self, yd: 0.0)
+        stepper = build_host_stepper(settings, backend=backend).stepper
+        builds = []
+        original = stepper.sim._set_ring_spin
+        monkeypatch.setattr(stepper.sim, "_set_ring_spin",
+                            lambda spin: (builds.append(spin), original(spin)))
+        return _braking_axle(stepper, steps), len(builds)
+
+    exact, exact_builds = run(0.0, 0.0)
+    followed, builds = run(tread_fraction, ring_fraction)
+    held, _ = run(tread_fraction, ring_fraction, correct=False)
+    load = settings.load_n
+    assert exact[-1, 3] < 0.75 * exact[0, 3]  # the spin fell by more than a quarter
+    error = np.abs(followed - exact).max(axis=0)
+    assert exact_builds >= steps - 1 and 3 <= builds <= 12
+    assert np.all(error[:2] < 1e-4 * load)
+    assert np.abs(held - exact).max(axis=0)[:2].max() > 3 * error[:2].max()

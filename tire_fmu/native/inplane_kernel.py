@@ -18,14 +18,14 @@ from .kernel import load_library
 
 _P = ctypes.POINTER(ctypes.c_double)
 _MATRICES = ("m", "c", "a0_inv", "yn", "yx", "wnn", "wnx", "kg", "kgn", "kgx", "gain", "carry",
-             "jn", "jxw", "jl", "rim_inertia")
+             "jn", "jxw", "jl", "rim_inertia", "c1", "k1s", "k2")
 _VECTORS = ("kn", "cn", "kx", "cx", "pen0", "sec", "s0")
 
 
 class _Step(ctypes.Structure):
     _fields_ = ([(name, ctypes.c_int) for name in ("ny", "np", "free_spin", "max_passes",
                                                     "settle_passes")]
-                + [(name, ctypes.c_double) for name in ("h", "mu", "spin")]
+                + [(name, ctypes.c_double) for name in ("h", "mu", "spin", "dspin")]
                 + [(name, _P) for name in _MATRICES + _VECTORS])
 
 
@@ -46,6 +46,10 @@ def _declare(lib) -> None:
     lib.inplane_work_doubles.argtypes = [ctypes.c_int, ctypes.c_int]
     lib.inplane_work_ints.restype = ctypes.c_size_t
     lib.inplane_work_ints.argtypes = [ctypes.c_int]
+    lib.host_road_window_reads.restype = None
+    lib.host_road_window_reads.argtypes = [ctypes.c_void_p] * 3 + [ctypes.c_int] + [
+        ctypes.c_void_p] * 2 + [ctypes.c_int, ctypes.c_double, ctypes.c_double] + [
+        ctypes.c_void_p] * 2
     lib._inplane_declared = True
 
 
@@ -66,18 +70,19 @@ class InPlaneKernel:
         self._built_for = None
         self._keep: list = []
         self._buffers = None
+        self._windows = None
 
     def _data(self) -> _Step:
         sim = self.sim
         # the road's speed moves s0 every step (a new array of the same length): copied into
         # a buffer C reads; the rest moves with the spin, when the step is rebuilt
-        key = (id(sim._a0_inv), sim._spin_now)
+        key = (id(sim._a0_inv), id(sim._kg), id(sim._carry))
         if key != self._built_for:
             arrays = {name: _doubles(getattr(sim, "_" + name)) for name in _MATRICES + _VECTORS}
             self._s0 = arrays["s0"] = np.array(sim._s0, dtype=np.float64)
-            self._keep = list(arrays.values()) + [sim._a0_inv]
+            self._keep = list(arrays.values()) + [sim._a0_inv, sim._kg, sim._carry]
             self._step = _Step(sim._ny, sim._zone.n_points, int(sim._free_spin), MAX_SET_PASSES,
-                               SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now,
+                               SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now, 0.0,
                                *(a.ctypes.data_as(_P) for a in arrays.values()))
             self._built_for = key
         else:
@@ -88,23 +93,47 @@ class InPlaneKernel:
         """The next StepState, or (status, None): 1 the sets did not settle, 2 a singular
         point solve."""
         data = self._data()
+        # the tread's arrays follow the spin in place; its value and the ring's offset do not
+        data.spin, data.dspin = self.sim._spin_now, self.sim._ring_offset(state.yd)
         if self._buffers is None:
-            self._buffers = self._make_buffers(data.ny, data.np)
+            ins, outs, in_struct, out_struct, extra = self._make_buffers(data.ny, data.np)
+            height_buffer, rate_buffer, rims = extra
+            addresses = (height_buffer.ctypes.data, rate_buffer.ctypes.data, rims.ctypes.data,
+                         rims.ctypes.data + 8 * rims.shape[1], self._work.ctypes.data,
+                         self._iwork.ctypes.data)
+            self._buffers = ins, outs, in_struct, out_struct, (extra, addresses)
         ins, outs, in_struct, out_struct, extra = self._buffers
         for buffer, value in zip(ins, (state.y, state.yd, state.ydd, state.e, state.slip_sign,
                                        state.f_n, state.contact, state.stick)):
             buffer[:] = value
-        height_buffer, rate_buffer, rims = extra
+        (height_buffer, rate_buffer, rims), addresses = extra
         height_buffer[:], rate_buffer[:] = height, rate
         rims[0, :], rims[1, :] = rim_old, rim
-        status = self.lib.inplane_step(ctypes.byref(data), in_struct, out_struct,
-                                       height_buffer.ctypes.data, rate_buffer.ctypes.data,
-                                       float(torque), rims[0].ctypes.data, rims[1].ctypes.data,
-                                       self._work.ctypes.data, self._iwork.ctypes.data)
+        at_height, at_rate, at_rim_old, at_rim, at_work, at_iwork = addresses
+        status = self.lib.inplane_step(ctypes.byref(data), in_struct, out_struct, at_height,
+                                       at_rate, float(torque), at_rim_old, at_rim, at_work,
+                                       at_iwork)
         if status:
             return status, None
         y, yd, ydd, e, sign, f_n, contact, stick = (b.copy() for b in outs)
         return 0, StepState(y, yd, ydd, e, contact == 1, stick == 1, sign, f_n)
+
+    def window_reads(self, road, distance_m: float, speed_m_s: float):
+        """HostRoad.window_reads over the simulator's windows moved by ``distance_m``, in C
+        (the same arithmetic)."""
+        sim, p = self.sim, self.sim._zone.n_points
+        if self._windows is None:
+            self._windows = (_doubles(sim._x_lo), _doubles(sim._x_hi), np.zeros(p), np.zeros(p))
+            self._window_addresses = tuple(a.ctypes.data for a in self._windows)
+        lo, hi, mean, rate = self._windows
+        buffer, first, n = road._buffer, road._lo, road._hi - road._lo
+        rows = buffer.ctypes.data + 8 * first  # the live samples of the buffer's three rows
+        stride = 8 * buffer.shape[1]
+        at_lo, at_hi, at_mean, at_rate = self._window_addresses
+        self.lib.host_road_window_reads(rows, rows + stride, rows + 2 * stride, n, at_lo,
+                                        at_hi, p, float(distance_m), float(speed_m_s),
+                                        at_mean, at_rate)
+        return mean.copy(), rate.copy()
 
     @staticmethod
     def _make_buffers(ny, p):

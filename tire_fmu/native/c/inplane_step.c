@@ -7,16 +7,19 @@
  * overhead. tests/test_inplane_host.py steps both over a braking, bumpy run and compares.
  *
  * Matrices are row-major doubles: (P x ny) jn, jxw, jl, kg, gain; (ny x P) yn, yx;
- * (P x P) wnn, wnx, kgn, kgx, carry; (ny x ny) m, c, a0_inv; (ny x 2) rim_inertia. */
+ * (P x P) wnn, wnx, kgn, kgx, carry; (ny x ny) m, c, a0_inv, c1, k1s, k2; (ny x 2)
+ * rim_inertia. dspin is the wheel's spin less the one the ring's step was built at: its
+ * terms, dspin (c1 v + k1s y) + dspin^2 k2 y on the state predicted at the step's end, are
+ * taken off the step's load (_spin_correction). */
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
 
 typedef struct {
     int ny, np, free_spin, max_passes, settle_passes;
-    double h, mu, spin;
+    double h, mu, spin, dspin;
     const double *m, *c, *a0_inv, *yn, *yx, *wnn, *wnx, *kg, *kgn, *kgx, *gain, *carry;
-    const double *jn, *jxw, *jl, *rim_inertia;
+    const double *jn, *jxw, *jl, *rim_inertia, *c1, *k1s, *k2;
     const double *kn, *cn, *kx, *cx, *pen0, *sec, *s0;
 } InPlaneStep;
 
@@ -135,7 +138,7 @@ static int point_forces(const InPlaneStep* d, const int* contact, const int* sti
 
 /* Workspace doubles and ints inplane_step needs for ny coordinates and np points. */
 size_t inplane_work_doubles(int ny, int np) {
-    return (size_t)8 * ny + (size_t)24 * np + (size_t)4 * np * np + 16;
+    return (size_t)11 * ny + (size_t)24 * np + (size_t)4 * np * np + 16;
 }
 
 size_t inplane_work_ints(int np) { return (size_t)8 * np + 8; }
@@ -171,6 +174,18 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
     matvec(d->c, r, ny, ny, tmp2);
     for (int k = 0; k < ny; ++k) b0[k] += tmp2[k];
     if (d->free_spin) b0[ny - 1] += torque;
+    if (d->dspin != 0.0) {
+        double *v_end = rhs + 2 * p, *y_end = v_end + ny, *q = y_end + ny;
+        for (int k = 0; k < ny; ++k) {
+            v_end[k] = s->yd[k] + h * s->ydd[k];
+            y_end[k] = s->y[k] + h * s->yd[k] + 0.5 * h * h * s->ydd[k];
+        }
+        matvec(d->c1, v_end, ny, ny, tmp2);
+        for (int k = 0; k < ny; ++k) b0[k] -= d->dspin * tmp2[k];
+        matvec(d->k1s, y_end, ny, ny, tmp2);
+        matvec(d->k2, y_end, ny, ny, q);
+        for (int k = 0; k < ny; ++k) b0[k] -= d->dspin * (tmp2[k] + d->dspin * q[k]);
+    }
     if (rim[2] != 0.0 || rim[5] != 0.0)
         for (int k = 0; k < ny; ++k)
             b0[k] -= d->rim_inertia[2 * k] * rim[2] + d->rim_inertia[2 * k + 1] * rim[5];
@@ -277,4 +292,45 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
         out->e[i] = contact[i] ? (stick[i] ? e_trial[i] : sign[i] * limit[i] / kx) : 0.0;
     }
     return 0;
+}
+
+/* The host road's height and running integral at x (HostRoad._reads): linear between the n
+ * samples (s ascending), level outside them. */
+static void road_read(const double* s, const double* z, const double* at, int n, double x,
+                      double* height, double* integral) {
+    if (n < 2) {
+        double level = n ? z[0] : 0.0;
+        *height = level;
+        *integral = level * (x - (n ? s[0] : 0.0));
+        return;
+    }
+    int lo = 0, hi = n; /* the last sample at or before x: searchsorted(s, x, "right") - 1 */
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (s[mid] <= x) lo = mid + 1;
+        else hi = mid;
+    }
+    int k = lo - 1;
+    if (k < 0) k = 0;
+    if (k > n - 2) k = n - 2;
+    double slope = (z[k + 1] - z[k]) / (s[k + 1] - s[k]);
+    double inside = x < s[0] ? s[0] : (x > s[n - 1] ? s[n - 1] : x);
+    double past = inside - s[k];
+    *height = z[k] + slope * past;
+    *integral = at[k] + (z[k] + 0.5 * slope * past) * past + (x - inside) * *height;
+}
+
+/* HostRoad.window_reads over p windows [x_lo + shift, x_hi + shift]: the mean height over
+ * each and its rate as the road passes at speed. */
+void host_road_window_reads(const double* s, const double* z, const double* at, int n,
+                            const double* x_lo, const double* x_hi, int p, double shift,
+                            double speed, double* mean, double* rate) {
+    for (int i = 0; i < p; ++i) {
+        double a = x_lo[i] + shift, b = x_hi[i] + shift, ha, ia, hb, ib;
+        road_read(s, z, at, n, a, &ha, &ia);
+        road_read(s, z, at, n, b, &hb, &ib);
+        double width = b - a, safe = width > 0.0 ? width : 1.0;
+        mean[i] = width > 0.0 ? (ib - ia) / safe : ha;
+        rate[i] = speed * (hb - ha) / safe;
+    }
 }
