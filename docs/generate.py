@@ -974,7 +974,8 @@ def fmu_init_fresh() -> str:
         lines.append(f"| {label} | {tire[key]:.3f} s | {floor[key]:.3f} s |")
     lines += ["", f"Medians of {results['rounds']} processes each, every one but the last "
               "row's on a fresh extraction of the FMU, as fmpy's `simulate_fmu` gives each run "
-              "(no bytecode cache in its resources): TireModal takes "
+              "(only the bytecode each FMU ships beside its sources, no cache of earlier "
+              "runs): TireModal takes "
               f"{tire['total_s'] - floor['total_s']:.3f} s more than the minimal slave, whose "
               "time is that of Python, fmpy and pythonfmu starting. " + provenance(data)]
     return "\n".join(lines)

@@ -147,3 +147,43 @@ def test_the_built_fmu_initialises_through_fmpy_without_what_it_does_not_need(
     """))
     assert found["loaded"] == []
     assert found["fz"] > 0
+
+
+@pytest.mark.fmu
+def test_a_fresh_extraction_imports_the_shipped_bytecode(python_fmu_path, tmp_path):
+    """Every Python file in the FMU has its bytecode beside it, checked by the source's hash:
+    from a fresh extraction (time stamps not kept) with bytecode writing off, as hosts run,
+    the slave and everything it imports from the FMU load without compiling a line."""
+    import zipfile
+
+    with zipfile.ZipFile(python_fmu_path) as archive:
+        names = set(archive.namelist())
+        archive.extractall(tmp_path)
+    sources = sorted(n for n in names if n.startswith("resources/") and n.endswith(".py"))
+    tag = sys.implementation.cache_tag
+    missing = [n for n in sources if "{0}/__pycache__/{2}.{1}.pyc".format(
+        *n.rsplit("/", 1)[0:1], tag, n.rsplit("/", 1)[1][:-3]) not in names]
+    assert len(sources) > 30 and missing == []
+    resources = tmp_path / "resources"
+    slave = next(p.stem for p in resources.glob("tire_fmu_modal_slave_*.py"))
+    code = textwrap.dedent(f"""
+        import importlib.machinery, json, sys
+        compiled = []
+        original = importlib.machinery.SourceFileLoader.source_to_code
+        def counted(self, data, path, *args, **kwargs):
+            compiled.append(path)
+            return original(self, data, path, *args, **kwargs)
+        importlib.machinery.SourceFileLoader.source_to_code = counted
+        sys.path.insert(0, {str(resources)!r})
+        import {slave}
+        ours = [m.__file__ for m in list(sys.modules.values())
+                if getattr(m, "__file__", None) and m.__file__.startswith({str(resources)!r})]
+        print(json.dumps({{"compiled": compiled, "ours": len(ours)}}))
+    """)
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    env.pop("PYTHONPATH", None)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, cwd=tmp_path, timeout=120)
+    assert done.returncode == 0, done.stderr
+    found = json.loads(done.stdout.strip().splitlines()[-1])
+    assert found["ours"] > 15 and found["compiled"] == []

@@ -292,8 +292,8 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                                                           zipfile.ZIP_DEFLATED) as archive:
         for item in source.infolist():
             data = source.read(item.filename)
-            if item.filename == BUILD_RECORD:
-                continue  # a record of an earlier completion: written anew below
+            if item.filename == BUILD_RECORD or "/__pycache__/" in item.filename:
+                continue  # of an earlier completion: written anew
             if item.filename == "modelDescription.xml":
                 data = complete_model_description(data, capabilities, units, real_starts)
             elif guard is not None and re.fullmatch(r"binaries/linux64/[^/]+\.so",
@@ -303,11 +303,33 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                 archive.writestr(wrapper, data, compress_type=zipfile.ZIP_DEFLATED)
                 data = guard.read_bytes()
             archive.writestr(item, data, compress_type=zipfile.ZIP_DEFLATED)
+            if re.fullmatch(r"resources/.+\.py", item.filename):
+                _write_bytecode(archive, item, data)
         for platform, library in sorted(kernels.items()):
             archive.write(library, f"binaries/{platform}/{library.name}")
         record = {"built_by": f"tire_fmu {tire_fmu.__version__}", "guard": guard is not None,
                   "kernel": sorted(kernels)}
         archive.writestr(BUILD_RECORD, json.dumps(record) + "\n")
+
+
+def _write_bytecode(archive: zipfile.ZipFile, item: zipfile.ZipInfo, source: bytes) -> None:
+    """The bytecode of a Python file the FMU carries, beside it in ``__pycache__`` for this
+    interpreter's version. A host extracts the FMU afresh (often with bytecode writing off), so
+    without it every start compiles the package and pythonfmu's own modules again: about a
+    third of a fresh start. The bytecode is checked by the source's hash, not its time stamp,
+    which extraction does not keep; a host of another Python version compiles as before."""
+    import importlib.util
+    import py_compile
+
+    cached = importlib.util.cache_from_source(item.filename)
+    with tempfile.TemporaryDirectory(prefix="tire_fmu_pyc_") as folder:
+        script, compiled = Path(folder) / "source.py", Path(folder) / "source.pyc"
+        script.write_bytes(source)
+        py_compile.compile(str(script), cfile=str(compiled), dfile=item.filename, doraise=True,
+                           invalidation_mode=py_compile.PycInvalidationMode.CHECKED_HASH)
+        entry = zipfile.ZipInfo(cached.replace("\\", "/"), item.date_time)
+        entry.external_attr = item.external_attr
+        archive.writestr(entry, compiled.read_bytes(), compress_type=zipfile.ZIP_DEFLATED)
 
 
 def build_record(fmu: str | Path) -> dict | None:
