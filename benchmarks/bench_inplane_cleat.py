@@ -26,6 +26,7 @@ from tire_fmu.core.inplane import InPlaneTire  # noqa: E402
 from tire_fmu.core.inplane_contact import InPlaneSimulator, deflection_for_load  # noqa: E402
 from tire_fmu.core.obstacles import cleat  # noqa: E402
 from tire_fmu.core.parameters import DEFAULT_LOAD_N  # noqa: E402
+from tire_fmu.tire_files import read_tire_file  # noqa: E402
 
 STEP_S = 5e-5
 SPEED_M_S = 10.0
@@ -52,6 +53,11 @@ def cleat_case(model, deflection, spacing, n_elements, obstacle):
             "fx_dominant_hz": dominant_hz(fx, STEP_S), "fz_dominant_hz": dominant_hz(fz, STEP_S),
             "seconds": seconds, "steps": int(run.time_s.size),
             "fx": fx[::20].tolist(), "fz": fz[::20].tolist()}
+
+
+#: The tire files whose rolling resistance is reported, and the speeds (m/s).
+RESISTANCE_TIRES = ("GL073A_inplane", "GL073A_inplane_hysteretic")
+RESISTANCE_SPEEDS_M_S = (1.0, 5.0, 10.0, 20.0)
 
 
 def rolling_resistance(model, load_n, speed, spacing):
@@ -84,13 +90,17 @@ def main(argv=None) -> int:
                   f"{row['fx_max_n'] / 1e3:6.2f}kN {row['fx_rms_n'] / 1e3:5.2f}kN "
                   f"{row['fx_dominant_hz']:6.1f} {row['fz_dominant_hz']:6.1f} "
                   f"{row['seconds']:6.1f}", flush=True)
-    resistance = [rolling_resistance(model, load, speed, 0.01)
-                  for load in (0.5 * DEFAULT_LOAD_N, DEFAULT_LOAD_N)
-                  for speed in (5.0, 10.0, 20.0)]
+    resistance = []
+    for name in RESISTANCE_TIRES:  # the paper's viscous damping, and with a hysteretic loss
+        tire = read_tire_file(name)
+        tire_model = InPlaneTire(tire.tire, tire.tangential)
+        resistance += [{"tire": name, **rolling_resistance(tire_model, load, speed, 0.01)}
+                       for load in (0.5 * DEFAULT_LOAD_N, DEFAULT_LOAD_N)
+                       for speed in RESISTANCE_SPEEDS_M_S]
     print("rolling resistance coefficient (free wheel, flat road):")
     for r in resistance:
-        print(f"  {r['load_n'] / 1e3:6.2f} kN {r['speed_m_s']:5.1f} m/s  {r['coefficient']:.5f}"
-              f"  (axle moment {r['axle_moment_n_m']:+.2f} N m)")
+        print(f"  {r['tire']:<26} {r['load_n'] / 1e3:6.2f} kN {r['speed_m_s']:5.1f} m/s  "
+              f"{r['coefficient']:.5f}  (axle moment {r['axle_moment_n_m']:+.2f} N m)")
     if args.record:
         write_record(args.record, {"step_s": STEP_S, "speed_m_s": SPEED_M_S,
                                    "deflection_m": deflection, "cleat": rows,

@@ -379,16 +379,17 @@ def inplane_rolling_resistance_table() -> str:
     data = record("bench_inplane_cleat")
     rows = data["results"]["rolling_resistance"]
     speeds = sorted({r["speed_m_s"] for r in rows})
-    loads = sorted({r["load_n"] for r in rows})
-    lines = ["| load | " + " | ".join(f"{v:g} m/s" for v in speeds) + " |",
-             "|---|" + "---|" * len(speeds)]
-    for load in loads:
-        cells = [next(r for r in rows if r["load_n"] == load and r["speed_m_s"] == v)
-                 for v in speeds]
-        lines.append(f"| {load / 1e3:.2f} kN | "
+    cases = sorted({(r["tire"], r["load_n"]) for r in rows})
+    lines = ["| tire file | load | " + " | ".join(f"{v:g} m/s" for v in speeds) + " |",
+             "|---|---|" + "---|" * len(speeds)]
+    for tire, load in cases:
+        cells = [next(r for r in rows if (r["tire"], r["load_n"]) == (tire, load)
+                      and r["speed_m_s"] == v) for v in speeds]
+        lines.append(f"| {tire} | {load / 1e3:.2f} kN | "
                      + " | ".join(f"{c['coefficient']:.5f}" for c in cells) + " |")
     lines += ["", "Rolling resistance coefficient -Fx/Fz of the free wheel on a flat road "
-              "(default in-plane tire, N = 100, 10 mm points). " + provenance(data)]
+              "(N = 100, 10 mm points, the mean over 0.15-0.3 s of a run from the static "
+              "footprint). " + provenance(data)]
     return "\n".join(lines)
 
 

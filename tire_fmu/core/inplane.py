@@ -80,7 +80,10 @@ class TangentialParameters:
       bristle of a brush model, 5e7 N/m²: the brush's longitudinal slip stiffness 2 k a² with
       a footprint half-length a of 6-9 cm is then 10-25 times a 27.7 kN load, the range of
       truck tires' C_Fκ/Fz (Pacejka, Tire and Vehicle Dynamics, truck data);
-    - ``friction_coefficient``: μ of the tread on the road, 0.8 (dry asphalt, truck tire).
+    - ``friction_coefficient``: μ of the tread on the road, 0.8 (dry asphalt, truck tire);
+    - ``loss_factor``: η of a hysteretic (rate-independent) loss in rolling, 0: the paper's
+      viscous β only, whose rolling resistance grows with speed and is several times below a
+      truck tire's (the tire file GL073A_inplane_hysteretic carries a fitted η; module doc).
     """
 
     EA: float = 1.0e7
@@ -91,6 +94,7 @@ class TangentialParameters:
     wheel_inertia_kg_m2: float = 8.0
     k_tx: float = 5.0e7
     friction_coefficient: float = 0.8
+    loss_factor: float = 0.0
 
     def as_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -106,7 +110,31 @@ TANGENTIAL_RANGES = {
     "wheel_inertia_kg_m2": (1e-6, 1e5, "kg*m^2"),
     "k_tx": (0.0, 1e12, "N/m^2"),
     "friction_coefficient": (0.0, 3.0, ""),
+    "loss_factor": (0.0, 1.0, ""),
 }
+
+#: Road speed (m/s) from which the hysteretic rolling loss acts in full: below it its share
+#: falls linearly to zero at rest (:func:`hysteresis_share`), so that the loss, which a
+#: rate-independent law gives at any speed, vanishes with the rolling and the static footprint
+#: stays the static one.
+HYSTERESIS_FULL_SPEED_M_S = 0.5
+
+
+def hysteresis_share(spin_rad_s: float, radius_m: float) -> float:
+    """s(Ω) in [-1, 1]: the share of the hysteretic loss at this spin (its sign the
+    direction of rolling), linear up to :data:`HYSTERESIS_FULL_SPEED_M_S` of the tread."""
+    full = HYSTERESIS_FULL_SPEED_M_S / radius_m
+    return max(-1.0, min(1.0, spin_rad_s / full))
+
+
+def hilbert_circulant(n: int) -> np.ndarray:
+    """H (N x N): the discrete Hilbert transform along θ, i·sign(n) on the order-n wave
+    e^{inθ} with the sign of the central difference's wavenumber sin(nδθ)/δθ (0 for order 0
+    and N/2): D1 with every order's wavenumber scaled to one."""
+    orders = np.arange(n)
+    symbol = 1j * np.sign(np.round(np.sin(2.0 * math.pi * orders / n), 14))
+    column = np.fft.ifft(symbol).real  # H[j, m] = c[(j - m) mod N]
+    return column[(orders[:, None] - orders[None, :]) % n]
 
 
 def tangential_problems(values: TangentialParameters, tread_radius_m: float) -> list[Problem]:
@@ -208,6 +236,9 @@ class InPlaneRing:
     n_elements: int
     spin_rad_s: float = 0.0
     rim_free: bool = False
+    #: False leaves the hysteretic loss out of :attr:`stiffness` (it is not polynomial in the
+    #: spin: a simulator reads the polynomial off three spins and adds it apart)
+    hysteresis: bool = True
 
     # ----- grid and operators -----
     @property
@@ -343,6 +374,25 @@ class InPlaneRing:
         return k
 
     @cached_property
+    def _built_hysteretic(self) -> np.ndarray:
+        """η K H on the rim-relative DOFs, unscaled by the spin's share: the circulatory term
+        Ω β K D1 of viscous damping with β = η/ω_n, ω_n = |Ω sin(nδθ)/δθ| the rate at which
+        rolling cycles a material point through order n (a loss per cycle independent of
+        the rate). Rigid translation (order 1) goes to rigid translation, rigid rotation
+        (order 0) to nothing: K annihilates both."""
+        eta = self.model.tangential.loss_factor
+        if eta == 0.0:
+            return np.zeros_like(self._built_elastic)
+        h = np.kron(np.eye(self._n_built), hilbert_circulant(self.n_elements))
+        return eta * self._built_elastic @ h
+
+    @cached_property
+    def hysteretic_stiffness(self) -> np.ndarray:
+        """The hysteretic loss's stiffness at full share on the DOFs (the stiffness holds
+        :func:`hysteresis_share` of it at the ring's spin)."""
+        return self._assemble(self._built_hysteretic, relative=True)
+
+    @cached_property
     def _tie(self) -> np.ndarray:
         """(built DOFs [+ rim], DOFs): v_s = r v_rel + rim's motion, or identity."""
         n, built = self.n_elements, self._n_built * self.n_elements
@@ -382,8 +432,13 @@ class InPlaneRing:
 
     @cached_property
     def stiffness(self) -> np.ndarray:
-        """K and the speed's stiffness (not symmetric at speed with damping: circulatory)."""
-        return self._assemble(self._built_elastic + self._built_rolling, relative=True)
+        """K and the speed's stiffness (not symmetric at speed with damping: circulatory),
+        with the hysteretic loss's share at this spin."""
+        k = self._built_elastic + self._built_rolling
+        share = hysteresis_share(self.spin_rad_s, self.model.tire.R) if self.hysteresis else 0.0
+        if share and self.model.tangential.loss_factor:
+            k = k + share * self._built_hysteretic
+        return self._assemble(k, relative=True)
 
     @cached_property
     def damping(self) -> np.ndarray:

@@ -56,7 +56,7 @@ import numpy as np
 
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
-from .inplane import InPlaneRing, InPlaneTire, quadratic_in_spin
+from .inplane import InPlaneRing, InPlaneTire, hysteresis_share, quadratic_in_spin
 from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
 
@@ -211,8 +211,8 @@ class InPlaneSimulator:
         t, tang = self.model.tire, self.model.tangential
         # C and K are polynomials in the spin (C linear, K quadratic): read them off three
         # spins, so that the step can follow the wheel's spin as it changes
-        rings = [InPlaneRing(self.model, self.n_elements, spin_rad_s=spin, rim_free=True)
-                 for spin in (0.0, 1.0, 2.0)]
+        rings = [InPlaneRing(self.model, self.n_elements, spin_rad_s=spin, rim_free=True,
+                             hysteresis=False) for spin in (0.0, 1.0, 2.0)]
         ring = rings[0]
         zone = contact_zone(Grid(self.n_elements, t.R), t.k_cw, t.beta, self.zone_length_m,
                             self.point_spacing_m)
@@ -229,7 +229,10 @@ class InPlaneSimulator:
         c_at = [to_abs.T @ r.damping @ to_abs for r in rings]
         k_at = [to_abs.T @ r.stiffness @ to_abs for r in rings]
         k0, k1, k2 = quadratic_in_spin(*k_at)
-        spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k0, "k1": k1, "k2": k2}
+        # the hysteretic loss, added apart at its share of the spin (not polynomial in it)
+        hysteretic = rings[0].hysteretic_stiffness
+        spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k0, "k1": k1, "k2": k2,
+                      "kh": to_abs.T @ hysteretic @ to_abs}
 
         interp = np.zeros((zone.n_points, n))
         interp[:, zone.nodes] = zone.interpolation  # zone nodes -> ring nodes
@@ -274,7 +277,7 @@ class InPlaneSimulator:
         mass_rows[:, -3:] -= np.diag([tang.wheel_mass_kg, tang.wheel_mass_kg,
                                       tang.wheel_inertia_kg_m2])
         rk0, rk1, rk2 = quadratic_in_spin(*rows_k)
-        self._rim_rows = {"k0": rk0, "k1": rk1, "k2": rk2,
+        self._rim_rows = {"k0": rk0, "k1": rk1, "k2": rk2, "kh": hysteretic[-3:],
                           "c0": rows_c[0], "c1": rows_c[1] - rows_c[0], "m": mass_rows,
                           "m_translation": mass_rows @ translation}
         self._m, self._spin_terms = mass, spin_terms
@@ -313,6 +316,9 @@ class InPlaneSimulator:
         # K(o + d) - K(o) = d (k1 + 2 o k2) + d² k2
         self._c1, self._k1s, self._k2 = terms["c1"], terms["k1"] + 2.0 * o * terms["k2"], \
             terms["k2"]
+        self._kh, self._ring_share = terms["kh"], self._share(o)
+        if self._ring_share:
+            self._k = self._k + self._ring_share * self._kh
         a0 = 4.0 / h**2 * self._m + 2.0 / h * self._c + self._k
         self._a0_inv = np.linalg.inv(a0)
         self._yn = self._a0_inv @ self._jnw.T  # ring response to unit point forces
@@ -357,6 +363,16 @@ class InPlaneSimulator:
         self._speed_now = speed
         self._s0 = speed - self._spin_now * self.model.tire.R * self._cos
 
+    def _share(self, spin_rad_s: float) -> float:
+        """The hysteretic loss's share at this spin (0 without one)."""
+        if not self.model.tangential.loss_factor:
+            return 0.0
+        return hysteresis_share(spin_rad_s, self.model.tire.R)
+
+    def _share_offset(self, yd: np.ndarray) -> float:
+        """The hysteretic share at the wheel's spin less the one the ring was built at."""
+        return self._share(self.spin_total_rad_s(yd)) - self._ring_share
+
     def spin_total_rad_s(self, yd: np.ndarray) -> float:
         """The wheel's spin (rad/s): the reference plus a free wheel's offset ψ̇."""
         return self._spin_now + (float(yd[-1]) if self._free_spin else 0.0)
@@ -368,12 +384,17 @@ class InPlaneSimulator:
     def _spin_correction(self, y, yd, ydd, offset: float) -> np.ndarray:
         """The spin's terms the ring's step lacks, -(ΔC ẏ + ΔK y) at the step's end for a
         spin ``offset`` from the ring's, on the state predicted from the step's start
-        (explicit: ΔC and ΔK are the spin's small change, d c1 and d (k1 + 2 o k2) + d² k2)."""
+        (explicit: ΔC and ΔK are the spin's small change, d c1 and d (k1 + 2 o k2) + d² k2,
+        and the hysteretic share's change, below its full speed)."""
         h = self.step_s
         v_end = yd + h * ydd
         y_end = y + h * yd + 0.5 * h * h * ydd
-        return -(offset * (self._c1 @ v_end + self._k1s @ y_end)
-                 + offset * offset * (self._k2 @ y_end))
+        out = -(offset * (self._c1 @ v_end + self._k1s @ y_end)
+                + offset * offset * (self._k2 @ y_end))
+        share = self._share_offset(yd)
+        if share:
+            out -= share * (self._kh @ y_end)
+        return out
 
     def road(self, time_s: float, distance_m: float | None = None,
              speed_m_s: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -533,7 +554,7 @@ class InPlaneSimulator:
         b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
               + self._f_ext(time, torque, rim))
         offset = self._ring_offset(yd)
-        if offset:
+        if offset or self._share_offset(yd):
             b0 += self._spin_correction(y, yd, ydd, offset)
         pen_const = self._pen0 + height * self._sec
         a_n = self._kn + 2.0 * self._cn / h
@@ -670,9 +691,10 @@ class InPlaneSimulator:
         az) adds the inertia of the rim's translation."""
         o = self.spin_total_rad_s(yd) if spin_rad_s is None else spin_rad_s
         # the spin's polynomial on the products, not on the rows (the spin moves every step):
-        # rows [k0 c0 m; k1 c1 0; k2 0 0] on [y, ẏ, ÿ]
+        # rows [k0 c0 m; k1 c1 0; k2 0 0; kh 0 0] on [y, ẏ, ÿ], by [1, Ω, Ω², s(Ω)]
         motion = np.concatenate([y, yd, np.zeros_like(y) if ydd is None else ydd])
-        f = (self._rim_stack() @ motion).reshape(3, 3).T @ np.array([1.0, o, o * o])
+        f = (self._rim_stack() @ motion).reshape(4, 3).T @ np.array([1.0, o, o * o,
+                                                                      self._share(o)])
         if rim is not None:
             f += self._rim_rows["m_translation"] @ rim[[2, 5]]
         return -f
@@ -687,21 +709,24 @@ class InPlaneSimulator:
         self._rim_stack()
         if self._rim_rows_at[0] != o:
             p = self._rim_on_y
-            self._rim_rows_at = (o, p["k0"] + o * p["k1"] + o**2 * p["k2"],
+            self._rim_rows_at = (o, p["k0"] + o * p["k1"] + o**2 * p["k2"]
+                                 + self._share(o) * p["kh"],
                                  p["c0"] + o * p["c1"], p["m"])
         return self._rim_rows_at[1:]
 
     def _rim_stack(self) -> np.ndarray:
-        """The rim's rows of the spin's polynomial on the coordinates, (9, 3 coordinates):
-        [k0 c0 m; k1 c1 0; k2 0 0] (made once)."""
+        """The rim's rows of the spin's terms on the coordinates, (12, 3 coordinates):
+        [k0 c0 m; k1 c1 0; k2 0 0; kh 0 0] (made once)."""
         if self._rim_on_y is None:
             rows = self._rim_rows
-            p = {name: rows[name] @ self._to_abs for name in ("k0", "k1", "k2", "c0", "c1", "m")}
+            p = {name: rows[name] @ self._to_abs
+                 for name in ("k0", "k1", "k2", "kh", "c0", "c1", "m")}
             zero = np.zeros_like(p["m"])
             self._rim_on_y = p
             self._rim_stack_rows = np.block([[p["k0"], p["c0"], p["m"]],
                                              [p["k1"], p["c1"], zero],
-                                             [p["k2"], zero, zero]])
+                                             [p["k2"], zero, zero],
+                                             [p["kh"], zero, zero]])
         return self._rim_stack_rows
 
     def static_load_n(self, deflection_m: float | None = None) -> float:

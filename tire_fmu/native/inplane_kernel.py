@@ -18,14 +18,14 @@ from .kernel import load_library
 
 _P = ctypes.POINTER(ctypes.c_double)
 _MATRICES = ("m", "c", "a0_inv", "yn", "yx", "wnn", "wnx", "kg", "kgn", "kgx", "gain", "carry",
-             "jn", "jxw", "jl", "rim_inertia", "c1", "k1s", "k2")
+             "jn", "jxw", "jl", "rim_inertia", "c1", "k1s", "k2", "kh")
 _VECTORS = ("kn", "cn", "kx", "cx", "pen0", "sec", "s0")
 
 
 class _Step(ctypes.Structure):
     _fields_ = ([(name, ctypes.c_int) for name in ("ny", "np", "free_spin", "max_passes",
                                                     "settle_passes")]
-                + [(name, ctypes.c_double) for name in ("h", "mu", "spin", "dspin")]
+                + [(name, ctypes.c_double) for name in ("h", "mu", "spin", "dspin", "dshare")]
                 + [(name, _P) for name in _MATRICES + _VECTORS])
 
 
@@ -82,7 +82,7 @@ class InPlaneKernel:
             self._s0 = arrays["s0"] = np.array(sim._s0, dtype=np.float64)
             self._keep = list(arrays.values()) + [sim._a0_inv, sim._kg, sim._carry]
             self._step = _Step(sim._ny, sim._zone.n_points, int(sim._free_spin), MAX_SET_PASSES,
-                               SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now, 0.0,
+                               SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now, 0.0, 0.0,
                                *(a.ctypes.data_as(_P) for a in arrays.values()))
             self._built_for = key
         else:
@@ -95,6 +95,7 @@ class InPlaneKernel:
         data = self._data()
         # the tread's arrays follow the spin in place; its value and the ring's offset do not
         data.spin, data.dspin = self.sim._spin_now, self.sim._ring_offset(state.yd)
+        data.dshare = self.sim._share_offset(state.yd)
         if self._buffers is None:
             ins, outs, in_struct, out_struct, extra = self._make_buffers(data.ny, data.np)
             height_buffer, rate_buffer, rims = extra

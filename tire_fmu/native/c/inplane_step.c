@@ -10,16 +10,17 @@
  * (P x P) wnn, wnx, kgn, kgx, carry; (ny x ny) m, c, a0_inv, c1, k1s, k2; (ny x 2)
  * rim_inertia. dspin is the wheel's spin less the one the ring's step was built at: its
  * terms, dspin (c1 v + k1s y) + dspin^2 k2 y on the state predicted at the step's end, are
- * taken off the step's load (_spin_correction). */
+ * taken off the step's load (_spin_correction), with dshare kh y, the change of the
+ * hysteretic loss's share (nonzero only below its full speed). */
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
 
 typedef struct {
     int ny, np, free_spin, max_passes, settle_passes;
-    double h, mu, spin, dspin;
+    double h, mu, spin, dspin, dshare;
     const double *m, *c, *a0_inv, *yn, *yx, *wnn, *wnx, *kg, *kgn, *kgx, *gain, *carry;
-    const double *jn, *jxw, *jl, *rim_inertia, *c1, *k1s, *k2;
+    const double *jn, *jxw, *jl, *rim_inertia, *c1, *k1s, *k2, *kh;
     const double *kn, *cn, *kx, *cx, *pen0, *sec, *s0;
 } InPlaneStep;
 
@@ -174,7 +175,7 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
     matvec(d->c, r, ny, ny, tmp2);
     for (int k = 0; k < ny; ++k) b0[k] += tmp2[k];
     if (d->free_spin) b0[ny - 1] += torque;
-    if (d->dspin != 0.0) {
+    if (d->dspin != 0.0 || d->dshare != 0.0) {
         double *v_end = rhs + 2 * p, *y_end = v_end + ny, *q = y_end + ny;
         for (int k = 0; k < ny; ++k) {
             v_end[k] = s->yd[k] + h * s->ydd[k];
@@ -185,6 +186,10 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
         matvec(d->k1s, y_end, ny, ny, tmp2);
         matvec(d->k2, y_end, ny, ny, q);
         for (int k = 0; k < ny; ++k) b0[k] -= d->dspin * (tmp2[k] + d->dspin * q[k]);
+        if (d->dshare != 0.0) {
+            matvec(d->kh, y_end, ny, ny, q);
+            for (int k = 0; k < ny; ++k) b0[k] -= d->dshare * q[k];
+        }
     }
     if (rim[2] != 0.0 || rim[5] != 0.0)
         for (int k = 0; k < ny; ++k)
