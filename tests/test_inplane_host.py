@@ -117,8 +117,27 @@ def test_every_bad_setting_is_named_at_once():
 
 
 def test_a_speed_near_the_meshs_critical_speed_is_refused():
-    with pytest.raises(ParameterError, match=r"critical speed 42\.6\d m/s"):
-        build_host_stepper(HostSettings(speed_m_s=41.0))
+    """Above 0.95 of the mesh's critical speed the stepper is refused, naming that speed and
+    the remedy: with the lumped sidewall (which halves it when N doubles) a tie; with the
+    default tie, whose critical speed converges, a lower top order. Below it, it builds."""
+    import re
+
+    from tire_fmu.core.inplane import InPlaneTire
+    from tire_fmu.core.inplane_modes import critical_speed
+    from tire_fmu.core.parameters import TireParameters
+
+    lumped = {"sidewall_max_order": 0.0}
+    speeds = {top: critical_speed(InPlaneTire(TireParameters(sidewall_max_order=top)),
+                                  100).speed_m_s for top in (0.0, 8.0)}
+    assert speeds[8.0] > 1.5 * speeds[0.0]
+    for tire, remedy in ((lumped, "sidewall_max_order = 8"), ({}, "lower sidewall_max_order")):
+        critical = speeds[tire.get("sidewall_max_order", 8.0)]
+        with pytest.raises(ParameterError) as error:
+            build_host_stepper(HostSettings(speed_m_s=0.97 * critical, tire=tire))
+        assert f"critical speed {critical:.4g} m/s" in str(error.value)
+        assert re.search(re.escape(remedy), str(error.value))
+    assert build_host_stepper(HostSettings(speed_m_s=0.97 * speeds[0.0])).critical_speed_m_s \
+        == pytest.approx(speeds[8.0], rel=1e-12)
 
 
 def test_the_compiled_step_is_the_numpy_step(deflected):

@@ -219,7 +219,8 @@ def _fit_inplane(args, targets, radial_tire):
         if "slip_stiffness" in kinds:
             free.append("k_tx")
     tangential = _tangential([], args.tire_file or DEFAULT_TIRE_FILE)
-    # the in-plane ring has the paper's lumped radial sidewall (sidewall_max_order = 0)
+    # fitted on the paper's lumped radial sidewall (sidewall_max_order = 0), as the in-plane
+    # tire files give it: the measured modes are low orders, where the tie does not act
     model = InPlaneTire(replace(radial_tire, sidewall_max_order=0.0), tangential)
     try:
         return fit_inplane(targets, free, model, n_elements=args.inplane_elements,

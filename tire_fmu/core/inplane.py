@@ -178,12 +178,11 @@ class InPlaneTire:
         if self.sidewall_tangential not in ("tied", "lumped"):
             problems.append(Problem("sidewall_tangential", self.sidewall_tangential, "",
                                     "'tied' or 'lumped'"))
-        if self.tire.sidewall_max_order > 0 or self.tire.sidewall_shear > 0:
+        if self.tire.sidewall_shear > 0:
             problems.append(Problem(
-                "sidewall_max_order", self.tire.sidewall_max_order, "",
-                "0 with sidewall_shear = 0 for the in-plane ring",
-                "it has the paper's lumped radial sidewall; the radial ring's tie is not "
-                "carried over yet: use the tire file GL073A_inplane (or GL073A)"))
+                "sidewall_shear", self.tire.sidewall_shear, "N", "0 for the in-plane ring",
+                "its sidewall masses have no circumferential coupling; to move the sidewall's "
+                "band out of the high orders tie it instead (sidewall_max_order, e.g. 8)"))
         if problems:
             raise ParameterError(problems)
 
@@ -348,6 +347,28 @@ class InPlaneRing:
         return full
 
     @cached_property
+    def _built_tie(self) -> np.ndarray | None:
+        """The radial sidewall's tie to the tread above ``sidewall_max_order`` (the radial
+        ring's, :func:`.model.sidewall_tie_matrix`: ½p(w_s - r w)² per order, r the static
+        share k_r1/(k_r1 + k_r2)), on the rim-relative built DOFs, or None where it does not
+        act. Every static state of the ring has w_s = r w, so it stores nothing there (the
+        footprint is the lumped sidewall's) and moves the sidewall's band, which sets a
+        critical speed falling as 1/N, out of the tied orders. It is elastic: no damper and no
+        loss act on it, as in the radial ring."""
+        t, n = self.model.tire, self.n_elements
+        if not (self.model.sidewall_mass and 0 < t.sidewall_max_order < n // 2):
+            return None
+        from .discretisation import Grid
+        from .model import sidewall_tie_matrix
+
+        tie = sidewall_tie_matrix(t, Grid(n, t.R)).toarray() * self.node_arc_m
+        out = np.zeros_like(self._built_elastic)
+        w, w_s = slice(0, n), slice(2 * n, 3 * n)
+        out[w, w], out[w, w_s] = tie[:n, :n], tie[:n, n:]
+        out[w_s, w], out[w_s, w_s] = tie[n:, :n], tie[n:, n:]
+        return out
+
+    @cached_property
     def _built_damping(self) -> np.ndarray:
         t = self.model.tire
         return t.alpha * self._built_mass + t.beta * self._built_elastic
@@ -435,6 +456,8 @@ class InPlaneRing:
         """K and the speed's stiffness (not symmetric at speed with damping: circulatory),
         with the hysteretic loss's share at this spin."""
         k = self._built_elastic + self._built_rolling
+        if self._built_tie is not None:
+            k = k + self._built_tie
         share = hysteresis_share(self.spin_rad_s, self.model.tire.R) if self.hysteresis else 0.0
         if share and self.model.tangential.loss_factor:
             k = k + share * self._built_hysteretic

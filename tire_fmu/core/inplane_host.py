@@ -6,9 +6,10 @@ tangential, and the operating point); :func:`build_host_stepper` validates them 
 every problem in one :class:`~.parameters.ParameterError`, and returns the
 :class:`~.inplane_contact.InPlaneStepper` with the host's road
 (:class:`~.obstacles.HostRoad`) and a summary for the log. The speed must stay below the
-mesh's critical speed (:func:`.inplane_modes.critical_speed`): with the paper's lumped
-sidewall a finer mesh lowers it (42.6 m/s at N = 100, under 11 m/s at N = 400), and above it
-the rolling ring's standing waves grow without bound.
+mesh's critical speed (:func:`.inplane_modes.critical_speed`), above which the rolling ring's
+standing waves grow without bound. The default tire ties the radial sidewall to the tread above
+order 8, as the radial FMU's does, so that the critical speed converges as the mesh is refined;
+with the paper's lumped sidewall (``sidewall_max_order`` = 0) it falls as 1/N.
 """
 
 from __future__ import annotations
@@ -57,7 +58,7 @@ class HostSettings:
     """What the in-plane FMU's parameters give (SI). ``tire`` and ``tangential`` are plain
     values by field name (the radial ones of :class:`~.parameters.TireParameters`, the
     tangential ones of :class:`~.inplane.TangentialParameters`); missing ones take the
-    in-plane defaults (GL073A with the paper's lumped sidewall)."""
+    FMUs' defaults (GL073A_tied: the paper's data, the radial sidewall tied above order 8)."""
 
     tire: dict = field(default_factory=dict)
     tangential: dict = field(default_factory=dict)
@@ -102,7 +103,7 @@ def _number_problem(name, value, unit, low, high, integer=False) -> Problem | No
 def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTire | None]:
     """Every problem with the settings on their own, and the tire if its data are sound."""
     problems = []
-    tire_values = {"sidewall_max_order": 0.0, **settings.tire}
+    tire_values = dict(settings.tire)
     problems += tire_problems(tire_values)
     known = {f.name for f in fields(TangentialParameters)}
     for name in sorted(set(settings.tangential) - known):
@@ -151,7 +152,10 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
                 "speed_m_s", settings.speed_m_s, "m/s",
                 f"at most {CRITICAL_SPEED_FRACTION:g} of the mesh's critical speed "
                 f"{critical:.4g} m/s (n_elements = {n})",
-                "with the paper's lumped sidewall a finer mesh lowers it: use fewer elements")])
+                "with the paper's lumped sidewall (sidewall_max_order = 0) a finer mesh lowers "
+                "it: use fewer elements, or tie the sidewall (sidewall_max_order = 8)"
+                if tire.tire.sidewall_max_order == 0 else
+                "the sidewall's highest free order sets it: lower sidewall_max_order")])
     options = {"zone_length_m": settings.zone_length_m,
                "point_spacing_m": settings.point_spacing_m}
     # the footprint of the reduced tire the step runs (its static shapes make it the full

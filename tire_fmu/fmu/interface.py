@@ -297,8 +297,9 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                     f"rim_vx); allowed [0, {CRITICAL_SPEED_FRACTION:g} of the mesh's critical "
                     "speed]", "--speed"),
         FmuVariable("n_elements", "Integer", "parameter", 100, "",
-                    f"nodes around the ring; {allowed('n_elements')} (the lumped sidewall's "
-                    "critical speed falls as the mesh is refined)",
+                    f"nodes around the ring; {allowed('n_elements')} (with the lumped "
+                    "sidewall, sidewall_max_order = 0, the critical speed falls as the mesh "
+                    "is refined)",
                     "--elements"),
         FmuVariable("f_max", "Real", "parameter", DEFAULT_HOST_F_MAX_HZ, "Hz",
                     "highest natural frequency of the free ring's modes the reduced step "
@@ -319,9 +320,9 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                     "the wheel turns under wheel_torque and the tread's drag (its inertia "
                     "wheel_inertia_kg_m2); false holds its spin at speed / R", "--wheel-held"),
     ]
-    lumped = "; 0 for the in-plane ring"
-    table += _tire_data_variables(TireParameters(sidewall_max_order=0.0),
-                                  {"sidewall_max_order": lumped, "sidewall_shear": lumped})
+    table += _tire_data_variables(TireParameters(),
+                                  {"sidewall_shear": "; 0 for the in-plane ring (tie the "
+                                                     "sidewall with sidewall_max_order)"})
     defaults = TangentialParameters()
     for name, (low, high, unit) in TANGENTIAL_RANGES.items():
         table.append(FmuVariable(name, "Real", "parameter", getattr(defaults, name),
