@@ -190,3 +190,8 @@ def test_the_massless_ring_does_not_read_m_s():
     status, why, (mass, _, _) = _build(data, 16, n_fields(model), rim_free=0)
     assert status == 0, why
     np.testing.assert_array_equal(mass, InPlaneRing(model, 16).mass)
+
+
+def test_the_wrapper_raises_the_c_sentence():
+    with pytest.raises(ValueError, match=r"n_elements = 4: allowed an integer in \[8, 1600\]"):
+        c_inplane_ring(InPlaneTire(), 4)
