@@ -195,3 +195,17 @@ def test_the_massless_ring_does_not_read_m_s():
 def test_the_wrapper_raises_the_c_sentence():
     with pytest.raises(ValueError, match=r"n_elements = 4: allowed an integer in \[8, 1600\]"):
         c_inplane_ring(InPlaneTire(), 4)
+
+
+def test_what_the_c_does_not_build_yet_is_refused_not_built_wrong():
+    """The hysteretic loss and the radial tie are the Python ring's only (for now): the
+    wrapper names them rather than returning the ring without them."""
+    lossy = InPlaneTire(tangential=TangentialParameters(loss_factor=0.05))
+    tied = InPlaneTire(TireParameters(sidewall_max_order=8.0))
+    with pytest.raises(ValueError, match=r"hysteretic loss \(loss_factor = 0\.05\)"):
+        c_inplane_ring(lossy, 32)
+    with pytest.raises(ValueError, match=r"sidewall's tie \(sidewall_max_order = 8\)"):
+        c_inplane_ring(tied, 32)
+    # a top order at or above N/2 ties nothing: that ring is the lumped one, which the C builds
+    mass, _, _ = c_inplane_ring(tied, 16)
+    np.testing.assert_array_equal(mass, InPlaneRing(tied, 16).mass)

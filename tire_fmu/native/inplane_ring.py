@@ -49,6 +49,18 @@ def n_fields(model: InPlaneTire) -> int:
     return 3 if model.sidewall_tangential == "tied" else 4
 
 
+def _not_in_c(model: InPlaneTire, n_elements: int) -> str:
+    """What of the Python ring the C leaves out for this model ("" when nothing): the
+    hysteretic loss and the radial sidewall's tie came to the Python ring after the C."""
+    missing = []
+    if model.tangential.loss_factor:
+        missing.append(f"the hysteretic loss (loss_factor = {model.tangential.loss_factor:g})")
+    top = model.tire.sidewall_max_order
+    if model.sidewall_mass and 0 < top < n_elements // 2:
+        missing.append(f"the radial sidewall's tie (sidewall_max_order = {top:g})")
+    return " and ".join(missing)
+
+
 def ring_data(model: InPlaneTire) -> InPlaneRingData:
     values = [getattr(model.tire, name) for name in TIRE_FIELDS]
     values += [getattr(model.tangential, name) for name in TANGENTIAL_FIELDS]
@@ -60,6 +72,10 @@ def c_inplane_ring(model: InPlaneTire, n_elements: int, spin_rad_s: float = 0.0,
     """(mass, stiffness, damping) of ``InPlaneRing(model, n_elements, spin_rad_s, rim_free)``
     built by the C; ValueError with the C's sentence (parameter, value, allowed) when it
     refuses them."""
+    missing = _not_in_c(model, n_elements)
+    if missing:
+        raise ValueError(f"inplane_ring_build does not build {missing} yet (the Python ring "
+                         "does: core/inplane.py)")
     lib = load_library() if library is None else library
     _declare(lib)
     fields = n_fields(model)
