@@ -217,11 +217,6 @@ def test_every_tangential_problem_is_reported_at_once():
     assert "rim_radius_m = 0.9 m: must be below the tread radius R = 0.65 m" in text
 
 
-def test_the_tied_radial_sidewall_is_refused_with_the_remedy():
-    with pytest.raises(ParameterError, match="sidewall_max_order = 8: must be 0.*GL073A"):
-        InPlaneTire(tire=TireParameters())
-
-
 # ----- the command -----
 
 def test_command_reports_the_modes_the_core_computes(capsys):
