@@ -336,8 +336,8 @@ class InPlaneSimulator:
         """The tread's step at this spin and road speed: the slip's reference, the elements'
         gain and force on the ring, their carry through the footprint (cheap: points-sized)."""
         h, o = self.step_s, spin_rad_s
-        self._spin_now, self._speed_now = o, speed_m_s
-        self._s0 = speed_m_s - o * self.model.tire.R * self._cos
+        self._spin_now = o
+        self._set_speed(speed_m_s)
         (ka, kb), (na, nb), (xa, xb) = self._kg_parts, self._kgn_parts, self._kgx_parts
         if not hasattr(self, "_gain"):
             self._gain, self._kg, self._kgn, self._kgx = (np.empty_like(a)
@@ -360,8 +360,12 @@ class InPlaneSimulator:
             self._set_ring_spin(ring_spin)
         if rebuilt or spin != self._spin_now:
             self._set_tread_spin(spin, speed)
-        self._speed_now = speed
-        self._s0 = speed - self._spin_now * self.model.tire.R * self._cos
+        self._set_speed(speed)
+
+    def _set_speed(self, speed_m_s: float) -> None:
+        """The road's speed, and the slip's reference s0 it gives at the tread's spin."""
+        self._speed_now = speed_m_s
+        self._s0 = speed_m_s - self._spin_now * self.model.tire.R * self._cos
 
     def _share(self, spin_rad_s: float) -> float:
         """The hysteretic loss's share at this spin (0 without one)."""
@@ -381,17 +385,16 @@ class InPlaneSimulator:
         """How far the wheel's spin is from the one the ring's step was built at (rad/s)."""
         return self.spin_total_rad_s(yd) - self._ring_spin
 
-    def _spin_correction(self, y, yd, ydd, offset: float) -> np.ndarray:
-        """The spin's terms the ring's step lacks, -(ΔC ẏ + ΔK y) at the step's end for a
-        spin ``offset`` from the ring's, on the state predicted from the step's start
-        (explicit: ΔC and ΔK are the spin's small change, d c1 and d (k1 + 2 o k2) + d² k2,
-        and the hysteretic share's change, below its full speed)."""
+    def _spin_correction(self, y, yd, ydd, offset: float, share: float) -> np.ndarray:
+        """The spin's terms the ring's step lacks, -(ΔC ẏ + ΔK y) at the step's end, on the
+        state predicted from the step's start, for a spin ``offset`` from the ring's and a
+        hysteretic ``share`` change (explicit: ΔC and ΔK are the spin's small change, d c1
+        and d (k1 + 2 o k2) + d² k2, and the share's change times kh, below its full speed)."""
         h = self.step_s
         v_end = yd + h * ydd
         y_end = y + h * yd + 0.5 * h * h * ydd
         out = -(offset * (self._c1 @ v_end + self._k1s @ y_end)
                 + offset * offset * (self._k2 @ y_end))
-        share = self._share_offset(yd)
         if share:
             out -= share * (self._kh @ y_end)
         return out
@@ -553,9 +556,9 @@ class InPlaneSimulator:
         r = 2.0 / h * y + yd
         b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
               + self._f_ext(time, torque, rim))
-        offset = self._ring_offset(yd)
-        if offset or self._share_offset(yd):
-            b0 += self._spin_correction(y, yd, ydd, offset)
+        offset, share = self._ring_offset(yd), self._share_offset(yd)
+        if offset or share:
+            b0 += self._spin_correction(y, yd, ydd, offset, share)
         pen_const = self._pen0 + height * self._sec
         a_n = self._kn + 2.0 * self._cn / h
         beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
@@ -652,8 +655,7 @@ class InPlaneSimulator:
             yd[-1] = 0.0
             self._set_tread_spin(spin, speed)
         else:
-            self._speed_now = speed
-            self._s0 = speed - self._spin_now * self.model.tire.R * self._cos
+            self._set_speed(speed)
         if abs(spin - self._ring_spin) > RING_REBUILD_FRACTION * scale:
             self._set_ring_spin(spin)
             self._set_tread_spin(self._spin_now, self._speed_now)
