@@ -398,16 +398,49 @@ def inplane_convergence_table() -> str:
     data = record("bench_inplane_convergence")
     results = data["results"]
     lines = ["| N | points | rotational, wheel held | rotational, wheel free "
-             "| rolling resistance |", "|---|---|---|---|---|"]
+             "| rolling resistance, viscous | rolling resistance, hysteretic |",
+             "|---|---|---|---|---|---|"]
     for r in results["rows"]:
         lines.append(f"| {r['n_elements']} | {r['points']} at {r['point_spacing_m'] * 1e3:g} mm "
                      f"| {r['rotational_held_hz']:.2f} Hz | {r['rotational_free_hz']:.2f} Hz "
-                     f"| {r['rolling_resistance']:.5f} |")
+                     f"| {r['rolling_resistance']:.5f} "
+                     f"| {r['rolling_resistance_hysteretic']:.5f} |")
     lines += ["", f"The loaded tire at {results['load_n'] / 1e3:.2f} kN: its rotational mode at "
               f"rest (`loaded_modes`) and the free-rolling resistance coefficient -Fx/Fz at "
               f"{results['speed_m_s']:g} m/s (`steady_rolling`), by mesh and contact-point "
-              "spacing. " + provenance(data)]
+              "spacing, with the paper's viscous damping (the default tire) and with the "
+              f"hysteretic loss of `{results['hysteretic_tire']}`. " + provenance(data)]
     return "\n".join(lines)
+
+
+def _convergence_rows(key: str) -> dict:
+    rows = record("bench_inplane_convergence")["results"]["rows"]
+    return {(r["n_elements"], r["point_spacing_m"]): r[key] for r in rows}
+
+
+@value("hysteretic-rr-convergence")
+def hysteretic_rr_convergence() -> str:
+    """How far the hysteretic coefficient moves with the mesh: N = 100 and 200 against N = 400
+    at the same point spacing, the largest over the spacings."""
+    rr = _convergence_rows("rolling_resistance_hysteretic")
+    finest = max(n for n, _ in rr)
+    spacings = sorted({s for _, s in rr})
+
+    def worst(n):
+        return max(abs(rr[n, s] / rr[finest, s] - 1) for s in spacings if (n, s) in rr)
+
+    coarse = sorted({n for n, _ in rr if n < finest})
+    return " and ".join(f"{100 * worst(n):.1f} % at N = {n}" for n in coarse) + (
+        f" of N = {finest}")
+
+
+@value("viscous-rr-convergence")
+def viscous_rr_convergence() -> str:
+    """The viscous coefficient's change from N = 100 to N = 400, the largest over spacings."""
+    rr = _convergence_rows("rolling_resistance")
+    finest, coarsest = max(n for n, _ in rr), min(n for n, _ in rr)
+    change = max(abs(rr[coarsest, s] / rr[finest, s] - 1) for _, s in rr if (finest, s) in rr)
+    return f"{100 * change:.0f} %"
 
 
 @generator("inplane-footprint")
