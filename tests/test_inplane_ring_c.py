@@ -320,3 +320,21 @@ def test_the_tie_stores_nothing_on_the_sidewall_static_share_and_ends_below_half
         for a, b in zip(c_inplane_ring(model_of(base), size, 25.0, True),
                         c_inplane_ring(model_of(top_at_half), size, 25.0, True)):
             np.testing.assert_array_equal(a, b)
+
+
+def test_the_full_share_loss_is_built_only_when_asked_for():
+    """A NULL hysteretic matrix skips it (a native FMU that steps at one spin needs only K):
+    the other three are those built with it."""
+    model = model_of(fixed_case("lumped", 24, 0.5 * FULL_SHARE_SPIN, True, 0.1, 4.0))
+    lib = load_library()
+    _declare(lib)
+    size = lib.inplane_ring_n_dof(24, 4, 1)
+    matrices = [np.empty((size, size)) for _ in range(3)]
+    work = np.empty(lib.inplane_ring_work_doubles(24, 4))
+    why = ctypes.create_string_buffer(512)
+    status = lib.inplane_ring_build(ctypes.byref(ring_data(model)), 24, 4,
+                                    0.5 * FULL_SHARE_SPIN, 1, 1, *(m.ctypes.data for m in matrices),
+                                    None, work.ctypes.data, why, 512)
+    assert status == 0, why.value.decode()
+    for a, b in zip(matrices, c_inplane_ring(model, 24, 0.5 * FULL_SHARE_SPIN, True)):
+        np.testing.assert_array_equal(a, b)
