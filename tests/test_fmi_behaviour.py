@@ -1104,5 +1104,5 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "SUBSTEP_WORK_BASE", "SUBSTEP_WORK_PER_MODE", "SUBSTEP_WORK_PER_ORDER_NODE",
              "SUBSTEP_WORK_PER_SUPPORT", "SUBSTEP_WORK_PER_POINT", "SUBSTEP_WORK_PER_NODE_PAIR",
              "SUBSTEP_WORK_PER_RATE_ENTRY", "DEFAULT_POINT_SPACING_M", "POINT_SPACING_SLACK",
-             "MOST_POINTS_PER_NODE", "SIDEWALL_TIE_FACTOR"}
+             "MOST_POINTS_PER_NODE", "SIDEWALL_TIE_FACTOR", "HYSTERESIS_FULL_SPEED_M_S"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)

@@ -33,6 +33,7 @@ from ..core import (
     contact,
     contact_dynamics,
     free_ring,
+    inplane,
     kernel_numpy,
     modal_form,
     model,
@@ -129,6 +130,8 @@ CONSTANTS: dict[str, float | int] = {
     "MIN_ROLLING_SPEED_M_S": parameters.MIN_ROLLING_SPEED_M_S,
     "MIN_LAW_PRESSURE_PA": parameters.MIN_LAW_PRESSURE_PA,
     "SIDEWALL_TIE_FACTOR": parameters.SIDEWALL_TIE_FACTOR,
+    # the in-plane ring's hysteretic loss: the road speed of its full share
+    "HYSTERESIS_FULL_SPEED_M_S": inplane.HYSTERESIS_FULL_SPEED_M_S,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,

@@ -8,8 +8,12 @@
  * three rim entries per built row, so G^T B G costs O(n^2) here where the Python's dense
  * products cost O(n^3). Each scalar is formed as the Python forms it (a product's grouping,
  * pow for the powers), and each energy term is summed on its own before it is added, as the
- * Python adds whole matrices. */
+ * Python adds whole matrices. The two terms that are dense per field are formed from their
+ * per-order values: the radial tie's circulant columns (the inverse DFT the Python takes with
+ * irfft, summed here in O(N^2)) and the Hilbert circulant of the hysteretic loss (its closed
+ * form, -(2/N) cot(pi m/N) on odd m for even N), applied to K's few entries per row. */
 #include "inplane_ring.h"
+#include "spec.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -23,7 +27,7 @@ typedef struct {
     size_t offset;
     const char *name, *unit;
     double low, high;
-    int low_inclusive;
+    int low_inclusive, integer;
 } Range;
 
 #define FIELD(name) offsetof(InPlaneRingData, name), #name
@@ -32,27 +36,29 @@ typedef struct {
  * TANGENTIAL_RANGES: a native FMU refuses what the Python refuses. m_s is checked apart: the
  * massless ring does not read it. */
 static const Range RANGES[] = {
-    {FIELD(R), "m", 0.1, 3.0, 0},
-    {FIELD(b), "m", 0.01, 2.0, 0},
-    {FIELD(inflation_pressure), "Pa", 0.0, 3.0e6, 1},
-    {FIELD(rhoA), "kg/m", 1e-6, 1.0e4, 1},
-    {FIELD(k_r1), "N/m^2", 0.0, 1.0e12, 0},
-    {FIELD(k_r2), "N/m^2", 0.0, 1.0e12, 0},
-    {FIELD(EI), "N*m^2", 0.0, 1.0e8, 0},
-    {FIELD(alpha), "1/s", 0.0, 1.0e3, 1},
-    {FIELD(beta), "s", 0.0, 1.0e-1, 1},
-    {FIELD(sidewall_pressure_exponent), "", 0.0, 3.0, 1},
-    {FIELD(reference_pressure), "Pa", 1e4, 3.0e6, 1},
-    {FIELD(EA), "N", 1e3, 1e12, 1},
-    {FIELD(k_t1), "N/m^2", 1e2, 1e12, 1},
-    {FIELD(k_t2), "N/m^2", 1e2, 1e12, 1},
-    {FIELD(rim_radius_m), "m", 1e-3, 10.0, 1},
-    {FIELD(wheel_mass_kg), "kg", 1e-3, 1e5, 1},
-    {FIELD(wheel_inertia_kg_m2), "kg*m^2", 1e-6, 1e5, 1},
-    {FIELD(k_tx), "N/m^2", 0.0, 1e12, 1},
-    {FIELD(friction_coefficient), "", 0.0, 3.0, 1},
+    {FIELD(R), "m", 0.1, 3.0, 0, 0},
+    {FIELD(b), "m", 0.01, 2.0, 0, 0},
+    {FIELD(inflation_pressure), "Pa", 0.0, 3.0e6, 1, 0},
+    {FIELD(rhoA), "kg/m", 1e-6, 1.0e4, 1, 0},
+    {FIELD(k_r1), "N/m^2", 0.0, 1.0e12, 0, 0},
+    {FIELD(k_r2), "N/m^2", 0.0, 1.0e12, 0, 0},
+    {FIELD(EI), "N*m^2", 0.0, 1.0e8, 0, 0},
+    {FIELD(alpha), "1/s", 0.0, 1.0e3, 1, 0},
+    {FIELD(beta), "s", 0.0, 1.0e-1, 1, 0},
+    {FIELD(sidewall_pressure_exponent), "", 0.0, 3.0, 1, 0},
+    {FIELD(reference_pressure), "Pa", 1e4, 3.0e6, 1, 0},
+    {FIELD(sidewall_max_order), "", 0.0, 1e5, 1, 1},
+    {FIELD(EA), "N", 1e3, 1e12, 1, 0},
+    {FIELD(k_t1), "N/m^2", 1e2, 1e12, 1, 0},
+    {FIELD(k_t2), "N/m^2", 1e2, 1e12, 1, 0},
+    {FIELD(rim_radius_m), "m", 1e-3, 10.0, 1, 0},
+    {FIELD(wheel_mass_kg), "kg", 1e-3, 1e5, 1, 0},
+    {FIELD(wheel_inertia_kg_m2), "kg*m^2", 1e-6, 1e5, 1, 0},
+    {FIELD(k_tx), "N/m^2", 0.0, 1e12, 1, 0},
+    {FIELD(friction_coefficient), "", 0.0, 3.0, 1, 0},
+    {FIELD(loss_factor), "", 0.0, 1.0, 1, 0},
 };
-static const Range M_S_RANGE = {FIELD(m_s), "kg/m", 1e-6, 1.0e4, 1};
+static const Range M_S_RANGE = {FIELD(m_s), "kg/m", 1e-6, 1.0e4, 1, 0};
 
 /* below core/parameters.py's MIN_LAW_PRESSURE_PA the pressure law leaves the sidewall almost
  * without stiffness */
@@ -73,10 +79,12 @@ static int range_problem(const Range* r, const InPlaneRingData* d, char* why, si
 {
     double v = *(const double*)((const char*)d + r->offset);
     int below = r->low_inclusive ? v < r->low : v <= r->low;
-    if (isfinite(v) && !below && v <= r->high)
+    if (isfinite(v) && !below && v <= r->high && (!r->integer || v == floor(v)))
         return INPLANE_RING_OK;
-    return say(why, size, INPLANE_RING_BAD_DATA, "%s = %g %s: allowed a finite number in %s%g, %g] %s",
-               r->name, v, r->unit, r->low_inclusive ? "[" : "(", r->low, r->high, r->unit);
+    const char* gap = r->unit[0] ? " " : "";
+    return say(why, size, INPLANE_RING_BAD_DATA, "%s = %g%s%s: allowed %s in %s%g, %g]%s%s",
+               r->name, v, gap, r->unit, r->integer ? "an integer" : "a finite number",
+               r->low_inclusive ? "[" : "(", r->low, r->high, gap, r->unit);
 }
 
 static int valid_shape(int n_elements, int n_fields)
@@ -102,8 +110,10 @@ size_t inplane_ring_work_doubles(int n_elements, int n_fields)
     size_t nb = (size_t)built_fields(n_fields) * (size_t)n_elements;
     /* two built matrices (the elastic one and one being worked on), a row of it, and the
      * sidewall's L^T L (2N x 2N), the patterns, the rim rows of G and two products with them
-     * (3 columns each) */
-    return 2 * nb * nb + 4 * (size_t)n_elements * n_elements + nb + 4 * 3 * nb;
+     * (3 columns each); a cosine table, the Hilbert column and the tie's three columns (N
+     * each) */
+    return 2 * nb * nb + 4 * (size_t)n_elements * n_elements + nb + 4 * 3 * nb
+           + 5 * (size_t)n_elements;
 }
 
 int inplane_ring_check(const InPlaneRingData* d, int n_elements, int n_fields,
@@ -197,6 +207,15 @@ typedef struct {
     double dtheta, arc, kappa1, share; /* share: the tied sidewall's r = k_t1/(k_t1 + k_t2) */
     const double* patterns;            /* nb x 3: the built fields' rigid patterns */
 } Ring;
+
+/* core/inplane.py's hysteresis_share: the loss's share at this spin, linear up to
+ * HYSTERESIS_FULL_SPEED_M_S of the tread, its sign the direction of rolling */
+static double hysteresis_share(double spin_rad_s, double radius_m)
+{
+    double full = SPEC_HYSTERESIS_FULL_SPEED_M_S / radius_m;
+    double share = spin_rad_s / full;
+    return share > 1.0 ? 1.0 : (share < -1.0 ? -1.0 : share);
+}
 
 static inline int wrap(int j, int n) { return j < 0 ? j + n : (j >= n ? j - n : j); }
 
@@ -388,9 +407,101 @@ static void assemble(const Ring* g, const double* b, int relative, double* out, 
 #undef WEIGHT
 }
 
+/* The radial sidewall's tie above sidewall_max_order (model.sidewall_tie_matrix): the first
+ * columns of its tt, ss, ts circulants (per metre), from dispersion.sidewall_tie's per-order
+ * values p [[r^2, -r], [-r, 1]], p = SIDEWALL_TIE_FACTOR (k0_tt + k0_ss), r = k_r1/k0_ss, on the
+ * lumped stiffness at rest (discretisation.symbols summed as the core sums them). 0 where no
+ * order is tied (massless, sidewall_max_order 0 or at least N/2), else 1. */
+static int tie_columns(const Ring* g, const InPlaneRingData* d, double* cosines, double* tt,
+                       double* ss, double* ts)
+{
+    int n = g->n, half = n / 2;
+    double top = d->sidewall_max_order;
+    if (g->n_fields == INPLANE_RING_MASSLESS || !(top > 0.0 && top < half))
+        return 0;
+    double k_r1, k_r2;
+    effective_radial(d, &k_r1, &k_r2);
+    double dth = g->dtheta, radius = d->R;
+    double pretension = d->inflation_pressure * d->b * radius;
+    for (int j = 0; j < n; ++j)
+        cosines[j] = cos(2.0 * PI * j / n);
+    memset(tt, 0, (size_t)n * sizeof *tt);
+    memset(ss, 0, (size_t)n * sizeof *ss);
+    memset(ts, 0, (size_t)n * sizeof *ts);
+    for (int k = 0; k <= half; ++k) {
+        if (!((double)k > top))
+            continue;
+        double c1 = cos(k * dth), c2 = cos((2.0 * k) * dth);
+        double lam2 = -(pow(dth, -2.0) * ((c1 + -2.0) + c1));
+        double lam4 = pow(dth, -4.0) * ((((c2 + -4.0 * c1) + 6.0) + -4.0 * c1) + c2);
+        double k0_tt = d->EI / pow(radius, 4.0) * lam4 + pretension / pow(radius, 2.0) * lam2;
+        k0_tt = k0_tt + k_r1;
+        double k0_ss = k_r1 + k_r2; /* + the sidewall's shear, 0 in the in-plane ring */
+        double ratio = k_r1 / k0_ss;
+        double p = SPEC_SIDEWALL_TIE_FACTOR * (k0_tt + k0_ss);
+        double s_tt = p * ratio * ratio, s_ss = p, s_ts = -p * ratio;
+        /* the inverse DFT of a real even symbol: orders k and N - k alike, N/2 once */
+        double weight = (k == 0 || 2 * k == n) ? 1.0 : 2.0;
+        for (int m = 0; m < n; ++m) {
+            double c = weight * cosines[(k * m) % n];
+            tt[m] += s_tt * c;
+            ss[m] += s_ss * c;
+            ts[m] += s_ts * c;
+        }
+    }
+    for (int m = 0; m < n; ++m) {
+        tt[m] *= 1.0 / n;
+        ss[m] *= 1.0 / n;
+        ts[m] *= 1.0 / n;
+    }
+    return 1;
+}
+
+/* core/inplane.py's hilbert_circulant: H[j, m] = h[(j - m) mod N], i sign(sin(n dtheta)) on
+ * order n, in closed form: -(2/N) cot(pi m/N) on odd m for even N, -(1/N) cot(pi m/(2N)) on odd
+ * and (1/N) tan(pi m/(2N)) on even m for odd N. Formed for m <= N/2 and mirrored (h is odd),
+ * so that the angle stays away from the cotangent's pole, where pi's rounding would tell. */
+static void hilbert_column(int n, double* h)
+{
+    h[0] = 0.0;
+    for (int m = 1; m <= n / 2; ++m) {
+        double v;
+        if (n % 2 == 0)
+            v = m % 2 ? -(2.0 / n) / tan(PI * m / n) : 0.0;
+        else
+            v = m % 2 ? -(1.0 / n) / tan(PI * m / (2.0 * n)) : (1.0 / n) * tan(PI * m / (2.0 * n));
+        h[m] = v;
+        if (n - m != m)
+            h[n - m] = -v;
+    }
+}
+
+/* row i of (eta K) H, H the Hilbert circulant on every built field (InPlaneRing's
+ * _built_hysteretic, `eta * K @ h`): each of K's few entries in the row spreads H's row over
+ * its field */
+static void hysteretic_row(const Ring* g, const double* e, double eta, const double* h, int i,
+                           double* out)
+{
+    int n = g->n, nb = g->nb;
+    const double* line = e + (size_t)i * nb;
+    memset(out, 0, (size_t)nb * sizeof *out);
+    for (int k = 0; k < nb; ++k) {
+        if (line[k] == 0.0)
+            continue;
+        double c = eta * line[k];
+        int field = k / n, local = k - field * n;
+        double* target = out + (size_t)field * n;
+        for (int j = 0; j <= local; ++j) /* H[k, j] = h[(k - j) mod N] */
+            target[j] += c * h[local - j];
+        for (int j = local + 1; j < n; ++j)
+            target[j] += c * h[local - j + n];
+    }
+}
+
 int inplane_ring_build(const InPlaneRingData* d, int n_elements, int n_fields,
-                       double spin_rad_s, int rim_free, double* mass, double* stiffness,
-                       double* damping, double* work, char* why, size_t why_size)
+                       double spin_rad_s, int rim_free, int hysteresis, double* mass,
+                       double* stiffness, double* damping, double* hysteretic, double* work,
+                       char* why, size_t why_size)
 {
     int status = inplane_ring_check(d, n_elements, n_fields, spin_rad_s, why, why_size);
     if (status)
@@ -416,6 +527,9 @@ int inplane_ring_build(const InPlaneRingData* d, int n_elements, int n_fields,
            *patterns = row + nb;
     double *rim_rows = patterns + 3 * (size_t)nb, *bh = rim_rows + 3 * (size_t)nb,
            *htb = bh + 3 * (size_t)nb;
+    double *cosines = htb + 3 * (size_t)nb;
+    double *hilbert = cosines + n, *tie_tt = hilbert + n, *tie_ss = tie_tt + n,
+           *tie_ts = tie_ss + n;
     g.patterns = patterns;
     /* radial (-sin, -cos, 0) and tangential (-cos, sin, R) per (w, v) pair */
     for (int i = 0; i < nb; ++i) {
@@ -429,6 +543,8 @@ int inplane_ring_build(const InPlaneRingData* d, int n_elements, int n_fields,
     memset(mass, 0, dofs * sizeof *mass);
     memset(stiffness, 0, dofs * sizeof *stiffness);
     memset(damping, 0, dofs * sizeof *damping);
+    if (hysteretic != NULL)
+        memset(hysteretic, 0, dofs * sizeof *hysteretic);
 
     built_elastic(&g, d, e, w);
 
@@ -470,7 +586,36 @@ int inplane_ring_build(const InPlaneRingData* d, int n_elements, int n_fields,
                 w[(side + i) * nb + side + j] -= s * block[(size_t)i * 2 * n + j];
     }
     add_into(w, e, all); /* w = rolling + elastic: the order of the Python's sum is immaterial */
+    /* the radial tie (tread w, sidewall w_s), elastic only: no damper and no loss act on it */
+    if (tie_columns(&g, d, cosines, tie_tt, tie_ss, tie_ts)) {
+        size_t ws = (size_t)2 * n;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                int m = wrap(i - j, n);
+                w[(size_t)i * nb + j] += tie_tt[m] * g.arc;
+                w[(size_t)i * nb + ws + j] += tie_ts[m] * g.arc;
+                w[(ws + i) * nb + j] += tie_ts[m] * g.arc;
+                w[(ws + i) * nb + ws + j] += tie_ss[m] * g.arc;
+            }
+    }
+    /* the hysteretic loss eta K H at its share of the spin; K the elastic one, without the tie */
+    double eta = d->loss_factor;
+    double share = hysteresis ? hysteresis_share(omega, d->R) : 0.0;
+    if (eta != 0.0)
+        hilbert_column(n, hilbert);
+    if (eta != 0.0 && share != 0.0)
+        for (int i = 0; i < nb; ++i) {
+            double* line = w + (size_t)i * nb;
+            hysteretic_row(&g, e, eta, hilbert, i, row);
+            for (int j = 0; j < nb; ++j)
+                line[j] += share * row[j];
+        }
     assemble(&g, w, 1, stiffness, rim_rows, bh, htb);
+    if (hysteretic != NULL && eta != 0.0) {
+        for (int i = 0; i < nb; ++i)
+            hysteretic_row(&g, e, eta, hilbert, i, w + (size_t)i * nb);
+        assemble(&g, w, 1, hysteretic, rim_rows, bh, htb);
+    }
 
     /* gyroscopic 2 Omega M L on the absolute velocities */
     memset(w, 0, all * sizeof *w);

@@ -1,9 +1,11 @@
 /* inplane_ring.h: the in-plane ring's mass, stiffness and damping built in C.
  *
  * The same matrices as tire_fmu/core/inplane.py's InPlaneRing(model, n_elements, spin_rad_s,
- * rim_free) .mass, .stiffness and .damping (read that for the physics), so that a native
- * in-plane FMU can build them at initialisation without Python. Row-major doubles, memory
- * from the caller: inplane_ring_n_dof and inplane_ring_work_doubles say how much. */
+ * rim_free, hysteresis) .mass, .stiffness, .damping and .hysteretic_stiffness (read that for
+ * the physics: the radial sidewall's tie above sidewall_max_order, the hysteretic loss at its
+ * share of the spin), so that a native in-plane FMU can build them at initialisation without
+ * Python. Row-major doubles, memory from the caller: inplane_ring_n_dof and
+ * inplane_ring_work_doubles say how much. */
 #ifndef TIRE_INPLANE_RING_H
 #define TIRE_INPLANE_RING_H
 
@@ -11,12 +13,13 @@
 
 /* The tire data the ring reads: TireParameters' fields, then all of TangentialParameters'
  * (k_tx and friction_coefficient are the contact's, carried so that one struct holds the
- * tangential data; the ring does not read them). SI units as in the Python. */
+ * tangential data; the ring does not read them). SI units as in the Python. sidewall_shear is
+ * not carried: InPlaneTire refuses any but 0. */
 typedef struct {
     double R, b, inflation_pressure, rhoA, m_s, k_r1, k_r2, EI, alpha, beta,
-        sidewall_pressure_exponent, reference_pressure;
+        sidewall_pressure_exponent, reference_pressure, sidewall_max_order;
     double EA, k_t1, k_t2, rim_radius_m, wheel_mass_kg, wheel_inertia_kg_m2, k_tx,
-        friction_coefficient;
+        friction_coefficient, loss_factor;
 } InPlaneRingData;
 
 /* The field count says the sidewall model (InPlaneTire's sidewall_mass and
@@ -50,10 +53,14 @@ int inplane_ring_check(const InPlaneRingData* data, int n_elements, int n_fields
                        double spin_rad_s, char* why, size_t why_size);
 
 /* Fill mass, stiffness, damping (each n_dof x n_dof) for spin_rad_s and rim_free (0 held,
- * else free), as InPlaneRing does; work holds inplane_ring_work_doubles. Checks first (why as
- * inplane_ring_check) and writes nothing on a problem. */
+ * else free), as InPlaneRing does; hysteresis 0 leaves the hysteretic loss out of the
+ * stiffness (InPlaneRing's hysteresis=False), else the stiffness holds its share at the spin.
+ * hysteretic, when not NULL, receives the loss's stiffness at full share (n_dof x n_dof, zero
+ * for loss_factor = 0; it does not depend on the spin). work holds inplane_ring_work_doubles.
+ * Checks first (why as inplane_ring_check) and writes nothing on a problem. */
 int inplane_ring_build(const InPlaneRingData* data, int n_elements, int n_fields,
-                       double spin_rad_s, int rim_free, double* mass, double* stiffness,
-                       double* damping, double* work, char* why, size_t why_size);
+                       double spin_rad_s, int rim_free, int hysteresis, double* mass,
+                       double* stiffness, double* damping, double* hysteretic, double* work,
+                       char* why, size_t why_size);
 
 #endif
