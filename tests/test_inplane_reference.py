@@ -16,10 +16,11 @@ or its static solve is used.
   point slides; the two differ by the element's own relaxation, 1/β ≈ 9e3 1/s.)
 - The element field is carried through the footprint by ∂e/∂t = ė_material - Ω ∂e/∂θ, the
   derivative by the same upwind-biased cubic stencil that the simulator's cubic carry tends
-  to as its step goes to zero: the comparison then measures the time stepping and the contact
-  and friction laws, not the choice of stencil. The stencil is a spatial discretisation of its
-  own: at 10 mm points a second-order upwind stencil moves Fx by a few per cent rms, which
-  is what the spacing study of test_inplane_contact bounds.
+  to as its step goes to zero, with the field read past its ends as the simulator's carry reads it
+  (`field_gradient`): the comparison then measures the time stepping and the contact and friction
+  laws, not the choice of stencil. The stencil is a spatial discretisation of its own: at 10 mm
+  points a second-order upwind stencil moves Fx by a few per cent rms, which is what the spacing
+  study of test_inplane_contact bounds.
 """
 
 from __future__ import annotations
@@ -52,6 +53,42 @@ def spin_weights(spin_rad_s: float, nominal_rad_s: float) -> np.ndarray:
     so their values at those three spins give them exactly at any other."""
     x = spin_rad_s / nominal_rad_s
     return np.array([0.5 * (x - 1.0) * (x - 2.0), -x * (x - 2.0), 0.5 * x * (x - 1.0)])
+
+
+def field_gradient(e, on, sticks, pen) -> np.ndarray:
+    """dθ × ∂e/∂θ at every point by the upwind-biased cubic (points i-2 .. i+1, weights
+    (1, -6, 3, 2)/6), the field read past its ends as it goes on: ahead of a run of points on
+    the road linearly through zero at the road's edge (where the penetration, linear between
+    the run's first point and the one ahead, is zero; half a spacing ahead with no point
+    ahead to tell, at least a thousandth of one), behind a run of sticking points with the
+    slope of its last two (or of its edge, for one point alone)."""
+    count = e.size
+    stencil = np.arange(count)[:, None] + np.arange(-2, 2)
+    known = (stencil >= 0) & (stencil < count)
+    values = np.where(known, np.where(on, e, 0.0)[np.clip(stencil, 0, count - 1)], 0.0)
+
+    def runs(flags):
+        edges = np.diff(np.concatenate([[0], flags.astype(int), [0]]))
+        return zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1)
+
+    edge = {}
+    for first, last in runs(on):
+        ahead_pen = pen[first - 1] if first > 0 else np.nan
+        fraction = (pen[first] / (pen[first] - ahead_pen) if ahead_pen <= 0 < pen[first]
+                    else 0.5)
+        edge[first] = max(fraction, 1e-3)
+        for i in range(first, last + 1):
+            for k, c in enumerate(stencil[i]):
+                if c < first:
+                    values[i, k] = e[first] * (1.0 - (first - c) / edge[first])
+    for first, last in runs(on & sticks):
+        slope = (e[last] - e[last - 1] if last > 0 and on[last - 1]
+                 else e[last] / edge[last])
+        for i in range(first, last + 1):
+            for k, c in enumerate(stencil[i]):
+                if c > last:
+                    values[i, k] = e[last] + (c - last) * slope
+    return values @ np.array([1.0, -6.0, 3.0, 2.0]) / 6.0
 
 
 class UnreducedCleatRun:
@@ -166,12 +203,7 @@ class UnreducedCleatRun:
         sticks = np.abs(trial) <= limit
         e_rate = np.where(sticks, slip, (np.sign(trial) * limit - self.k_x * e) / self.c_x)
         tread = self.k_x * e + self.c_x * e_rate  # the element's pull on the belt, backwards
-        on = np.where(f_n > 0, e, 0.0)  # off the road the field is zero
-        gradient = 3.0 * e
-        gradient[:-1] += 2.0 * on[1:]  # the point behind; past the last one the field is zero
-        gradient[1:] -= 6.0 * on[:-1]  # the points ahead: zero before the first
-        gradient[2:] += on[:-2]
-        gradient /= 6.0 * self.dtheta
+        gradient = field_gradient(e, f_n > 0, sticks, pen) / self.dtheta
         force = sum(weight * (k_and_c @ motion) for weight, k_and_c in
                     zip(spin_weights(spin, self.spin), self.k_and_c) if weight != 0.0)
         ydd = -self.mass.solve(force + self.to_normal @ f_n + self.to_tread @ tread)

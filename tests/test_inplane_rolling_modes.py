@@ -147,8 +147,8 @@ def sim_steady_elements(sim, torque):
 def test_a_brake_step_at_speed_rings_at_the_rolling_rotational_mode():
     """A -3 kN m brake step at 10 m/s (wheel free, axle held; N = 100, 5 mm points): Fx rings
     at rolling_modes' rotational frequency and decay, read by a fit of damped cosines seeded
-    by the linear step response's four largest modes. Measured +0.1 % and -0.3 %; the bounds
-    leave room for the run's sets, which are not frozen."""
+    by the linear step response's four largest modes (bench_inplane_brake_ringing.py records
+    what they are); the bounds leave room for the run's sets, which are not frozen."""
     spacing = 0.005
     deflection = deflection_for_load(MODEL, DEFAULT_LOAD_N, 100, point_spacing_m=spacing)
     sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=spacing)

@@ -351,6 +351,13 @@ class InPlaneSimulator:
             np.multiply(b, o, out=out)
             out += a
         self._carry = carry_matrix(self._zone.point_theta, o * h, getattr(self, "_carry", None))
+        base, weights = carry_stencil(self._zone.point_theta, o * h)
+        theta = self._zone.point_theta
+        self._carry_shift = o * h * (theta.size - 1) / (theta[-1] - theta[0])  # in spacings
+        if not hasattr(self, "_carry_base"):
+            self._carry_base, self._carry_weights = base.astype(np.int32), weights
+        else:  # in place, as the carry (the C step keeps the addresses)
+            self._carry_base[:], self._carry_weights[...] = base, weights
 
     def _take_spins(self, ring_spin: float, spin: float, speed: float) -> None:
         """Rebuild what differs from these spins (a state taken back): the ring's step at
@@ -560,6 +567,11 @@ class InPlaneSimulator:
         if offset or share:
             b0 += self._spin_correction(y, yd, ydd, offset, share)
         pen_const = self._pen0 + height * self._sec
+        if contact.any():  # the runs' ends (carry_edges); their edges from the step's start
+            delta = np.maximum(entering_fractions(pen_const + self._jn @ y, contact),
+                               self._carry_shift)
+            e_conv += carry_edges(e, contact, stick, self._carry_base,
+                                  self._carry_weights, delta)
         a_n = self._kn + 2.0 * self._cn / h
         beta_n = self._kn * pen_const + self._cn * (rate * self._sec - self._jn @ r)
         # e = e_conv + h/2 (s_n + s_{n+1}), s = (the ring part) + s0
@@ -1076,6 +1088,7 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
     contact = sim._pen0 > 0
     stick = np.ones(p, dtype=bool)
     sign = np.ones(p)
+    delta = entering_fractions(sim._pen0, contact)
     for _ in range(MAX_SET_PASSES):
         a = np.zeros((nu, nu))
         b = np.zeros(nu)
@@ -1108,7 +1121,8 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
                 b[row] = sign[j] * sim._mu * sim._kn[j] * sim._pen0[j] / sim._kx[j]
                 continue
             entering = j == 0 or not c[j - 1]
-            weight = spacing / (2 * omega)
+            # from the road's edge δ_j spacings ahead, or trapezoidal from the point ahead
+            weight = spacing / omega * (delta[j] if entering else 0.5)
             a[row, ring_cols] -= weight * a_s[j]
             b[row] = weight * sim._s0[j]
             if not entering:
@@ -1125,15 +1139,18 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
         carried = np.concatenate([[0.0], e[:-1]])
         ahead = np.concatenate([[0.0], slip_speed[:-1]])
         entering = ~np.concatenate([[False], c[:-1]])
-        e_trial = np.where(entering, 0.0, carried + spacing / (2 * omega) * ahead) + (
-            spacing / (2 * omega) * slip_speed)
+        new_delta = entering_fractions(pen, (pen > 0) & (f_n > 0))
+        e_trial = np.where(entering, spacing / omega * new_delta * slip_speed,
+                           carried + spacing / (2 * omega) * (ahead + slip_speed))
         tread = sim._kx * e_trial + sim._cx * slip_speed
         new_contact = (pen > 0) & (f_n > 0)
         new_stick = np.abs(tread) <= sim._mu * np.maximum(f_n, 0) * (1 + 1e-12)
         new_sign = np.where(new_stick, sign, np.sign(tread))
-        if sets_settled((contact, stick, sign), (new_contact, new_stick, new_sign)):
+        # the edges move with the solve: their fractions settle with the sets
+        if (sets_settled((contact, stick, sign), (new_contact, new_stick, new_sign))
+                and np.allclose(new_delta, delta, rtol=1e-11, atol=1e-13)):
             break
-        contact, stick, sign = new_contact, new_stick, new_sign
+        contact, stick, sign, delta = new_contact, new_stick, new_sign, new_delta
     else:
         raise ContactSetError("steady_rolling: the contact and stick sets did not settle")
     rate = np.zeros(ny)
@@ -1173,21 +1190,70 @@ def ritz_basis(model: InPlaneTire, n_elements: int, zone_nodes: np.ndarray,
     return scipy.linalg.orth(shapes, rcond=1e-10)
 
 
-def carry_matrix(theta: np.ndarray, shift_rad: float, out: np.ndarray | None = None
-                 ) -> np.ndarray:
-    """B (P x P): the field at the points carried by ``shift_rad`` in the direction of θ,
-    e_new = B e, by cubic Lagrange interpolation at the departure points θ_p - shift (zero
-    from ahead of the first point). Linear interpolation damps a field carried through the
-    footprint by a fraction that grows with the spacing; that numerical damping set the
-    amplitude of the tread's fore-aft ringing, so the fore-aft force did not converge with
-    the spacing. ``out`` (P x P) is written instead of a new array."""
+#: The least entering fraction (a point may sit just behind the road's edge): its element
+#: then holds a thousandth of a spacing's slip rather than a division by zero.
+MIN_ENTERING_FRACTION = 1e-3
+
+
+def entering_fractions(pen: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """δ (P,): for each point that begins a run of points in contact, how far ahead of it, in
+    spacings, its elements enter the footprint: where the penetration, linear between it and
+    the point ahead, crosses zero (the road's edge). 1/2 where there is no point ahead out of
+    contact to tell (the zone's first point, or one ahead pressed but pushing nothing); 1 at
+    the other points, where it is not used. With a fixed half spacing, the entering element
+    held the same slip however lightly the point was pressed, so a point just behind the edge
+    slid where the next one pressed in would stick, and the footprint's forces jumped as the
+    edge crossed a point; with δ they follow the edge continuously."""
+    delta = np.ones(pen.size)
+    on = np.asarray(contact, dtype=bool)
+    starts = np.flatnonzero(on & ~np.concatenate([[False], on[:-1]]))
+    delta[starts] = 0.5
+    inside = starts[starts > 0]
+    ahead = pen[inside - 1]
+    edge = (ahead <= 0.0) & (pen[inside] > 0.0)
+    j = inside[edge]
+    delta[j] = np.maximum(pen[j] / (pen[j] - pen[j - 1]), MIN_ENTERING_FRACTION)
+    return delta
+
+
+def entering_fraction_slopes(pen: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """∂δ_j/∂pen_{j-1} and ∂δ_j/∂pen_j (P, 2) of :func:`entering_fractions`: the road's edge
+    moves with the penetrations (zero where δ is not the edge's: 1/2, the least, or unused)."""
+    slopes = np.zeros((pen.size, 2))
+    delta = entering_fractions(pen, contact)
+    on = np.asarray(contact, dtype=bool)
+    j = np.flatnonzero(on & ~np.concatenate([[False], on[:-1]]))
+    j = j[j > 0]
+    j = j[(pen[j - 1] <= 0.0) & (pen[j] > 0.0) & (delta[j] > MIN_ENTERING_FRACTION)]
+    gap = (pen[j] - pen[j - 1]) ** 2
+    slopes[j, 0], slopes[j, 1] = pen[j] / gap, -pen[j - 1] / gap
+    return slopes
+
+
+def carry_stencil(theta: np.ndarray, shift_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """(base (P,) int, weights (P, 4)): the departure point θ_p - shift of each point lies
+    between points base and base + 1, and the cubic Lagrange weights on points base - 1 ...
+    base + 2 interpolate the field there (points may be out of range)."""
     from .contact import lagrange_weights
 
     count = theta.size
     spacing = (theta[-1] - theta[0]) / (count - 1)
     position = (theta - shift_rad - theta[0]) / spacing
     base = np.floor(position).astype(int)
-    weights = lagrange_weights(position - base)
+    return base, lagrange_weights(position - base)
+
+
+def carry_matrix(theta: np.ndarray, shift_rad: float, out: np.ndarray | None = None
+                 ) -> np.ndarray:
+    """B (P x P): the field at the points carried by ``shift_rad`` in the direction of θ,
+    e_new = B e, by cubic Lagrange interpolation at the departure points θ_p - shift (zero
+    from ahead of the first point; :func:`carry_edges` corrects the stencils that reach past
+    a run of points in contact). Linear interpolation damps a field carried through the
+    footprint by a fraction that grows with the spacing; that numerical damping set the
+    amplitude of the tread's fore-aft ringing, so the fore-aft force did not converge with
+    the spacing. ``out`` (P x P) is written instead of a new array."""
+    count = theta.size
+    base, weights = carry_stencil(theta, shift_rad)
     if out is None:
         out = np.zeros((count, count))
     else:
@@ -1197,6 +1263,53 @@ def carry_matrix(theta: np.ndarray, shift_rad: float, out: np.ndarray | None = N
         ok = (column >= 0) & (column < count)
         out[np.flatnonzero(ok), column[ok]] = weights[ok, k]
     return out
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) of each run of consecutive true flags."""
+    on = np.asarray(flags, dtype=bool)
+    starts = np.flatnonzero(on & ~np.concatenate([[False], on[:-1]]))
+    ends = np.flatnonzero(on & ~np.concatenate([on[1:], [False]]))
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def carry_edges(e: np.ndarray, contact: np.ndarray, stick: np.ndarray, base: np.ndarray,
+                weights: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """What the carry's stencils get wrong at the ends of the elements' field (P,), to add to
+    B e. The cubic through a point reads one point behind it and two ahead, but the field is
+    transported from ahead only, and it has ends:
+
+    - ahead of each run of points in contact, the elements hold nothing (e = 0), yet the
+      field a cubic interpolates across the road's edge goes on linearly through the zero
+      where the elements enter, δ_j spacings ahead of the run's first point j
+      (:func:`entering_fractions`, as steady_rolling's and the rolling modes' transports
+      take it): e_j (1 - k/δ_j) at k spacings ahead. Read as zero, the entering element
+      settled at 0.8 of a spacing's slip whatever δ, so a lightly pressed first point slid in
+      the step where it stuck in the steady solve;
+    - behind each run of sticking points, the point behind slides (its element held at the
+      friction limit) or is off the road: the sticking field goes on with the slope of its
+      last two points, so that the kink where sliding begins does not reach back into the
+      points that stick.
+
+    ``delta``: the entering fractions, at least the step's shift in spacings (an element that
+    entered during the step is carried from zero)."""
+    p = e.size
+    correction = np.zeros(p)
+    columns = base[:, None] + np.arange(-1, 3)
+    real = np.where((columns >= 0) & (columns < p), e[np.clip(columns, 0, p - 1)], 0.0)
+    for first, last in _runs(contact):
+        rows = slice(first, last + 1)
+        virtual = (1.0 - (first - columns[rows]) / delta[first]) * e[first]
+        correction[rows] += np.sum(np.where(columns[rows] < first,
+                                            weights[rows] * (virtual - real[rows]), 0.0), axis=1)
+    for first, last in _runs(contact & stick):
+        rows = slice(first, last + 1)
+        slope = (e[last] - e[last - 1] if last > 0 and contact[last - 1]
+                 else e[last] / delta[last])
+        virtual = e[last] + (columns[rows] - last) * slope
+        correction[rows] += np.sum(np.where(columns[rows] > last,
+                                            weights[rows] * (virtual - real[rows]), 0.0), axis=1)
+    return correction
 
 
 def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100,

@@ -19,12 +19,14 @@ while it sticks, σ μ f_n while it slides (its e then slaved to σ μ f_n / k_x
 
     ½ (ė_j + ė_{j-1}) + Ω (e_j - e_{j-1}) / Δθ = ½ (s_j + s_{j-1}),
 
-and ė_j + Ω e_j / (Δθ/2) = s_j at a point entering contact, e = 0 half a spacing ahead.
-(The box over that half cell, ½ ė_j = s_j - ..., doubles the entering element's stiffness as
-the speed goes to zero, and the box's recursion carries the error down the footprint with
-alternating sign.) Both have steady_rolling's trapezoidal transport as their steady state, so
-the linear system's equilibrium is steady_rolling's state (tested to round-off); as the speed
-goes to zero, ė = s at every sticking point, which is loaded_modes' springs. The box scheme
+and ė_j + Ω e_j / (δ_j Δθ) = s_j at a point entering contact, e = 0 at the road's edge δ_j spacings
+ahead (:func:`.inplane_contact.entering_fractions`; the edge moves with the penetrations, and its
+motion is linearised with the rest). (A box over that part cell, ½ ė_j = s_j - ..., doubles the
+entering element's stiffness as the speed goes to zero, and the box's recursion carries the error
+down the footprint with alternating sign.) Both have steady_rolling's trapezoidal transport as their
+steady state, so the linear system's equilibrium is steady_rolling's state (tested to round-off); as
+the speed goes to zero, ė = s at every sticking point, which is loaded_modes' springs. The box
+scheme
 carries a wave without numerical damping; an upwind difference would damp the elements'
 field by a fraction that grows with the spacing, as linear interpolation did in the step
 (:func:`.inplane_contact.carry_matrix`). After a sliding point, ė_{j-1} is the rate of its
@@ -46,7 +48,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .inplane_contact import InPlaneSimulator, steady_rolling
+from .inplane_contact import (
+    InPlaneSimulator,
+    entering_fraction_slopes,
+    entering_fractions,
+    steady_rolling,
+)
 from .parameters import ParameterError, Problem
 
 #: An eigenvalue whose energy is more than this share in the tread elements' springs is the
@@ -99,6 +106,10 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     th = sim._zone.point_theta
     spacing = float(np.diff(th).mean())
     m_inv = np.linalg.inv(sim._m)
+    # the road's edges where the steady rolling has them; they move with the penetrations
+    pen_steady = sim._pen0 + sim._jn[:, :nr] @ steady.state[:nr]
+    delta = entering_fractions(pen_steady, contact)
+    delta_slopes = entering_fraction_slopes(pen_steady, contact)
     rows_st = np.flatnonzero(contact & stick)
     ns = rows_st.size
     index = -np.ones(th.size, dtype=int)
@@ -144,9 +155,15 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     for j in rows_st:
         row = nr + ny + index[j]
         entering = j == 0 or not contact[j - 1]
-        if entering:  # e = 0 half a spacing ahead, ė_j + Ω e_j / (Δθ/2) = s_j (module doc)
-            q = -2.0 * omega / spacing * e_q[j] + s_q[j]
+        if entering:  # e = 0 δ_j spacings ahead, ė_j + Ω e_j / (δ_j Δθ) = s_j (module doc)
+            q = -omega / (delta[j] * spacing) * e_q[j] + s_q[j]
             q0 = s_0[j]
+            if j > 0 and delta_slopes[j].any():  # -Ω e/(δ Δθ) about the edge's motion
+                held = omega * steady.element_deflection_m[j] / (delta[j] ** 2 * spacing)
+                g_ahead, g_here = held * delta_slopes[j]
+                q = q + g_ahead * pen_q[j - 1] + g_here * pen_q[j]
+                q0 = q0 + (g_ahead * (pen_0[j - 1] - pen_steady[j - 1])
+                           + g_here * (pen_0[j] - pen_steady[j]))
             a[row], b[row] = q, q0
             continue
         q = (-2.0 * omega / spacing * (e_q[j] - e_q[j - 1]) + s_q[j] + s_q[j - 1])

@@ -13,7 +13,12 @@ import ctypes
 
 import numpy as np
 
-from ..core.inplane_contact import MAX_SET_PASSES, SETTLE_PASSES, StepState
+from ..core.inplane_contact import (
+    MAX_SET_PASSES,
+    MIN_ENTERING_FRACTION,
+    SETTLE_PASSES,
+    StepState,
+)
 from .kernel import load_library
 
 _P = ctypes.POINTER(ctypes.c_double)
@@ -26,7 +31,9 @@ class _Step(ctypes.Structure):
     _fields_ = ([(name, ctypes.c_int) for name in ("ny", "np", "free_spin", "max_passes",
                                                     "settle_passes")]
                 + [(name, ctypes.c_double) for name in ("h", "mu", "spin", "dspin", "dshare")]
-                + [(name, _P) for name in _MATRICES + _VECTORS])
+                + [(name, _P) for name in _MATRICES + _VECTORS]
+                + [("carry_base", ctypes.POINTER(ctypes.c_int)), ("carry_weights", _P),
+                   ("carry_shift", ctypes.c_double), ("min_entering", ctypes.c_double)])
 
 
 class _State(ctypes.Structure):
@@ -81,9 +88,14 @@ class InPlaneKernel:
             arrays = {name: _doubles(getattr(sim, "_" + name)) for name in _MATRICES + _VECTORS}
             self._s0 = arrays["s0"] = np.array(sim._s0, dtype=np.float64)
             self._keep = list(arrays.values()) + [sim._a0_inv, sim._kg, sim._carry]
+            base = sim._carry_base  # int32, written in place as the carry is
+            self._keep += [base, sim._carry_weights]
             self._step = _Step(sim._ny, sim._zone.n_points, int(sim._free_spin), MAX_SET_PASSES,
                                SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now, 0.0, 0.0,
-                               *(a.ctypes.data_as(_P) for a in arrays.values()))
+                               *(a.ctypes.data_as(_P) for a in arrays.values()),
+                               base.ctypes.data_as(ctypes.POINTER(ctypes.c_int)),
+                               sim._carry_weights.ctypes.data_as(_P), sim._carry_shift,
+                               MIN_ENTERING_FRACTION)
             self._built_for = key
         else:
             self._s0[:] = sim._s0
@@ -96,6 +108,7 @@ class InPlaneKernel:
         # the tread's arrays follow the spin in place; its value and the ring's offset do not
         data.spin, data.dspin = self.sim._spin_now, self.sim._ring_offset(state.yd)
         data.dshare = self.sim._share_offset(state.yd)
+        data.carry_shift = self.sim._carry_shift
         if self._buffers is None:
             ins, outs, in_struct, out_struct, extra = self._make_buffers(data.ny, data.np)
             height_buffer, rate_buffer, rims = extra

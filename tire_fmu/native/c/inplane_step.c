@@ -22,6 +22,11 @@ typedef struct {
     const double *m, *c, *a0_inv, *yn, *yx, *wnn, *wnx, *kg, *kgn, *kgx, *gain, *carry;
     const double *jn, *jxw, *jl, *rim_inertia, *c1, *k1s, *k2, *kh;
     const double *kn, *cn, *kx, *cx, *pen0, *sec, *s0;
+    /* the carry's stencils (carry_stencil: base, 4 weights per point), the step's shift in
+     * spacings and the least entering fraction (entering_fractions, carry_edges) */
+    const int* carry_base;
+    const double* carry_weights;
+    double carry_shift, min_entering;
 } InPlaneStep;
 
 typedef struct {
@@ -137,9 +142,65 @@ static int point_forces(const InPlaneStep* d, const int* contact, const int* sti
     return 0;
 }
 
+/* The entering fractions of the runs in contact (entering_fractions), at least the step's
+ * shift: pen is the penetration at the step's start. */
+static void entering_fractions(const InPlaneStep* d, const double* pen, const int* contact,
+                               double* delta) {
+    const int p = d->np;
+    for (int j = 0; j < p; ++j) {
+        delta[j] = 1.0;
+        if (!contact[j] || (j > 0 && contact[j - 1])) continue;
+        delta[j] = 0.5;
+        if (j > 0 && pen[j - 1] <= 0.0 && pen[j] > 0.0) {
+            double fraction = pen[j] / (pen[j] - pen[j - 1]);
+            delta[j] = fraction > d->min_entering ? fraction : d->min_entering;
+        }
+    }
+    for (int j = 0; j < p; ++j)
+        if (delta[j] < d->carry_shift) delta[j] = d->carry_shift;
+}
+
+/* The carry's corrections at the field's ends (carry_edges), added to e_conv: ahead of each
+ * run in contact the field through zero at the road's edge, behind each run of sticking
+ * points the run's own slope. */
+static void carry_edges(const InPlaneStep* d, const double* e, const int* contact,
+                        const int* stick, const double* delta, double* e_conv) {
+    const int p = d->np;
+    for (int pass = 0; pass < 2; ++pass) {
+        for (int first = 0; first < p; ++first) {
+#define IN_RUN(i) (contact[i] && (pass == 0 || stick[i]))
+            if (!IN_RUN(first) || (first > 0 && IN_RUN(first - 1))) continue;
+            int last = first;
+            while (last + 1 < p && IN_RUN(last + 1)) ++last;
+#undef IN_RUN
+            double slope = 0.0;
+            if (pass == 1)
+                slope = last > 0 && contact[last - 1] ? e[last] - e[last - 1]
+                                                      : e[last] / delta[last];
+            for (int r = first; r <= last; ++r) {
+                double sum = 0.0;
+                for (int k = 0; k < 4; ++k) {
+                    int c = d->carry_base[r] - 1 + k;
+                    double virtual_e;
+                    if (pass == 0 && c < first)
+                        virtual_e = (1.0 - (first - c) / delta[first]) * e[first];
+                    else if (pass == 1 && c > last)
+                        virtual_e = e[last] + (c - last) * slope;
+                    else
+                        continue;
+                    double real = c >= 0 && c < p ? e[c] : 0.0;
+                    sum += d->carry_weights[4 * r + k] * (virtual_e - real);
+                }
+                e_conv[r] += sum;
+            }
+            first = last;
+        }
+    }
+}
+
 /* Workspace doubles and ints inplane_step needs for ny coordinates and np points. */
 size_t inplane_work_doubles(int ny, int np) {
-    return (size_t)11 * ny + (size_t)24 * np + (size_t)4 * np * np + 16;
+    return (size_t)11 * ny + (size_t)26 * np + (size_t)4 * np * np + 16;
 }
 
 size_t inplane_work_ints(int np) { return (size_t)8 * np + 8; }
@@ -196,8 +257,19 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
             b0[k] -= d->rim_inertia[2 * k] * rim[2] + d->rim_inertia[2 * k + 1] * rim[5];
     matvec(d->jn, r, p, ny, vp);   /* jn r */
     matvec(d->jxw, r, p, ny, vp2); /* jxw r */
+    int any_contact = 0;
     for (int i = 0; i < p; ++i) {
         pen_const[i] = d->pen0[i] + height[i] * d->sec[i];
+        any_contact |= s->contact[i];
+    }
+    if (any_contact) { /* the field's ends, their edges from the step's start */
+        double *pen_start = rhs + 2 * p + 3 * ny, *delta = pen_start + p;
+        matvec(d->jn, s->y, p, ny, pen_start);
+        for (int i = 0; i < p; ++i) pen_start[i] += pen_const[i];
+        entering_fractions(d, pen_start, s->contact, delta);
+        carry_edges(d, s->e, s->contact, s->stick, delta, e_conv);
+    }
+    for (int i = 0; i < p; ++i) {
         a_n[i] = d->kn[i] + 2.0 * d->cn[i] / h;
         beta_n[i] = d->kn[i] * pen_const[i] + d->cn[i] * (rate[i] * d->sec[i] - vp[i]);
         double s0_new = d->s0[i] + rim[1];
