@@ -6,10 +6,15 @@ orthonormal; it keeps or drops a degenerate pair whole; it refuses bad input wit
 and writes nothing.
 
 The Python solves K s = e densely: at N = 400 its static shapes carry errors of up to about
-4e-12 of their size (K's condition is ~5e5), which turn the span of 81 neighbouring nodes'
-nearly dependent shapes by ~1e-8. So the C is held to 1e-9 against the Python's own steps with
-the static solve refined (the residual in extended precision), and to that plus the Python's
-own distance from it against ritz_basis as it is.
+4e-12 of their size (K's condition is ~5e5; the C refines its own to ~1e-15), which turn the
+span of 81 neighbouring nodes' nearly dependent shapes by up to ~1e-8. So the C is held against
+the Python's own steps with the static solve refined (the residual in extended precision), and
+against ritz_basis as it is to that plus ritz_basis's own distance from it. And a span is only
+as well defined as its columns make it: rounding of size eps s_max in the columns turns it by
+up to ~eps s_max / (s_r - s_{r+1}) (Wedin), s the columns' singular values and r the rank; a
+zone of neighbouring nodes' static shapes has singular values falling through orth's threshold,
+so where that gap is small the 1e-9 is widened by 1e-14 s_max / (s_r - s_{r+1}) (most cases
+have a gap above 1e-5 s_max, where this adds at most 1e-9).
 """
 
 from __future__ import annotations
@@ -37,6 +42,8 @@ from tire_fmu.native.kernel import load_library
 ANGLE = 1e-9
 #: The reduced problem's eigenvalues, relative.
 EIGENVALUES = 1e-10
+#: Rounding of the columns (relative to s_max) that the span's conditioning widens both by.
+COLUMN_ROUNDING = 1e-14
 #: Orthonormality of the C basis.
 ORTHONORMAL = 1e-12
 #: Relative gap (in frequency) around f_max free of modes: a mode within rounding of f_max is
@@ -114,7 +121,7 @@ def _with_tie(case: dict) -> bool:
 
 def refined_ritz_basis(ring: InPlaneRing, zone_nodes: np.ndarray, f_max_hz: float):
     """ritz_basis's steps on ``ring`` with the static solve refined twice from a residual in
-    extended precision (numpy's long double)."""
+    extended precision (numpy's long double); and s_max / (s_r - s_{r+1}) of its columns."""
     modes = tire_modes(ring, f_max_hz=f_max_hz)
     k = 0.5 * (ring.stiffness + ring.stiffness.T)
     loads = np.zeros((ring.n_ring_dof, 2 * zone_nodes.size))
@@ -130,7 +137,10 @@ def refined_ritz_basis(ring: InPlaneRing, zone_nodes: np.ndarray, f_max_hz: floa
         static = static + scipy.linalg.lu_solve(lu, residual.astype(float))
     shapes = np.hstack([modes.shapes, static / np.abs(static).max(axis=0)]) if zone_nodes.size \
         else modes.shapes
-    return scipy.linalg.orth(shapes, rcond=1e-10)
+    basis = scipy.linalg.orth(shapes, rcond=1e-10)
+    sigma = np.append(scipy.linalg.svdvals(shapes), 0.0) if shapes.size else np.ones(2)
+    rank = basis.shape[1]
+    return basis, sigma[0] / (sigma[max(rank, 1) - 1] - sigma[rank])
 
 
 def _reduced_eigenvalues(basis, ring):
@@ -153,13 +163,14 @@ def test_c_basis_spans_the_python_subspace(label, extended_precision):
     frequencies = np.array([m.frequency_hz for m in tire_modes(ring).modes])
     f_max = _f_max_in_a_gap(frequencies, case["target_hz"])
     python = ritz_basis(model, n, zone, f_max)
-    refined = refined_ritz_basis(ring, zone, f_max)
+    refined, conditioning = refined_ritz_basis(ring, zone, f_max)
     if _with_tie(case):
         built = c_ritz_basis_of(ring.mass, ring.stiffness, n, ring.n_fields, zone, f_max)
     else:
         built = c_ritz_basis(model, n, zone, f_max)
     where = (f"{label} ({case['sidewall']}, N = {n}, {zone.size} zone nodes ({case['zone']}), "
-             f"f_max {f_max:.6g} Hz)")
+             f"f_max {f_max:.6g} Hz, s_max / (s_r - s_r+1) = {conditioning:.3g})")
+    widening = COLUMN_ROUNDING * conditioning
     assert built.shape == python.shape == refined.shape, (
         f"{where}: rank C {built.shape[1]}, Python {python.shape[1]}, refined "
         f"{refined.shape[1]} of {ring.n_ring_dof} DOFs")
@@ -170,15 +181,17 @@ def test_c_basis_spans_the_python_subspace(label, extended_precision):
     to_refined = scipy.linalg.subspace_angles(built, refined).max()
     python_drift = scipy.linalg.subspace_angles(python, refined).max()
     to_python = scipy.linalg.subspace_angles(built, python).max()
-    assert to_refined < ANGLE, f"{where}: {to_refined:.3g} rad from the refined Python's span"
+    assert to_refined < ANGLE + widening, (
+        f"{where}: {to_refined:.3g} rad from the refined Python's span")
     # the largest principal angle is a metric: the C is no further from ritz_basis than
     # ritz_basis is from its refined self, plus the C's own distance
-    assert to_python <= python_drift + ANGLE, (
+    assert to_python <= python_drift + ANGLE + widening, (
         f"{where}: {to_python:.3g} rad from ritz_basis, which is {python_drift:.3g} from the "
         "refined span")
     ours, theirs = _reduced_eigenvalues(built, ring), _reduced_eigenvalues(refined, ring)
     worst = float(np.max(np.abs(ours - theirs) / np.abs(theirs)))
-    assert worst < EIGENVALUES, f"{where}: reduced eigenvalues differ by {worst:.3g} relative"
+    assert worst < EIGENVALUES + widening, (
+        f"{where}: reduced eigenvalues differ by {worst:.3g} relative")
 
 
 def test_the_cases_cover_every_option():
@@ -278,6 +291,13 @@ def _spinning():
     return ring.mass, ring.stiffness, 3
 
 
+def _bumped(matrix):
+    """One node's entry and its mirror changed: symmetric, no longer circulant."""
+    out = matrix.copy()
+    out[3, 4] = out[4, 3] = matrix[3, 4] + 1e-6 * np.abs(matrix).max()
+    return out
+
+
 M16, K16, F16 = _held()
 
 
@@ -292,7 +312,7 @@ M16, K16, F16 = _held()
     ((M16, K16, 16, F16, [0], 300.0, -1), ["max_columns = -1", ">= 0"]),
     ((M16, K16, 16, F16, [0, 3], 300.0, 2), ["max_columns = 2", "modes up to 300 Hz"]),
     ((M16, -K16, 16, F16, [0], 300.0, 64), ["stiffness: allowed a positive definite matrix"]),
-    ((M16, K16 * np.where(np.eye(48, k=5) > 0, 1.5, 1.0), 16, F16, [0], 300.0, 64),
+    ((M16, _bumped(K16), 16, F16, [0], 300.0, 64),
      ["stiffness[", "symmetric circulant field blocks"]),
     ((*_spinning()[:2], 16, 3, [0], 300.0, 64), ["stiffness[", "the ring at rest"]),
     ((np.where(np.eye(48) > 0, np.nan, M16), K16, 16, F16, [0], 300.0, 64),
@@ -309,7 +329,8 @@ def test_bad_input_is_refused_with_a_sentence_and_nothing_written(inputs, words)
 def test_the_wrapper_raises_the_c_sentence():
     with pytest.raises(ValueError, match=r"zone_nodes\[0\] = 20: allowed a node in \[0, 15\]"):
         c_ritz_basis(InPlaneTire(), 16, [20], 300.0)
-    with pytest.raises(ValueError, match=r"f_max_hz = 2e\+05 Hz"):
+    with pytest.raises(ValueError,
+                       match=r"f_max_hz = 200000 Hz: allowed a finite number in \[1, 100000\] Hz"):
         c_ritz_basis(InPlaneTire(), 16, [0], 2e5)
 
 

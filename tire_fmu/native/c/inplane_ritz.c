@@ -9,8 +9,12 @@
  * - modes: the Hermitian n_fields x n_fields problem K(n) x = lambda M(n) x (Cholesky of M(n),
  *   complex Jacobi); each x gives the pair Re, Im of x e^{i n theta}, kept together when its one
  *   frequency is <= f_max_hz (orders 0 and N/2 give one real mode), M-normalised as eigh's;
- * - static shapes: K(n)^-1 of the unit load at node 0; a load at node j is that shape turned by
- *   j nodes (a phase per order), scaled to max |.| = 1 as the Python scales it.
+ * - static shapes: K(n)^-1 of the unit load at node 0, refined twice from the residual of the
+ *   dense K computed in double-double (Dekker's product, Knuth's sum): K(n) read off the first
+ *   columns loses digits to the stencils' cancellation at low orders (the bending stencil's
+ *   sum is of order dtheta^4 of its terms), so a shape from K(n) alone carries errors of
+ *   eps cond(K); refined it solves the given K to rounding. A load at node j is that shape
+ *   turned by j nodes (a phase per order), scaled to max |.| = 1 as the Python scales it.
  *
  * Orthonormalisation, with orth(rcond)'s rank: A = [modes, statics] and orth keeps the left
  * singular vectors of A with singular values above rcond s_max. With U D V^T the per-order SVD
@@ -79,7 +83,8 @@ size_t inplane_ritz_work_doubles(int n_elements, int n_fields, int n_zone)
     size_t orders = n / 2 + 1;
     return 2 * n                  /* tables */
            + 2 * nf * nf * n      /* first columns of M and K */
-           + orders * 4 * nf      /* K(n)^-1 of the w and v loads (complex) */
+           + orders * 4 * nf      /* node 0's static coordinates, w and v loads */
+           + orders * 2 * nf * nf /* K(n)'s Cholesky factors (complex) */
            + orders               /* modes kept per order */
            + 2 * nf * nd + nd     /* mode directions U and D */
            + 3 * nd * p           /* S (then Z), X, Q */
@@ -280,16 +285,91 @@ static void to_real(const Grid* g, const double* c, double* out)
     }
 }
 
-/* the coordinates of response x (complex, nf) to the load w e^{-i n theta_j}: (Re, -Im) */
-static void put_response(const Grid* g, int order, const cx* x, cx turn, double scale,
-                         double* block)
+/* the Fourier coordinates of a real-space vector (to_real's inverse: the waves are
+ * orthonormal) */
+static void from_real(const Grid* g, const double* x, double* c)
+{
+    int n = g->n, nf = g->nf;
+    for (int order = 0; order < g->n_orders; ++order) {
+        double* block = c + order_offset(g, order);
+        double weight = wave_weight(g, order);
+        int pair = !single(g, order);
+        for (int a = 0; a < nf; ++a) {
+            const double* line = x + (size_t)a * n;
+            double cs = 0.0, sn = 0.0;
+            for (int i = 0, m = 0; i < n; ++i, m = (m + order) % n) {
+                cs += line[i] * g->cosT[m];
+                sn += line[i] * g->sinT[m];
+            }
+            block[a] = weight * cs;
+            if (pair)
+                block[nf + a] = weight * sn;
+        }
+    }
+}
+
+/* c <- K^-1 c order by order, K(n) = L L^H in chol: a pair's (alpha, beta) is the complex
+ * alpha - i beta */
+static void solve_orders(const Grid* g, const double* chol, double* c)
 {
     int nf = g->nf;
-    for (int a = 0; a < nf; ++a) {
-        cx y = cx_scale(cx_mul(x[a], turn), scale);
-        block[a] = y.re;
-        if (!single(g, order))
-            block[nf + a] = -y.im;
+    for (int order = 0; order < g->n_orders; ++order) {
+        const cx* l = (const cx*)(const void*)(chol + (size_t)order * 2 * nf * nf);
+        double* block = c + order_offset(g, order);
+        int pair = !single(g, order);
+        cx y[MAX_FIELDS];
+        for (int a = 0; a < nf; ++a)
+            y[a] = cx_make(block[a], pair ? -block[nf + a] : 0.0);
+        cx_lower_solve(l, nf, y);
+        cx_adjoint_solve(l, nf, y);
+        for (int a = 0; a < nf; ++a) {
+            block[a] = y[a].re;
+            if (pair)
+                block[nf + a] = -y[a].im;
+        }
+    }
+}
+
+/* Knuth's two-sum and Dekker's two-product: a sum and a product with their rounding errors */
+static void two_sum(double a, double b, double* s, double* e)
+{
+    double t = a + b, v = t - a;
+    *s = t;
+    *e = (a - (t - v)) + (b - v);
+}
+static void split(double a, double* hi, double* lo)
+{
+    double t = 134217729.0 * a; /* 2^27 + 1 */
+    *hi = t - (t - a);
+    *lo = a - *hi;
+}
+static void two_product(double a, double b, double* p, double* e)
+{
+    double ah, al, bh, bl;
+    *p = a * b;
+    split(a, &ah, &al);
+    split(b, &bh, &bl);
+    *e = ((ah * bh - *p) + ah * bl + al * bh) + al * bl;
+}
+
+/* r = e_unit - K_sym x in double-double, rounded (K_sym = (K + K^T)/2 as the Python forms it,
+ * its zeros skipped) */
+static void residual(const double* k, int nd, int unit, const double* x, double* r)
+{
+    for (int i = 0; i < nd; ++i) {
+        double hi = i == unit ? 1.0 : 0.0, lo = 0.0;
+        const double* row = k + (size_t)i * nd;
+        for (int j = 0; j < nd; ++j) {
+            double kij = row[j], kji = k[(size_t)j * nd + i];
+            if (kij == 0.0 && kji == 0.0)
+                continue;
+            double p, pe, s, se;
+            two_product(-0.5 * (kij + kji), x[j], &p, &pe);
+            two_sum(hi, p, &s, &se);
+            hi = s;
+            lo += se + pe;
+        }
+        r[i] = hi + lo;
     }
 }
 
@@ -387,8 +467,9 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     double* sinT = cosT + n;
     double* colM = sinT + n;
     double* colK = colM + (size_t)nf * nf * n;
-    double* inv = colK + (size_t)nf * nf * n;       /* per order 2 nf complex */
-    double* kept = inv + (size_t)g.n_orders * 4 * nf; /* modes per order */
+    double* c0 = colK + (size_t)nf * nf * n;         /* 2 columns of nd coordinates */
+    double* chol = c0 + (size_t)g.n_orders * 4 * nf; /* per order nf^2 complex */
+    double* kept = chol + (size_t)g.n_orders * 2 * nf * nf; /* modes per order */
     double* U = kept + g.n_orders;                    /* per order d x k, column major */
     double* D = U + 2 * (size_t)nf * ndz;
     double* S = D + ndz;                              /* column c at S + c nd */
@@ -436,15 +517,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
             return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "stiffness: allowed a positive definite matrix, the rim held (not so in "
                        "order %d)", order);
-        /* K(n)^-1 e_w, e_v */
-        cx* x_inv = (cx*)(void*)(inv + (size_t)order * 4 * nf);
-        for (int f = 0; f < 2; ++f) {
-            cx* x = x_inv + f * nf;
-            for (int i = 0; i < nf; ++i)
-                x[i] = cx_make(i == f ? 1.0 : 0.0, 0.0);
-            cx_lower_solve(kh, nf, x);
-            cx_adjoint_solve(kh, nf, x);
-        }
+        memcpy(chol + (size_t)order * 2 * nf * nf, kh, (size_t)nf * nf * sizeof *kh);
         /* L^-1 K L^-H, column by column then row by row */
         for (int j = 0; j < nf; ++j) {
             cx column[MAX_FIELDS];
@@ -556,32 +629,53 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
         }
     }
 
-    /* ----- the static shapes' coordinates, scaled to max |.| = 1 in real space ----- */
+    /* ----- node 0's static shapes, refined; the zone's turned and scaled ----- */
     double scale[2];
     for (int f = 0; f < 2; ++f) {
-        double* c = S; /* node 0's shape, before S is filled */
-        for (int order = 0; order < g.n_orders; ++order) {
-            const cx* x = (const cx*)(const void*)(inv + (size_t)order * 4 * nf) + f * nf;
-            put_response(&g, order, x, cx_make(1.0, 0.0), wave_weight(&g, order),
-                         c + order_offset(&g, order));
+        double* c = c0 + (size_t)f * ndz;
+        double* x = S;           /* scratch before S is filled: the shape, */
+        double* r = S + ndz;     /* the residual, */
+        double* rc = S + 2 * ndz; /* its coordinates */
+        if (p < 3) /* S has fewer than 3 columns: the power-iteration vectors serve */
+            x = v1, r = y1, rc = shape;
+        memset(rc, 0, ndz * sizeof *rc);
+        for (int order = 0; order < g.n_orders; ++order) /* e_f's coordinates */
+            rc[order_offset(&g, order) + f] = wave_weight(&g, order);
+        memset(c, 0, ndz * sizeof *c);
+        for (int pass = 0; pass < 3; ++pass) {
+            solve_orders(&g, chol, rc);
+            for (int i = 0; i < nd; ++i)
+                c[i] += rc[i];
+            to_real(&g, c, x);
+            if (pass == 2)
+                break;
+            residual(stiffness, nd, f * n, x, r);
+            from_real(&g, r, rc);
         }
-        to_real(&g, c, shape);
         double top = 0.0;
         for (int i = 0; i < nd; ++i)
-            if (fabs(shape[i]) > top)
-                top = fabs(shape[i]);
+            if (fabs(x[i]) > top)
+                top = fabs(x[i]);
         scale[f] = 1.0 / top;
     }
     for (int z = 0; z < n_zone; ++z)
         for (int f = 0; f < 2; ++f) {
-            double* c = S + (size_t)(2 * z + f) * ndz;
+            double* out = S + (size_t)(2 * z + f) * ndz;
+            const double* c = c0 + (size_t)f * ndz;
             int j = zone_nodes[z];
             for (int order = 0; order < g.n_orders; ++order) {
-                const cx* x = (const cx*)(const void*)(inv + (size_t)order * 4 * nf) + f * nf;
-                int m = (int)(((long)order * j) % n);
-                cx turn = cx_make(g.cosT[m], -g.sinT[m]); /* e^{-i n theta_j} */
-                put_response(&g, order, x, turn, wave_weight(&g, order) * scale[f],
-                             c + order_offset(&g, order));
+                int off = order_offset(&g, order), m = (int)(((long)order * j) % n);
+                double cs = g.cosT[m], sn = g.sinT[m];
+                for (int a = 0; a < nf; ++a) {
+                    if (single(&g, order)) {
+                        out[off + a] = scale[f] * cs * c[off + a];
+                        continue;
+                    }
+                    /* (alpha - i beta) e^{-i n theta_j}, back to (Re, -Im) */
+                    double alpha = c[off + a], beta = c[off + nf + a];
+                    out[off + a] = scale[f] * (alpha * cs - beta * sn);
+                    out[off + nf + a] = scale[f] * (beta * cs + alpha * sn);
+                }
             }
         }
 
