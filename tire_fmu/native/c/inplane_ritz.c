@@ -63,6 +63,13 @@ typedef struct {
     const double *cosT, *sinT; /* cos, sin of 2 pi m / N */
 } Grid;
 
+/* the table index of (m + order) 2 pi / N, without a division in the inner loops */
+static int next_angle(int m, int order, int n)
+{
+    m += order;
+    return m >= n ? m - n : m;
+}
+
 static int single(const Grid* g, int order) { return order == 0 || 2 * order == g->n; }
 static int order_size(const Grid* g, int order) { return single(g, order) ? g->nf : 2 * g->nf; }
 static int order_offset(const Grid* g, int order)
@@ -89,8 +96,7 @@ size_t inplane_ritz_work_doubles(int n_elements, int n_fields, int n_zone)
            + 2 * nf * nd + nd     /* mode directions U and D */
            + 3 * nd * p           /* S (then Z), X, Q */
            + 4 * p * p + p        /* R, L, W, V; Householder scalars */
-           + 2 * (nd + p)         /* power iteration */
-           + nd + 16;             /* a real-space shape */
+           + 8 * nd + 2 * p;      /* power iteration; the statics' scratch when p < 4 */
 }
 
 /* ----- small dense tools ----- */
@@ -250,7 +256,7 @@ static void order_block(const Grid* g, const double* col, int order, cx* out)
         for (int b = 0; b < nf; ++b) {
             const double* c = col + ((size_t)a * nf + b) * n;
             double re = 0.0, im = 0.0;
-            for (int k = 0, m = 0; k < n; ++k, m = (m + order) % n) {
+            for (int k = 0, m = 0; k < n; ++k, m = next_angle(m, order, n)) {
                 re += c[k] * g->cosT[m];
                 im -= c[k] * g->sinT[m];
             }
@@ -279,7 +285,7 @@ static void to_real(const Grid* g, const double* c, double* out)
             if (cs == 0.0 && sn == 0.0)
                 continue;
             double* line = out + (size_t)a * n;
-            for (int i = 0, m = 0; i < n; ++i, m = (m + order) % n)
+            for (int i = 0, m = 0; i < n; ++i, m = next_angle(m, order, n))
                 line[i] += cs * g->cosT[m] + sn * g->sinT[m];
         }
     }
@@ -297,7 +303,7 @@ static void from_real(const Grid* g, const double* x, double* c)
         for (int a = 0; a < nf; ++a) {
             const double* line = x + (size_t)a * n;
             double cs = 0.0, sn = 0.0;
-            for (int i = 0, m = 0; i < n; ++i, m = (m + order) % n) {
+            for (int i = 0, m = 0; i < n; ++i, m = next_angle(m, order, n)) {
                 cs += line[i] * g->cosT[m];
                 sn += line[i] * g->sinT[m];
             }
@@ -352,24 +358,55 @@ static void two_product(double a, double b, double* p, double* e)
     *e = ((ah * bh - *p) + ah * bl + al * bh) + al * bl;
 }
 
-/* r = e_unit - K_sym x in double-double, rounded (K_sym = (K + K^T)/2 as the Python forms it,
- * its zeros skipped) */
-static void residual(const double* k, int nd, int unit, const double* x, double* r)
+/* r_f = e_{unit_f} - K_sym x_f for the two shapes f in double-double, rounded (K_sym =
+ * (K + K^T)/2 as the Python forms it, its zeros skipped); K is read in tiles so that K^T's
+ * entries come from the cache; hi, lo: 2 nd doubles each */
+#define TILE 32
+static void residuals(const double* k, int nd, const int* unit, const double* x, double* r,
+                      double* hi, double* lo)
 {
-    for (int i = 0; i < nd; ++i) {
-        double hi = i == unit ? 1.0 : 0.0, lo = 0.0;
-        const double* row = k + (size_t)i * nd;
-        for (int j = 0; j < nd; ++j) {
-            double kij = row[j], kji = k[(size_t)j * nd + i];
-            if (kij == 0.0 && kji == 0.0)
-                continue;
-            double p, pe, s, se;
-            two_product(-0.5 * (kij + kji), x[j], &p, &pe);
-            two_sum(hi, p, &s, &se);
-            hi = s;
-            lo += se + pe;
+    for (int f = 0; f < 2; ++f)
+        for (int i = 0; i < nd; ++i) {
+            hi[f * nd + i] = i == unit[f] ? 1.0 : 0.0;
+            lo[f * nd + i] = 0.0;
         }
-        r[i] = hi + lo;
+    for (int i0 = 0; i0 < nd; i0 += TILE)
+        for (int j0 = 0; j0 < nd; j0 += TILE) {
+            int i1 = i0 + TILE < nd ? i0 + TILE : nd, j1 = j0 + TILE < nd ? j0 + TILE : nd;
+            for (int i = i0; i < i1; ++i) {
+                const double* row = k + (size_t)i * nd;
+                for (int j = j0; j < j1; ++j) {
+                    double kij = row[j], kji = k[(size_t)j * nd + i];
+                    if (kij == 0.0 && kji == 0.0)
+                        continue;
+                    double entry = -0.5 * (kij + kji);
+                    for (int f = 0; f < 2; ++f) {
+                        double p, pe, t, te;
+                        two_product(entry, x[(size_t)f * nd + j], &p, &pe);
+                        two_sum(hi[f * nd + i], p, &t, &te);
+                        hi[f * nd + i] = t;
+                        lo[f * nd + i] += te + pe;
+                    }
+                }
+            }
+        }
+    for (int i = 0; i < 2 * nd; ++i)
+        r[i] = hi[i] + lo[i];
+}
+
+/* s <- s minus its components along the modes' directions U, order by order */
+static void project_out_modes(const Grid* g, const double* kept, const double* U, double* s)
+{
+    for (int order = 0; order < g->n_orders; ++order) {
+        int d = order_size(g, order), k = (int)kept[order], off = order_offset(g, order);
+        const double* u = U + (size_t)off * 2 * g->nf;
+        for (int i = 0; i < k; ++i) {
+            double dot = 0.0;
+            for (int r = 0; r < d; ++r)
+                dot += u[(size_t)i * d + r] * s[off + r];
+            for (int r = 0; r < d; ++r)
+                s[off + r] -= dot * u[(size_t)i * d + r];
+        }
     }
 }
 
@@ -397,9 +434,9 @@ static int read_blocks(const Grid* g, const double* m, int which, double* col, c
     for (int a = 0; a < nf; ++a)
         for (int b = 0; b < nf; ++b)
             for (int i = 0; i < n; ++i)
-                for (int j = 0; j < n; ++j) {
+                for (int j = 0, lag = i; j < n; ++j, lag = lag == 0 ? n - 1 : lag - 1) {
                     size_t r = (size_t)a * n + i, c = (size_t)b * n + j;
-                    size_t r0 = (size_t)a * n + (i - j + n) % n, c0 = (size_t)b * n;
+                    size_t r0 = (size_t)a * n + lag, c0 = (size_t)b * n;
                     double here = m[r * nd + c], first = m[r0 * nd + c0], mirror = m[c * nd + r];
                     if (fabs(here - first) > tol || fabs(here - mirror) > tol)
                         return say(why, size, INPLANE_RITZ_BAD_MATRIX,
@@ -480,11 +517,10 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     double* W = L + (size_t)p * p;
     double* V = W + (size_t)p * p;
     double* tau = V + (size_t)p * p;
-    double* v1 = tau + p;
-    double* v2 = v1 + ndz;
-    double* y1 = v2 + p;
-    double* y2 = y1 + ndz;
-    double* shape = y2 + p;
+    double* v1 = tau + p; /* 8 nd + 2 p from here */
+    double* y1 = v1 + ndz;
+    double* v2 = y1 + ndz;
+    double* y2 = v2 + p;
     g.cosT = cosT;
     g.sinT = sinT;
     for (int m = 0; m < n; ++m) {
@@ -631,32 +667,42 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
 
     /* ----- node 0's static shapes, refined; the zone's turned and scaled ----- */
     double scale[2];
-    for (int f = 0; f < 2; ++f) {
-        double* c = c0 + (size_t)f * ndz;
-        double* x = S;           /* scratch before S is filled: the shape, */
-        double* r = S + ndz;     /* the residual, */
-        double* rc = S + 2 * ndz; /* its coordinates */
-        if (p < 3) /* S has fewer than 3 columns: the power-iteration vectors serve */
-            x = v1, r = y1, rc = shape;
-        memset(rc, 0, ndz * sizeof *rc);
-        for (int order = 0; order < g.n_orders; ++order) /* e_f's coordinates */
-            rc[order_offset(&g, order) + f] = wave_weight(&g, order);
-        memset(c, 0, ndz * sizeof *c);
-        for (int pass = 0; pass < 3; ++pass) {
-            solve_orders(&g, chol, rc);
-            for (int i = 0; i < nd; ++i)
-                c[i] += rc[i];
-            to_real(&g, c, x);
-            if (pass == 2)
-                break;
-            residual(stiffness, nd, f * n, x, r);
-            from_real(&g, r, rc);
+    {
+        /* scratch before S and X are filled: S holds the shapes and the residuals when it
+         * has the room (p >= 4), else the power iteration's room */
+        double *x = S, *r = S + 2 * ndz, *hi = X, *lo = X + 2 * ndz;
+        if (p < 4)
+            x = v1, r = v1 + 2 * ndz, hi = v1 + 4 * ndz, lo = v1 + 6 * ndz;
+        int unit[2] = {0, n};
+        memset(c0, 0, 2 * ndz * sizeof *c0);
+        for (int f = 0; f < 2; ++f) { /* e_f's coordinates */
+            double* rc = r + (size_t)f * ndz;
+            memset(rc, 0, ndz * sizeof *rc);
+            for (int order = 0; order < g.n_orders; ++order)
+                rc[order_offset(&g, order) + f] = wave_weight(&g, order);
         }
-        double top = 0.0;
-        for (int i = 0; i < nd; ++i)
-            if (fabs(x[i]) > top)
-                top = fabs(x[i]);
-        scale[f] = 1.0 / top;
+        for (int pass = 0; pass < 3; ++pass) {
+            for (int f = 0; f < 2; ++f) {
+                double *c = c0 + (size_t)f * ndz, *rc = r + (size_t)f * ndz;
+                if (pass > 0)
+                    from_real(&g, r + (size_t)f * ndz, hi); /* hi: scratch here */
+                if (pass > 0)
+                    memcpy(rc, hi, ndz * sizeof *rc);
+                solve_orders(&g, chol, rc);
+                for (int i = 0; i < nd; ++i)
+                    c[i] += rc[i];
+                to_real(&g, c, x + (size_t)f * ndz);
+            }
+            if (pass < 2)
+                residuals(stiffness, nd, unit, x, r, hi, lo);
+        }
+        for (int f = 0; f < 2; ++f) {
+            double top = 0.0;
+            for (int i = 0; i < nd; ++i)
+                if (fabs(x[(size_t)f * ndz + i]) > top)
+                    top = fabs(x[(size_t)f * ndz + i]);
+            scale[f] = 1.0 / top;
+        }
     }
     for (int z = 0; z < n_zone; ++z)
         for (int f = 0; f < 2; ++f) {
@@ -806,14 +852,22 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     /* ----- the statics' remainder cut at orth's rank: W = R L^-T ----- */
     int kept_static = 0;
     if (p > 0) {
+        memset(L, 0, (size_t)p * p * sizeof *L);
         for (int a = 0; a < p; ++a)
-            for (int b = 0; b <= a; ++b) {
-                double s = a == b ? 1.0 : 0.0;
-                for (int i = 0; i < r_m; ++i)
-                    s += X[(size_t)i * p + a] * X[(size_t)i * p + b] / (D[i] * D[i] - mu);
-                L[(size_t)a * p + b] = s;
-                L[(size_t)b * p + a] = s;
+            L[(size_t)a * p + a] = 1.0;
+        for (int i = 0; i < r_m; ++i) {
+            const double* xi = X + (size_t)i * p;
+            double weight = 1.0 / (D[i] * D[i] - mu);
+            for (int a = 0; a < p; ++a) {
+                double xa = weight * xi[a];
+                double* line = L + (size_t)a * p;
+                for (int b = 0; b <= a; ++b)
+                    line[b] += xa * xi[b];
             }
+        }
+        for (int a = 0; a < p; ++a)
+            for (int b = 0; b < a; ++b)
+                L[(size_t)b * p + a] = L[(size_t)a * p + b];
         if (cholesky(L, p))
             return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "stiffness: allowed a ring whose static shapes are finite");
@@ -841,23 +895,14 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
             }
             kept_static += 1;
         }
-        /* the remainder orthogonal to the modes and to itself to rounding (Gram-Schmidt
-         * twice: its left vectors near the threshold carry rounding of order eps s_max / s) */
-        for (int pass = 0; pass < 2; ++pass)
-            for (int c = 0; c < kept_static; ++c) {
-                double* s = S + (size_t)c * ndz;
-                for (int order = 0; order < g.n_orders; ++order) {
-                    int d = order_size(&g, order), k = (int)kept[order];
-                    int off = order_offset(&g, order);
-                    const double* u = U + (size_t)off * 2 * nf;
-                    for (int i = 0; i < k; ++i) {
-                        double dot = 0.0;
-                        for (int r = 0; r < d; ++r)
-                            dot += u[(size_t)i * d + r] * s[off + r];
-                        for (int r = 0; r < d; ++r)
-                            s[off + r] -= dot * u[(size_t)i * d + r];
-                    }
-                }
+        /* the remainder orthogonal to the modes and to itself to rounding: its left vectors
+         * near the threshold carry rounding of order eps s_max / s, and Householder's Q is
+         * orthogonal to the modes only where Z has rank. Gram-Schmidt, once more where a
+         * projection took away more than half the norm ("twice is enough") */
+        for (int c = 0; c < kept_static; ++c) {
+            double* s = S + (size_t)c * ndz;
+            for (int pass = 0; pass < 2; ++pass) {
+                project_out_modes(&g, kept, U, s);
                 for (int e = 0; e < c; ++e) {
                     const double* t = S + (size_t)e * ndz;
                     double dot = 0.0;
@@ -872,7 +917,10 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
                 norm = sqrt(norm);
                 for (int r = 0; r < nd; ++r)
                     s[r] /= norm;
+                if (norm > 0.5)
+                    break;
             }
+        }
     }
 
     int total = r_m + kept_static;
@@ -893,7 +941,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
             for (int a = 0; a < nf; ++a) {
                 double cs = weight * u[(size_t)i * d + a];
                 double sn = single(&g, order) ? 0.0 : weight * u[(size_t)i * d + nf + a];
-                for (int j = 0, m = 0; j < n; ++j, m = (m + order) % n)
+                for (int j = 0, m = 0; j < n; ++j, m = next_angle(m, order, n))
                     out[(size_t)a * n + j] = cs * g.cosT[m] + sn * g.sinT[m];
             }
         }
