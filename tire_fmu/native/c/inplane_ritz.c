@@ -596,10 +596,12 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
                 double re = 0.0;
                 for (int i = 0; i < nf; ++i)
                     re += x[i].re * x[i].re;
-                /* real to rounding; the real part keeps M-norm 1 */
-                double fix = sqrt(norm / re);
+                /* real to rounding up to a phase (+-1, +-i: the rotations of a real matrix);
+                 * the larger part, scaled back to M-norm 1 */
+                int imaginary = re < 0.5 * norm;
+                double fix = sqrt(norm / (imaginary ? norm - re : re));
                 for (int i = 0; i < nf; ++i)
-                    phi[(size_t)k * d + i] = x[i].re * fix;
+                    phi[(size_t)k * d + i] = (imaginary ? x[i].im : x[i].re) * fix;
                 k += 1;
             } else {
                 for (int i = 0; i < nf; ++i) {

@@ -7,7 +7,14 @@
  * each static shape to max |.| = 1). The input is the ring's dense M and K at rest with the rim
  * held (inplane_ring_build with spin 0 and rim_free 0), whose field blocks are circulant: the
  * work is per Fourier order (inplane_ritz.c says how). Row-major doubles, memory from the
- * caller. */
+ * caller.
+ *
+ * f_max: a mode is kept when its lambda <= (2 pi f_max_hz)^2. A degenerate pair (the cos and
+ * sin of one order) has one lambda here, so it is kept or dropped whole; the Python's eigh
+ * gives the two members values that differ in the last digits and compares each
+ * (sqrt(lambda) / 2 pi <= f_max), so the two can differ only for an f_max within rounding of a
+ * mode's frequency (then the Python may keep one member of a pair, and the C keeps both or
+ * neither). */
 #ifndef TIRE_INPLANE_RITZ_H
 #define TIRE_INPLANE_RITZ_H
 
