@@ -336,6 +336,24 @@ def inplane_cleat_table() -> str:
     return "\n".join(lines)
 
 
+def _brake_ringing_gaps(key: str, fitted: str) -> list[float]:
+    """The run's fitted rotational mode against rolling_modes', relative, every case run."""
+    cases = record("bench_inplane_brake_ringing")["results"]["cases"]
+    return [case["run_fit"][0][fitted] / case[key] - 1 for case in cases if "run_fit" in case]
+
+
+@value("brake-ringing-frequency-gap")
+def brake_ringing_frequency_gap() -> str:
+    gaps = _brake_ringing_gaps("rotational_hz", "frequency_hz")
+    return f"{100 * max(abs(g) for g in gaps):.1f} %"
+
+
+@value("brake-ringing-decay-gap")
+def brake_ringing_decay_gap() -> str:
+    gaps = _brake_ringing_gaps("rotational_decay_1_s", "decay_1_s")
+    return f"{100 * min(gaps):.0f}–{100 * max(gaps):.0f} %"
+
+
 @generator("inplane-brake-ringing")
 def inplane_brake_ringing_table() -> str:
     data = record("bench_inplane_brake_ringing")

@@ -27,10 +27,10 @@ the rolling: ∂e/∂t + Ω ∂e/∂θ = s, with s the belt's fore-aft velocity 
 
 the material velocity of the tread at the point (rim-relative L u: a rigid turn of the wheel
 moves no geometry) plus the road's speed V. It is zero when the point leaves the road and
-enters at the front at zero. The element pulls the belt with f_x = -k_x,p e while it sticks,
-|k_x,p e| <= μ f_n; beyond, the element slides and e is held at the limit. The element's
-stiffness is the regularisation of Coulomb's law: stick is elastic, with the tread's own shear
-compliance, and no other parameter enters.
+enters at zero at the road's edge (:func:`entering_fractions`). The element pulls the belt
+with f_x = -k_x,p e while it sticks, |k_x,p e| <= μ f_n; beyond, the element slides and e
+is held at the limit. The element's stiffness is the regularisation of Coulomb's law: stick
+is elastic, with the tread's own shear compliance, and no other parameter enters.
 
 **Forces on the ring.** The normal push acts on w (-∂pen/∂q), the fore-aft force on the
 material's fore-aft motion ∂x_p/∂q, which includes the wheel's rotation ψ: the road's drag has
@@ -558,7 +558,7 @@ class InPlaneSimulator:
         y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
         contact, stick, slip_sign = state.contact, state.stick, state.slip_sign
         s_old = self._slip(y, yd)
-        # the element field carried back by Ωh through the points (zero ahead of them)
+        # the element field carried back by Ωh through the points (its ends: carry_edges)
         e_conv = self._carry @ e
         r = 2.0 / h * y + yd
         b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
