@@ -1057,9 +1057,9 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
     """The steady state of :class:`InPlaneSimulator` on a flat road, solved directly (no time
     stepping): ∂/∂t = 0 in the ground frame, the ring rim-relative and still, the wheel turning
     at a steady offset ω from the nominal spin (ψ = ωt), and the tread elements' field solving
-    Ω de/dθ = s along the points (trapezoidal from the front, an element entering half a
-    spacing before its first point in contact). The contact and stick sets are iterated as in
-    a step. With the wheel held, ω = 0 and the torque is what holds it.
+    Ω de/dθ = s along the points (trapezoidal from the front, an element entering at the
+    road's edge, :func:`entering_fractions`). The contact and stick sets, and the edges, are
+    iterated as in a step. With the wheel held, ω = 0 and the torque is what holds it.
 
     The spin's terms (the ring's C and K, the elements' transport) are the nominal spin's:
     the solve is linear about it, as :mod:`.inplane_rolling_modes` is (a step takes them at
