@@ -280,3 +280,24 @@ def test_the_critical_speed_is_where_a_wave_stands_still(n_elements):
                     for f in (0.99, 1.01))
     assert all(against_theta(below, n) == below.n_fields for n in range(n_elements // 2 + 1))
     assert against_theta(above, found.order) != above.n_fields
+
+
+@pytest.mark.parametrize("spin", [0.0, 40.0])
+@pytest.mark.parametrize("top_order", [0.0, 6.0])
+def test_the_order_matrices_are_the_ring_projected_on_each_wave(spin, top_order):
+    """order_matrices reads each order off one FFT per circulant block: it must be the dense
+    ring projected on the unit Fourier vectors e^{inθ}/√N of each field, every order, with the
+    rolling's terms, the lumped sidewall and the radial tie (which is per order, so stays
+    circulant)."""
+    model = InPlaneTire(TireParameters(sidewall_max_order=top_order),
+                        replace(InPlaneTire().tangential, loss_factor=0.05))
+    for sidewall in ("tied", "lumped"):
+        ring = InPlaneRing(replace(model, sidewall_tangential=sidewall), 24, spin_rad_s=spin)
+        wave = np.exp(1j * np.outer(ring.theta, np.arange(-12, 13))) / math.sqrt(24)
+        for n, column in zip(range(-12, 13), wave.T):
+            f = np.kron(np.eye(ring.n_fields), column[:, None])
+            for dense, fast in zip((ring.mass, ring.damping, ring.stiffness),
+                                   order_matrices(ring, n)):
+                projected = f.conj().T @ dense @ f
+                assert np.abs(fast - projected).max() <= 1e-13 * np.abs(dense).max(), (
+                    sidewall, n)

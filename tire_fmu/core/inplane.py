@@ -53,6 +53,7 @@ from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
+import scipy.sparse
 
 from .parameters import ParameterError, Problem, TireParameters
 
@@ -377,21 +378,25 @@ class InPlaneRing:
     def _built_gyroscopic(self) -> np.ndarray:
         """2Ω M L on the absolute velocities (skew-symmetric)."""
         L = np.kron(np.eye(self._n_built // 2), self._pair_L())
-        return 2.0 * self.spin_rad_s * self._built_mass @ L
+        # M is diagonal: a row scaling, not an N³ product
+        return 2.0 * self.spin_rad_s * np.diag(self._built_mass)[:, None] * L
 
     @cached_property
     def _built_rolling(self) -> np.ndarray:
         """The speed's stiffness on the rim-relative DOFs: the sidewall's net centrifugal term
         -m_s Ω² [LᵀL - (R/ℓ) E_v] and the circulatory Ω C D1 of material damping."""
         n, omega = self.n_elements, self.spin_rad_s
-        k = omega * self._built_damping @ np.kron(np.eye(self._n_built), self._ops["d1"])
+        # D1 has two entries a row: C D1 as a sparse product (dense, it cost N³)
+        d1 = scipy.sparse.kron(scipy.sparse.eye_array(self._n_built),
+                               scipy.sparse.csr_array(self._ops["d1"]), format="csr")
+        k = omega * np.asarray((d1.T @ self._built_damping.T).T)
         if self.model.sidewall_mass and omega != 0.0:
-            L = self._pair_L()
+            L = scipy.sparse.csr_array(self._pair_L())
             tangential = np.zeros((2 * n, 2 * n))
             tangential[n:, n:] = np.eye(n) * self.model.tire.R / self.model.sidewall_length_m
             side = slice(2 * n, 4 * n)
             k[side, side] -= omega**2 * self.model.tire.m_s * self.node_arc_m * (
-                L.T @ L - tangential)
+                (L.T @ L).toarray() - tangential)
         return k
 
     @cached_property
@@ -404,8 +409,12 @@ class InPlaneRing:
         eta = self.model.tangential.loss_factor
         if eta == 0.0:
             return np.zeros_like(self._built_elastic)
-        h = np.kron(np.eye(self._n_built), hilbert_circulant(self.n_elements))
-        return eta * self._built_elastic @ h
+        # K (I ⊗ H) block column by block column: N² per block rather than the kron's N³
+        h, n, k = hilbert_circulant(self.n_elements), self.n_elements, self._built_elastic
+        out = np.empty_like(k)
+        for b in range(self._n_built):
+            out[:, b * n:(b + 1) * n] = k[:, b * n:(b + 1) * n] @ h
+        return eta * out
 
     @cached_property
     def hysteretic_stiffness(self) -> np.ndarray:
@@ -431,19 +440,26 @@ class InPlaneRing:
         return tie
 
     def _assemble(self, ring: np.ndarray, relative: bool, rim: np.ndarray | None = None):
-        """The built ring matrix on the DOFs: relative ones act on q_ring - P x_rim."""
+        """The built ring matrix on the DOFs: relative ones act on q_ring - P x_rim. The
+        transformations are written out (the rim's three columns) and sparse (the tie's one
+        or two entries a row): as dense products they cost N³, seconds a matrix at N = 400."""
         if self.rim_free:
             built = ring.shape[0]
             out = np.zeros((built + 3, built + 3))
-            if relative:
-                t = np.hstack([np.eye(built), -self._patterns(self._n_built)])
-                out = t.T @ ring @ t
-            else:
-                out[:built, :built] = ring
+            out[:built, :built] = ring
+            if relative:  # t = [I, -P]: tᵀ R t
+                patterns = self._patterns(self._n_built)
+                ring_p = ring @ patterns
+                out[:built, built:] = -ring_p
+                out[built:, :built] = -(patterns.T @ ring)
+                out[built:, built:] = patterns.T @ ring_p
             if rim is not None:
                 out[built:, built:] += rim
             ring = out
-        return self._tie.T @ ring @ self._tie
+        if self.n_fields != 3:  # the tie is the identity
+            return ring
+        tie = scipy.sparse.csr_array(self._tie)
+        return np.asarray(tie.T @ (tie.T @ ring.T).T)
 
     @cached_property
     def mass(self) -> np.ndarray:

@@ -25,12 +25,27 @@ def _fourier(ring: InPlaneRing, n: int) -> np.ndarray:
     return np.kron(np.eye(ring.n_fields), column[:, None])
 
 
-def order_matrices(ring: InPlaneRing, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(M_n, C_n, K_n): the ring's matrices on order n (rim held), complex (fields x fields)."""
+def order_spectra(ring: InPlaneRing) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(M, C, K) on every order at once, each (N, fields, fields) complex, rim held, order n at
+    index n mod N. Each field block is circulant (the ring is the same at every node), so its
+    value on e^{inθ}/√N is the DFT of its first column: one FFT per block instead of a dense
+    projection per order (which made the critical speed cost N³ per matrix at N = 400).
+    Kept on the ring: every order reads the same spectra."""
     if ring.rim_free:
         raise ValueError("rim_free: the rim couples orders 0 and 1; use tire_modes")
-    f = _fourier(ring, n)
-    return tuple(f.conj().T @ a @ f for a in (ring.mass, ring.damping, ring.stiffness))
+    cached = ring.__dict__.get("_order_spectra")
+    if cached is None:
+        n, fields = ring.n_elements, ring.n_fields
+        # column q*n of a holds the first column of every block (p, q), by p along the rows
+        cached = tuple(np.fft.fft(a[:, ::n].reshape(fields, n, fields), axis=1).transpose(1, 0, 2)
+                       for a in (ring.mass, ring.damping, ring.stiffness))
+        ring.__dict__["_order_spectra"] = cached
+    return cached
+
+
+def order_matrices(ring: InPlaneRing, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(M_n, C_n, K_n): the ring's matrices on order n (rim held), complex (fields x fields)."""
+    return tuple(spectrum[n % ring.n_elements] for spectrum in order_spectra(ring))
 
 
 def quadratic_eigenvalues(mass, damping, stiffness) -> np.ndarray:
@@ -136,10 +151,15 @@ def critical_speed(model, n_elements: int):
     :func:`.standing_waves.critical_speed`, here with the tangential motion).
 
     A root s = 0 of order n means K_n(Ω) singular. K is quadratic in the spin, so the
-    critical spins of order n are the real positive eigenvalues Ω of the quadratic problem
-    (K0 + Ω K1 + Ω² K2) q = 0, solved exactly (generalised companion form, which takes a
-    singular K2); the lowest over the orders is the critical spin. Damping is left out: it
-    makes the crossing a divergence rather than a zero, at the same speed for light damping.
+    critical spins of order n are the real positive roots Ω of (K0 + Ω K1 + Ω² K2) q = 0;
+    the lowest over the orders is the critical spin. Damping is left out: it makes the
+    crossing a divergence rather than a zero, at the same speed for light damping, and with
+    it goes K1 (the damping's circulatory part; the hysteretic loss is left out too). Each
+    order's K0 and K2 are then Hermitian and K0, the ring at rest with the rim held, is
+    positive definite: the roots are Ω = 1/√ν for the eigenvalues ν > 0 of the
+    Hermitian-definite pencil -K2 q = ν K0 q, real by structure. (A companion form's roots
+    carried rounding's imaginary parts, which a tolerance had to tell from complex roots, and
+    at N = 200 it took the tie's top order's for complex.)
     Returns a :class:`.standing_waves.CriticalSpeed` whose ``branch`` is the standing
     wave's kind, "radial" or "tangential" (its kinetic energy's larger part)."""
     from dataclasses import replace
@@ -148,23 +168,18 @@ def critical_speed(model, n_elements: int):
     from .standing_waves import CriticalSpeed
 
     undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
-    rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s) for s in (0.0, 1.0, 2.0)]
+    rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s, hysteresis=False)
+             for s in (0.0, 1.0, 2.0)]
     masses = np.real(np.diag(rings[0].ring_mass))[:: n_elements]  # per field, per node
     tangential_field = np.array([name.startswith("v") for name in rings[0].fields])
     best = (math.inf, None, None)
     for n in range(n_elements // 2 + 1):
-        k0, k1, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings))
-        size = k0.shape[0]
-        left = np.block([[np.zeros((size, size)), np.eye(size)], [-k0, -k1]])
-        right = np.block([[np.eye(size), np.zeros((size, size))],
-                          [np.zeros((size, size)), k2]])
-        spins, vectors = scipy.linalg.eig(left, right)
-        real = np.isfinite(spins) & (np.abs(spins.imag) <= 1e-9 * np.abs(spins)) & (
-            spins.real > 0)
-        for index in np.flatnonzero(real):
-            spin = float(spins[index].real)
+        k0, _, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings))
+        nu, vectors = scipy.linalg.eigh(-0.5 * (k2 + k2.conj().T), 0.5 * (k0 + k0.conj().T))
+        for index in np.flatnonzero(nu > 0):
+            spin = float(1.0 / math.sqrt(nu[index]))
             if spin < best[0]:
-                energy = masses * np.abs(vectors[:size, index]) ** 2
+                energy = masses * np.abs(vectors[:, index]) ** 2
                 kind = ("tangential" if energy[tangential_field].sum() > 0.5 * energy.sum()
                         else "radial")
                 best = (spin, n, kind)
