@@ -53,6 +53,7 @@ import struct
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse
 
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
@@ -225,14 +226,20 @@ class InPlaneSimulator:
         if free_spin:
             to_abs[:nr, nr] = ring.rim_patterns[:, 2]
             to_abs[nr + 2, nr] = 1.0
-        mass = to_abs.T @ ring.mass @ to_abs
-        c_at = [to_abs.T @ r.damping @ to_abs for r in rings]
-        k_at = [to_abs.T @ r.stiffness @ to_abs for r in rings]
+        # to_abs is an identity and the turn's column: sparse, its products cost N², not N³
+        to_abs_sparse = scipy.sparse.csr_array(to_abs)
+
+        def on_y(a):
+            return np.asarray(to_abs_sparse.T @ (to_abs_sparse.T @ a.T).T)
+
+        mass = on_y(ring.mass)
+        c_at = [on_y(r.damping) for r in rings]
+        k_at = [on_y(r.stiffness) for r in rings]
         k0, k1, k2 = quadratic_in_spin(*k_at)
         # the hysteretic loss, added apart at its share of the spin (not polynomial in it)
         hysteretic = rings[0].hysteretic_stiffness
         spin_terms = {"c0": c_at[0], "c1": c_at[1] - c_at[0], "k0": k0, "k1": k1, "k2": k2,
-                      "kh": to_abs.T @ hysteretic @ to_abs}
+                      "kh": on_y(hysteretic)}
 
         interp = np.zeros((zone.n_points, n))
         interp[:, zone.nodes] = zone.interpolation  # zone nodes -> ring nodes
