@@ -130,6 +130,20 @@ def tire_modes(ring: InPlaneRing, f_max_hz: float | None = None) -> InPlaneModes
                         vec)
 
 
+#: The spin step (rad/s) of the three rings :func:`critical_speed` reads K's quadratic off
+#: (at 0, S, 2S): K is exactly quadratic in the spin, and a step of the critical spins' size
+#: keeps K2 = (K(2S) - 2 K(S) + K(0)) / 2S² from losing the digits of K(0)'s stencils that
+#: cancel in it (a step of 1 rad/s, with
+#: the pencil unscaled, left up to 5e-9 of the critical spin to rounding).
+CRITICAL_FIT_STEP_RAD_S = 64.0
+#: A spin Ω of the quadratic problem counts as real when |Im Ω| <= this |Ω|.
+CRITICAL_REAL_TOLERANCE = 1e-9
+#: A spin above 1/(this sqrt(|K2| / |K0|)) (Frobenius norms of the order's blocks: the order's
+#: own spin scale) is taken as infinite: K2's null directions (the sidewall's, which the spin
+#: does not load) are roots at infinite spin, which rounding leaves at large finite ones.
+CRITICAL_INFINITE_SHARE = 1e-8
+
+
 def critical_speed(model, n_elements: int):
     """The lowest speed (m/s) at which a ground-frame frequency of the undamped in-plane ring
     on this mesh reaches zero: a standing wave under the footprint (the radial ring's
@@ -138,29 +152,35 @@ def critical_speed(model, n_elements: int):
     A root s = 0 of order n means K_n(Ω) singular. K is quadratic in the spin, so the
     critical spins of order n are the real positive eigenvalues Ω of the quadratic problem
     (K0 + Ω K1 + Ω² K2) q = 0, solved exactly (generalised companion form, which takes a
-    singular K2); the lowest over the orders is the critical spin. Damping is left out: it
-    makes the crossing a divergence rather than a zero, at the same speed for light damping.
-    Returns a :class:`.standing_waves.CriticalSpeed` whose ``branch`` is the standing
-    wave's kind, "radial" or "tangential" (its kinetic energy's larger part)."""
+    singular K2, its identity blocks scaled to K0's size so that the small K2 keeps its
+    digits); the lowest over the orders is the critical spin. Damping and the hysteretic loss
+    are left out: they make the crossing a divergence rather than a zero, at the same speed for
+    light damping (the loss's share of the spin is not polynomial in it either). Returns a
+    :class:`.standing_waves.CriticalSpeed` whose ``branch`` is the standing wave's kind,
+    "radial" or "tangential" (its kinetic energy's larger part)."""
     from dataclasses import replace
 
     from .inplane import InPlaneRing, quadratic_in_spin
     from .standing_waves import CriticalSpeed
 
     undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
-    rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s) for s in (0.0, 1.0, 2.0)]
+    step = CRITICAL_FIT_STEP_RAD_S
+    rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s, hysteresis=False)
+             for s in (0.0, step, 2.0 * step)]
     masses = np.real(np.diag(rings[0].ring_mass))[:: n_elements]  # per field, per node
     tangential_field = np.array([name.startswith("v") for name in rings[0].fields])
     best = (math.inf, None, None)
     for n in range(n_elements // 2 + 1):
-        k0, k1, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings))
-        size = k0.shape[0]
-        left = np.block([[np.zeros((size, size)), np.eye(size)], [-k0, -k1]])
-        right = np.block([[np.eye(size), np.zeros((size, size))],
-                          [np.zeros((size, size)), k2]])
-        spins, vectors = scipy.linalg.eig(left, right)
-        real = np.isfinite(spins) & (np.abs(spins.imag) <= 1e-9 * np.abs(spins)) & (
-            spins.real > 0)
+        k0, k1, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings), step)
+        size, top = k0.shape[0], np.abs(k0).max()
+        eye, zero = top * np.eye(size), np.zeros((size, size))
+        spins, vectors = scipy.linalg.eig(np.block([[zero, eye], [-k0, -k1]]),
+                                          np.block([[eye, zero], [zero, k2]]))
+        scale = math.sqrt(np.linalg.norm(k2) / np.linalg.norm(k0))
+        with np.errstate(invalid="ignore"):
+            real = (np.abs(spins) * (CRITICAL_INFINITE_SHARE * scale) < 1.0) & (
+                np.abs(spins.imag) <= CRITICAL_REAL_TOLERANCE * np.abs(spins)) & (
+                spins.real > 0)
         for index in np.flatnonzero(real):
             spin = float(spins[index].real)
             if spin < best[0]:

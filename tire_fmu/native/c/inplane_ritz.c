@@ -248,19 +248,42 @@ static void hestenes(double* w, int n, double* sigma)
 
 /* ----- the ring's Fourier blocks ----- */
 
-/* M(n) or K(n) (nf x nf, Hermitian) from the blocks' first columns col[(a nf + b) N + k] */
-static void order_block(const Grid* g, const double* col, int order, cx* out)
+void inplane_fourier_tables(int n_elements, double* cos_table, double* sin_table)
 {
-    int n = g->n, nf = g->nf;
+    int n = n_elements;
+    for (int m = 0; m < n; ++m) {
+        /* exact zeros at the quarter turns, so orders 0 and N/2 stay real */
+        double angle = 2.0 * PI * m / n;
+        cos_table[m] = 4 * m == n || 4 * m == 3 * n ? 0.0 : cos(angle);
+        sin_table[m] = 2 * m == n || m == 0 ? 0.0 : sin(angle);
+    }
+}
+
+void inplane_fourier_columns(const double* m, int n_elements, int n_fields, double* col)
+{
+    int n = n_elements, nf = n_fields;
+    size_t nd = (size_t)nf * n;
+    for (int a = 0; a < nf; ++a)
+        for (int b = 0; b < nf; ++b)
+            for (int k = 0; k < n; ++k) {
+                size_t r = (size_t)a * n + k, c = (size_t)b * n;
+                col[((size_t)a * nf + b) * n + k] = 0.5 * (m[r * nd + c] + m[c * nd + r]);
+            }
+}
+
+void inplane_fourier_block(const double* col, int n_elements, int n_fields, int order,
+                           const double* cos_table, const double* sin_table, cx* out)
+{
+    int n = n_elements, nf = n_fields, real = order == 0 || 2 * order == n;
     for (int a = 0; a < nf; ++a)
         for (int b = 0; b < nf; ++b) {
             const double* c = col + ((size_t)a * nf + b) * n;
             double re = 0.0, im = 0.0;
             for (int k = 0, m = 0; k < n; ++k, m = next_angle(m, order, n)) {
-                re += c[k] * g->cosT[m];
-                im -= c[k] * g->sinT[m];
+                re += c[k] * cos_table[m];
+                im -= c[k] * sin_table[m];
             }
-            out[a * nf + b] = cx_make(re, single(g, order) ? 0.0 : im);
+            out[a * nf + b] = cx_make(re, real ? 0.0 : im);
         }
     for (int a = 0; a < nf; ++a) /* exactly Hermitian */
         for (int b = a; b < nf; ++b) {
@@ -269,6 +292,12 @@ static void order_block(const Grid* g, const double* col, int order, cx* out)
             out[a * nf + b] = mean;
             out[b * nf + a] = cx_conj(mean);
         }
+}
+
+/* M(n) or K(n) (nf x nf, Hermitian) from the blocks' first columns */
+static void order_block(const Grid* g, const double* col, int order, cx* out)
+{
+    inplane_fourier_block(col, g->n, g->nf, order, g->cosT, g->sinT, out);
 }
 
 /* the real-space vector (field-major, nf N) of Fourier coordinates c (n_dof) */
@@ -447,12 +476,7 @@ static int read_blocks(const Grid* g, const double* m, int which, double* col, c
                                    INPLANE_RITZ_CIRCULANT_TOLERANCE, first, r0, c0, mirror, c,
                                    r);
                 }
-    for (int a = 0; a < nf; ++a)
-        for (int b = 0; b < nf; ++b)
-            for (int k = 0; k < n; ++k) {
-                size_t r = (size_t)a * n + k, c = (size_t)b * n;
-                col[((size_t)a * nf + b) * n + k] = 0.5 * (m[r * nd + c] + m[c * nd + r]);
-            }
+    inplane_fourier_columns(m, n, nf, col);
     return INPLANE_RITZ_OK;
 }
 
@@ -523,12 +547,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     double* y2 = v2 + p;
     g.cosT = cosT;
     g.sinT = sinT;
-    for (int m = 0; m < n; ++m) {
-        /* exact zeros at the quarter turns, so orders 0 and N/2 stay real */
-        double angle = 2.0 * PI * m / n;
-        cosT[m] = 4 * m == n || 4 * m == 3 * n ? 0.0 : cos(angle);
-        sinT[m] = 2 * m == n || m == 0 ? 0.0 : sin(angle);
-    }
+    inplane_fourier_tables(n, cosT, sinT);
 
     int status = read_blocks(&g, mass, 0, colM, why, why_size);
     if (!status)
