@@ -46,7 +46,7 @@ size_t inplane_critical_work_doubles(int n_elements, int n_fields)
     size_t n = (size_t)n_elements, nf = (size_t)n_fields;
     return 3 * nd * nd + ring /* mass, stiffness, damping; the ring's scratch */
            + 3 * nf * nf * n  /* K's first columns at the three spins */
-           + 2 * n;           /* tables */
+           + 3 * n;           /* tables */
 }
 
 static double frobenius(const cx* a, int n)
@@ -76,8 +76,7 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
     double* damping = stiffness + nd * nd;
     double* ring_work = damping + nd * nd;
     double* col = ring_work + inplane_ring_work_doubles(n, nf); /* 3 spins */
-    double* cosT = col + 3 * (size_t)nf * nf * n;
-    double* sinT = cosT + n;
+    double* tables = col + 3 * (size_t)nf * nf * n;
 
     InPlaneRingData undamped = *data;
     undamped.alpha = 0.0;
@@ -94,7 +93,7 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
             for (int f = 0; f < nf; ++f) /* per field, node 0: the mass is diagonal, held */
                 masses[f] = mass[((size_t)f * n) * nd + (size_t)f * n];
     }
-    inplane_fourier_tables(n, cosT, sinT);
+    inplane_fourier_tables(n, tables);
 
     double best = HUGE_VAL;
     int best_order = -1, best_branch = INPLANE_CRITICAL_NONE;
@@ -105,9 +104,9 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
         cx a[4 * MAX_FIELDS * MAX_FIELDS], vectors[4 * MAX_FIELDS * MAX_FIELDS];
         cx mu[2 * MAX_FIELDS];
         size_t block = (size_t)nf * nf * n;
-        inplane_fourier_block(col, n, nf, o, cosT, sinT, k0);
-        inplane_fourier_block(col + block, n, nf, o, cosT, sinT, ka);
-        inplane_fourier_block(col + 2 * block, n, nf, o, cosT, sinT, kb);
+        inplane_fourier_block(col, n, nf, o, tables, k0);
+        inplane_fourier_block(col + block, n, nf, o, tables, ka);
+        inplane_fourier_block(col + 2 * block, n, nf, o, tables, kb);
         /* core/inplane.py's quadratic_in_spin, the same operations */
         for (int i = 0; i < nf * nf; ++i) {
             double f2 = 0.5 / (step * step), f1 = 1.0 / step;
