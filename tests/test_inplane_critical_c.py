@@ -19,7 +19,7 @@ from test_inplane_ring_c import fixed_case, model_of, random_case
 from tire_fmu.core.inplane import InPlaneRing
 from tire_fmu.core.inplane_modes import critical_speed, order_matrices
 from tire_fmu.native.inplane_critical import _declare, c_critical_speed
-from tire_fmu.native.inplane_ring import n_fields, ring_data
+from tire_fmu.native.inplane_ring import c_inplane_ring, n_fields, ring_data
 from tire_fmu.native.kernel import load_library
 
 #: Agreement asked of the C's critical spin, relative.
@@ -139,6 +139,37 @@ def test_the_c_critical_spin_is_the_first_singular_k_n(label):
                                   f"eigenvalue {lowest:.3g}")
     above = np.linalg.eigvalsh(order_stiffness(model, n, 1.001 * spin, found.order))
     assert above[0] < 0.0
+
+
+def c_ring_order_stiffnesses(model, n_elements, spin, orders=None):
+    """(n, K_n) for the orders (all by default) from the C ring built at the spin (undamped,
+    no loss; held to the Python ring by test_inplane_ring_c), by dense Fourier products,
+    Hermitian."""
+    undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
+    k = c_inplane_ring(undamped, n_elements, spin, hysteresis=False).stiffness
+    theta = 2.0 * np.pi * np.arange(n_elements) / n_elements
+    fields = k.shape[0] // n_elements
+    for order in range(n_elements // 2 + 1) if orders is None else orders:
+        f = np.kron(np.eye(fields), np.exp(1j * order * theta)[:, None]) / np.sqrt(n_elements)
+        block = f.conj().T @ k @ f
+        yield order, 0.5 * (block + block.conj().T)
+
+
+def test_at_n_400_the_c_critical_spin_is_the_first_singular_k_n():
+    """The check above at N = 400, on the C ring (the Python ring's there cost minutes)."""
+    case = CASES["tied_400_tie_8_lossy"]
+    model, n = model_of(case), case["n"]
+    found = c_critical_speed(model, n)
+    spin = found.spin_rad_s
+    ((_, k),) = c_ring_order_stiffnesses(model, n, spin, [found.order])
+    sigma = np.linalg.svd(k, compute_uv=False)
+    assert sigma[-1] < SINGULAR * sigma[0]
+    for share in (0.5, 0.999):
+        lowest = {order: np.linalg.eigvalsh(k)[0]
+                  for order, k in c_ring_order_stiffnesses(model, n, share * spin)}
+        assert min(lowest.values()) > 0.0, (share, min(lowest, key=lowest.get))
+    ((_, above),) = c_ring_order_stiffnesses(model, n, 1.001 * spin, [found.order])
+    assert np.linalg.eigvalsh(above)[0] < 0.0
 
 
 # ----- refusals -----

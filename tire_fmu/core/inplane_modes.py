@@ -133,8 +133,8 @@ def tire_modes(ring: InPlaneRing, f_max_hz: float | None = None) -> InPlaneModes
 #: The spin step (rad/s) of the three rings :func:`critical_speed` reads K's quadratic off
 #: (at 0, S, 2S): K is exactly quadratic in the spin, and a step of the critical spins' size
 #: keeps K2 = (K(2S) - 2 K(S) + K(0)) / 2S² from losing the digits of K(0)'s stencils that
-#: cancel in it (a step of 1 rad/s, with
-#: the pencil unscaled, left up to 5e-9 of the critical spin to rounding).
+#: cancel in it (a step of 1 rad/s, with the pencil unscaled, left up to 5e-9 of the critical
+#: spin to rounding).
 CRITICAL_FIT_STEP_RAD_S = 64.0
 #: A spin Ω of the quadratic problem counts as real when |Im Ω| <= this |Ω|.
 CRITICAL_REAL_TOLERANCE = 1e-9
