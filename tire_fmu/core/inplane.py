@@ -214,11 +214,12 @@ def _circulant(n: int, stencil: dict[int, float]) -> np.ndarray:
 
 
 
-def quadratic_in_spin(at_0, at_1, at_2) -> tuple:
-    """(a0, a1, a2) with a(Ω) = a0 + Ω a1 + Ω² a2 from its values at Ω = 0, 1, 2 rad/s: the
-    ring's C is linear and K quadratic in the spin, so three rings give them at any spin."""
-    a2 = 0.5 * (at_2 - 2.0 * at_1 + at_0)
-    return at_0, at_1 - at_0 - a2, a2
+def quadratic_in_spin(at_0, at_1, at_2, step_rad_s: float = 1.0) -> tuple:
+    """(a0, a1, a2) with a(Ω) = a0 + Ω a1 + Ω² a2 from its values at Ω = 0, step, 2 step
+    (rad/s; 1 by default): the ring's C is linear and K quadratic in the spin, so three rings
+    give them at any spin."""
+    a2 = (at_2 - 2.0 * at_1 + at_0) * (0.5 / step_rad_s**2)
+    return at_0, (at_1 - at_0) * (1.0 / step_rad_s) - step_rad_s * a2, a2
 
 @dataclass(frozen=True, eq=False)
 class InPlaneRing:

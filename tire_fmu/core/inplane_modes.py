@@ -145,21 +145,38 @@ def tire_modes(ring: InPlaneRing, f_max_hz: float | None = None) -> InPlaneModes
                         vec)
 
 
+#: The spin step (rad/s) of the three rings :func:`critical_speed` reads K's quadratic off
+#: (at 0, S, 2S): K is exactly quadratic in the spin, and a step of the critical spins' size
+#: keeps K2 = (K(2S) - 2 K(S) + K(0)) / 2S² from losing the digits of K(0)'s stencils that
+#: cancel in it (a step of 1 rad/s, with the pencil unscaled, left up to 5e-9 of the critical
+#: spin to rounding).
+CRITICAL_FIT_STEP_RAD_S = 64.0
+#: A spin Ω of the quadratic problem counts as real when |Im Ω| <= this |Ω| (the C's
+#: companion form, native/c/inplane_critical.c; the Hermitian pencil here has real roots).
+CRITICAL_REAL_TOLERANCE = 1e-9
+#: A spin above 1/(this sqrt(|K2| / |K0|)) (Frobenius norms of the order's blocks: the order's
+#: own spin scale) is taken as infinite: K2's null directions (the sidewall's, which the spin
+#: does not load) are roots at infinite spin, which rounding leaves at large finite ones.
+CRITICAL_INFINITE_SHARE = 1e-8
+
+
 def critical_speed(model, n_elements: int):
     """The lowest speed (m/s) at which a ground-frame frequency of the undamped in-plane ring
     on this mesh reaches zero: a standing wave under the footprint (the radial ring's
     :func:`.standing_waves.critical_speed`, here with the tangential motion).
 
     A root s = 0 of order n means K_n(Ω) singular. K is quadratic in the spin, so the
-    critical spins of order n are the real positive roots Ω of (K0 + Ω K1 + Ω² K2) q = 0;
-    the lowest over the orders is the critical spin. Damping is left out: it makes the
-    crossing a divergence rather than a zero, at the same speed for light damping, and with
-    it goes K1 (the damping's circulatory part; the hysteretic loss is left out too). Each
-    order's K0 and K2 are then Hermitian and K0, the ring at rest with the rim held, is
-    positive definite: the roots are Ω = 1/√ν for the eigenvalues ν > 0 of the
-    Hermitian-definite pencil -K2 q = ν K0 q, real by structure. (A companion form's roots
-    carried rounding's imaginary parts, which a tolerance had to tell from complex roots, and
-    at N = 200 it took the tie's top order's for complex.)
+    critical spins of order n are the real positive roots Ω of (K0 + Ω K1 + Ω² K2) q = 0,
+    K read off the rings at 0, S and 2S (:data:`CRITICAL_FIT_STEP_RAD_S`); the lowest over
+    the orders is the critical spin. Damping is left out: it makes the crossing a divergence
+    rather than a zero, at the same speed for light damping, and with it goes K1 (the
+    damping's circulatory part); the hysteretic loss is left out too (its share of the spin
+    is not polynomial in it). Each order's K0 and K2 are then Hermitian and K0, the ring at
+    rest with the rim held, is positive definite: the roots are Ω = 1/√ν for the eigenvalues
+    ν > 0 of the Hermitian-definite pencil -K2 q = ν K0 q, real by structure (a companion
+    form's roots carried rounding's imaginary parts, which a tolerance had to tell from
+    complex roots, and at N = 200 it took the tie's top order's for complex). A root beyond
+    :data:`CRITICAL_INFINITE_SHARE`'s bound is K2's null direction, at infinite spin.
     Returns a :class:`.standing_waves.CriticalSpeed` whose ``branch`` is the standing
     wave's kind, "radial" or "tangential" (its kinetic energy's larger part)."""
     from dataclasses import replace
@@ -168,15 +185,17 @@ def critical_speed(model, n_elements: int):
     from .standing_waves import CriticalSpeed
 
     undamped = replace(model, tire=replace(model.tire, alpha=0.0, beta=0.0))
+    step = CRITICAL_FIT_STEP_RAD_S
     rings = [InPlaneRing(undamped, n_elements, spin_rad_s=s, hysteresis=False)
-             for s in (0.0, 1.0, 2.0)]
+             for s in (0.0, step, 2.0 * step)]
     masses = np.real(np.diag(rings[0].ring_mass))[:: n_elements]  # per field, per node
     tangential_field = np.array([name.startswith("v") for name in rings[0].fields])
     best = (math.inf, None, None)
     for n in range(n_elements // 2 + 1):
-        k0, _, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings))
+        k0, _, k2 = quadratic_in_spin(*(order_matrices(r, n)[2] for r in rings), step)
         nu, vectors = scipy.linalg.eigh(-0.5 * (k2 + k2.conj().T), 0.5 * (k0 + k0.conj().T))
-        for index in np.flatnonzero(nu > 0):
+        bound = CRITICAL_INFINITE_SHARE * math.sqrt(np.linalg.norm(k2) / np.linalg.norm(k0))
+        for index in np.flatnonzero(nu > bound**2):
             spin = float(1.0 / math.sqrt(nu[index]))
             if spin < best[0]:
                 energy = masses * np.abs(vectors[:, index]) ** 2

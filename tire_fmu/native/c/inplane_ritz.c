@@ -60,7 +60,7 @@ static int valid_shape(int n, int nf, int nz)
 /* per-order layout in the Fourier coordinates */
 typedef struct {
     int n, nf, nz, p, n_dof, n_orders;
-    const double *cosT, *sinT; /* cos, sin of 2 pi m / N */
+    const double *cosT, *sinT; /* cos, sin of 2 pi m / N (then the versines) */
 } Grid;
 
 /* the table index of (m + order) 2 pi / N, without a division in the inner loops */
@@ -88,7 +88,7 @@ size_t inplane_ritz_work_doubles(int n_elements, int n_fields, int n_zone)
         return 0;
     size_t n = (size_t)n_elements, nf = (size_t)n_fields, nd = nf * n, p = 2 * (size_t)n_zone;
     size_t orders = n / 2 + 1;
-    return 2 * n                  /* tables */
+    return 3 * n                  /* tables */
            + 2 * nf * nf * n      /* first columns of M and K */
            + orders * 4 * nf      /* node 0's static coordinates, w and v loads */
            + orders * 2 * nf * nf /* K(n)'s Cholesky factors (complex) */
@@ -248,19 +248,51 @@ static void hestenes(double* w, int n, double* sigma)
 
 /* ----- the ring's Fourier blocks ----- */
 
-/* M(n) or K(n) (nf x nf, Hermitian) from the blocks' first columns col[(a nf + b) N + k] */
-static void order_block(const Grid* g, const double* col, int order, cx* out)
+void inplane_fourier_tables(int n_elements, double* tables)
 {
-    int n = g->n, nf = g->nf;
+    int n = n_elements;
+    double *cos_table = tables, *sin_table = tables + n, *versine = tables + 2 * (size_t)n;
+    for (int m = 0; m < n; ++m) {
+        /* exact zeros at the quarter turns, so orders 0 and N/2 stay real */
+        double angle = 2.0 * PI * m / n, half = sin(PI * m / n);
+        cos_table[m] = 4 * m == n || 4 * m == 3 * n ? 0.0 : cos(angle);
+        sin_table[m] = 2 * m == n || m == 0 ? 0.0 : sin(angle);
+        versine[m] = 2.0 * half * half;
+    }
+}
+
+void inplane_fourier_columns(const double* m, int n_elements, int n_fields, double* col)
+{
+    int n = n_elements, nf = n_fields;
+    size_t nd = (size_t)nf * n;
+    for (int a = 0; a < nf; ++a)
+        for (int b = 0; b < nf; ++b)
+            for (int k = 0; k < n; ++k) {
+                size_t r = (size_t)a * n + k, c = (size_t)b * n;
+                col[((size_t)a * nf + b) * n + k] = 0.5 * (m[r * nd + c] + m[c * nd + r]);
+            }
+}
+
+void inplane_fourier_block(const double* col, int n_elements, int n_fields, int order,
+                           const double* tables, cx* out)
+{
+    int n = n_elements, nf = n_fields, real = order == 0 || 2 * order == n;
+    const double *sin_table = tables + n, *versine = tables + 2 * (size_t)n;
     for (int a = 0; a < nf; ++a)
         for (int b = 0; b < nf; ++b) {
             const double* c = col + ((size_t)a * nf + b) * n;
-            double re = 0.0, im = 0.0;
+            /* sum c_k cos = sum c_k - sum c_k versine: the stencils' columns nearly sum to zero
+             * (a rigid motion), so the sum is compensated (Neumaier) and the cosines' rounding,
+             * of order eps |c_k| near 1, is left out of the rest */
+            double sum = 0.0, carry = 0.0, turned = 0.0, im = 0.0;
             for (int k = 0, m = 0; k < n; ++k, m = next_angle(m, order, n)) {
-                re += c[k] * g->cosT[m];
-                im -= c[k] * g->sinT[m];
+                double t = sum + c[k];
+                carry += fabs(sum) >= fabs(c[k]) ? (sum - t) + c[k] : (c[k] - t) + sum;
+                sum = t;
+                turned += c[k] * versine[m];
+                im -= c[k] * sin_table[m];
             }
-            out[a * nf + b] = cx_make(re, single(g, order) ? 0.0 : im);
+            out[a * nf + b] = cx_make((sum + carry) - turned, real ? 0.0 : im);
         }
     for (int a = 0; a < nf; ++a) /* exactly Hermitian */
         for (int b = a; b < nf; ++b) {
@@ -269,6 +301,12 @@ static void order_block(const Grid* g, const double* col, int order, cx* out)
             out[a * nf + b] = mean;
             out[b * nf + a] = cx_conj(mean);
         }
+}
+
+/* M(n) or K(n) (nf x nf, Hermitian) from the blocks' first columns */
+static void order_block(const Grid* g, const double* col, int order, cx* out)
+{
+    inplane_fourier_block(col, g->n, g->nf, order, g->cosT, out);
 }
 
 /* the real-space vector (field-major, nf N) of Fourier coordinates c (n_dof) */
@@ -447,12 +485,7 @@ static int read_blocks(const Grid* g, const double* m, int which, double* col, c
                                    INPLANE_RITZ_CIRCULANT_TOLERANCE, first, r0, c0, mirror, c,
                                    r);
                 }
-    for (int a = 0; a < nf; ++a)
-        for (int b = 0; b < nf; ++b)
-            for (int k = 0; k < n; ++k) {
-                size_t r = (size_t)a * n + k, c = (size_t)b * n;
-                col[((size_t)a * nf + b) * n + k] = 0.5 * (m[r * nd + c] + m[c * nd + r]);
-            }
+    inplane_fourier_columns(m, n, nf, col);
     return INPLANE_RITZ_OK;
 }
 
@@ -502,7 +535,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
 
     double* cosT = work;
     double* sinT = cosT + n;
-    double* colM = sinT + n;
+    double* colM = sinT + 2 * (size_t)n; /* and the versines */
     double* colK = colM + (size_t)nf * nf * n;
     double* c0 = colK + (size_t)nf * nf * n;         /* 2 columns of nd coordinates */
     double* chol = c0 + (size_t)g.n_orders * 4 * nf; /* per order nf^2 complex */
@@ -523,12 +556,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     double* y2 = v2 + p;
     g.cosT = cosT;
     g.sinT = sinT;
-    for (int m = 0; m < n; ++m) {
-        /* exact zeros at the quarter turns, so orders 0 and N/2 stay real */
-        double angle = 2.0 * PI * m / n;
-        cosT[m] = 4 * m == n || 4 * m == 3 * n ? 0.0 : cos(angle);
-        sinT[m] = 2 * m == n || m == 0 ? 0.0 : sin(angle);
-    }
+    inplane_fourier_tables(n, cosT);
 
     int status = read_blocks(&g, mass, 0, colM, why, why_size);
     if (!status)

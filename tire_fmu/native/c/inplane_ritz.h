@@ -20,6 +20,8 @@
 
 #include <stddef.h>
 
+#include "numerics.h"
+
 enum {
     INPLANE_RITZ_OK = 0,
     INPLANE_RITZ_BAD_SHAPE = 1,  /* n_elements, n_fields, n_zone or max_columns */
@@ -53,5 +55,26 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
                        int n_fields, const int* zone_nodes, int n_zone, double f_max_hz,
                        int max_columns, double* basis, int* n_columns, double* work,
                        char* why, size_t why_size);
+
+/* ----- the held ring's Fourier orders (shared with inplane_critical.c) -----
+ * A matrix of nf x nf symmetric circulant field blocks (N x N each, field-major DOFs) is
+ * block diagonal on the Fourier vectors e^{i n theta_j} / sqrt(N) of each field: its order-n
+ * block (nf x nf, Hermitian) is f^H A f, core/inplane_modes.py's order_matrices. */
+
+/* cos, sin and the versine 1 - cos = 2 sin^2(pi m / N) of 2 pi m / N for m < N, into tables
+ * (3 N doubles, the three one after the other); cos and sin exactly zero at the quarter turns
+ * so that orders 0 and N/2 come out real. */
+void inplane_fourier_tables(int n_elements, double* tables);
+
+/* The field blocks' first columns, col[(a nf + b) N + k] = (m[aN + k, bN] + m[bN, aN + k]) / 2
+ * (nf^2 N doubles), of m (nf N x nf N, row major). */
+void inplane_fourier_columns(const double* m, int n_elements, int n_fields, double* col);
+
+/* The order-n block (0 <= order <= N/2) into out (nf x nf, row major) from the first columns:
+ * sum_k col[k] e^{-i n theta_k} per block (its real part as sum col - sum col versine, which
+ * keeps the digits a stencil's near-zero sum cancels), made exactly Hermitian, real for orders
+ * 0 and N/2. The tables are inplane_fourier_tables'. */
+void inplane_fourier_block(const double* col, int n_elements, int n_fields, int order,
+                           const double* tables, cx* out);
 
 #endif
