@@ -136,8 +136,9 @@ def test_a_speed_near_the_meshs_critical_speed_is_refused():
             build_host_stepper(HostSettings(speed_m_s=0.97 * critical, tire=tire))
         assert f"critical speed {critical:.4g} m/s" in str(error.value)
         assert re.search(re.escape(remedy), str(error.value))
+    # the host's is the C's where the kernel builds (test_inplane_critical_c: within 1e-10)
     assert build_host_stepper(HostSettings(speed_m_s=0.97 * speeds[0.0])).critical_speed_m_s \
-        == pytest.approx(speeds[8.0], rel=1e-12)
+        == pytest.approx(speeds[8.0], rel=1e-9)
 
 
 def test_the_compiled_step_is_the_numpy_step(deflected):

@@ -132,21 +132,43 @@ def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTir
     return problems, tire
 
 
+def _critical_speed(tire, n: int, backend: str, library) -> float:
+    """The mesh's critical speed (m/s): by the C (``native/c/inplane_critical.c``, the same
+    to 1e-10, a hundred times faster at N = 400) where the step's C can be had, else by
+    :func:`.inplane_modes.critical_speed`."""
+    from .inplane_modes import critical_speed
+
+    if backend != "numpy":
+        try:  # outside the core (ctypes and a compiler): only when asked for
+            from ..native.inplane_critical import c_critical_speed
+            from ..native.kernel import KernelUnavailable
+        except ImportError:
+            if backend == "compiled":
+                raise
+        else:
+            try:
+                return c_critical_speed(tire, n, library).speed_m_s
+            except KernelUnavailable:
+                if backend == "compiled":
+                    raise
+            except ValueError:  # a tire the core takes and the C's ranges do not: the core's
+                pass
+    return critical_speed(tire, n).speed_m_s
+
+
 def build_host_stepper(settings: HostSettings, backend: str = "auto",
                        library=None) -> HostModel:
     """The stepper for these settings, or a ParameterError naming every problem. ``backend``
     is the step's arithmetic (:data:`~.inplane_contact.BACKENDS`: "auto" steps with the C of
     ``native/c/inplane_step.c`` when it can be had, ``library`` being a loaded kernel library
     to use, else numpy)."""
-    from .inplane_modes import critical_speed
-
     problems, tire = settings_problems(settings)
     if problems:
         raise ParameterError(problems)
     n = int(settings.n_elements)
     critical = math.nan
     if settings.speed_m_s > 0:
-        critical = critical_speed(tire, n).speed_m_s
+        critical = _critical_speed(tire, n, backend, library)
         if settings.speed_m_s > CRITICAL_SPEED_FRACTION * critical:
             raise ParameterError([Problem(
                 "speed_m_s", settings.speed_m_s, "m/s",
