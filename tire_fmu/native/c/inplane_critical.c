@@ -26,17 +26,6 @@
 
 #define MAX_FIELDS 4
 
-static int say(char* why, size_t size, int status, const char* format, ...)
-{
-    if (why != NULL && size > 0) {
-        va_list args;
-        va_start(args, format);
-        vsnprintf(why, size, format, args);
-        va_end(args);
-    }
-    return status;
-}
-
 size_t inplane_critical_work_doubles(int n_elements, int n_fields)
 {
     size_t nd = inplane_ring_n_dof(n_elements, n_fields, 0);
@@ -66,7 +55,7 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
         return status;
     if (spin_rad_s == NULL || speed_m_s == NULL || order == NULL || branch == NULL
         || work == NULL)
-        return say(why, why_size, INPLANE_RING_NULL,
+        return say_why(why, why_size, INPLANE_RING_NULL,
                    "an output (spin, speed, order, branch) or the scratch memory is missing");
 
     int n = n_elements, nf = n_fields;
@@ -115,7 +104,7 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
         }
         memcpy(inv, k0, sizeof k0);
         if (cx_invert(inv, nf))
-            return say(why, why_size, INPLANE_CRITICAL_SINGULAR,
+            return say_why(why, why_size, INPLANE_CRITICAL_SINGULAR,
                        "stiffness at rest, rim held: allowed a definite matrix (singular in "
                        "order %d)", o);
         int m = 2 * nf;
@@ -136,7 +125,7 @@ int inplane_critical_speed(const InPlaneRingData* data, int n_elements, int n_fi
         int real = o == 0 || 2 * o == n; /* real blocks: cx_eig keeps a real matrix's pairs */
         int eig = cx_eig(a, m, real, mu, vectors);
         if (eig)
-            return say(why, why_size, INPLANE_CRITICAL_NO_CONVERGENCE,
+            return say_why(why, why_size, INPLANE_CRITICAL_NO_CONVERGENCE,
                        "order %d: the eigenvalues of its %d x %d companion did not converge "
                        "(cx_eig status %d)", o, m, m, eig);
         double k0_norm = frobenius(k0, nf);

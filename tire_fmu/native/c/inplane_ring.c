@@ -13,6 +13,7 @@
  * irfft, summed here in O(N^2)) and the Hilbert circulant of the hysteretic loss (its closed
  * form, -(2/N) cot(pi m/N) on odd m for even N), applied to K's few entries per row. */
 #include "inplane_ring.h"
+#include "numerics.h"
 #include "spec.h"
 
 #include <math.h>
@@ -64,17 +65,6 @@ static const Range M_S_RANGE = {FIELD(m_s), "kg/m", 1e-6, 1.0e4, 1, 0};
  * without stiffness */
 #define MIN_LAW_PRESSURE_PA 1e4
 
-static int say(char* why, size_t size, int status, const char* format, ...)
-{
-    if (why != NULL && size > 0) {
-        va_list args;
-        va_start(args, format);
-        vsnprintf(why, size, format, args);
-        va_end(args);
-    }
-    return status;
-}
-
 static int range_problem(const Range* r, const InPlaneRingData* d, char* why, size_t size)
 {
     double v = *(const double*)((const char*)d + r->offset);
@@ -82,7 +72,7 @@ static int range_problem(const Range* r, const InPlaneRingData* d, char* why, si
     if (isfinite(v) && !below && v <= r->high && (!r->integer || v == floor(v)))
         return INPLANE_RING_OK;
     const char* gap = r->unit[0] ? " " : "";
-    return say(why, size, INPLANE_RING_BAD_DATA, "%s = %g%s%s: allowed %s in %s%g, %g]%s%s",
+    return say_why(why, size, INPLANE_RING_BAD_DATA, "%s = %g%s%s: allowed %s in %s%g, %g]%s%s",
                r->name, v, gap, r->unit, r->integer ? "an integer" : "a finite number",
                r->low_inclusive ? "[" : "(", r->low, r->high, gap, r->unit);
 }
@@ -120,18 +110,18 @@ int inplane_ring_check(const InPlaneRingData* d, int n_elements, int n_fields,
                        double spin_rad_s, char* why, size_t size)
 {
     if (d == NULL)
-        return say(why, size, INPLANE_RING_NULL, "no tire data given");
+        return say_why(why, size, INPLANE_RING_NULL, "no tire data given");
     if (n_elements < INPLANE_RING_MIN_ELEMENTS || n_elements > INPLANE_RING_MAX_ELEMENTS)
-        return say(why, size, INPLANE_RING_BAD_ELEMENTS,
+        return say_why(why, size, INPLANE_RING_BAD_ELEMENTS,
                    "n_elements = %d: allowed an integer in [%d, %d] (the bending stencil needs "
                    "distinct neighbours two nodes away; larger meshes cost too much to build)",
                    n_elements, INPLANE_RING_MIN_ELEMENTS, INPLANE_RING_MAX_ELEMENTS);
     if (n_fields < INPLANE_RING_MASSLESS || n_fields > INPLANE_RING_LUMPED)
-        return say(why, size, INPLANE_RING_BAD_FIELDS,
+        return say_why(why, size, INPLANE_RING_BAD_FIELDS,
                    "n_fields = %d: allowed 2 (massless sidewall), 3 (tied) or 4 (lumped)",
                    n_fields);
     if (!isfinite(spin_rad_s))
-        return say(why, size, INPLANE_RING_BAD_SPIN,
+        return say_why(why, size, INPLANE_RING_BAD_SPIN,
                    "spin_rad_s = %g rad/s: allowed a finite number", spin_rad_s);
     for (size_t i = 0; i < sizeof RANGES / sizeof RANGES[0]; ++i) {
         int status = range_problem(&RANGES[i], d, why, size);
@@ -144,13 +134,13 @@ int inplane_ring_check(const InPlaneRingData* d, int n_elements, int n_fields,
             return status;
     }
     if (d->sidewall_pressure_exponent > 0.0 && d->inflation_pressure < MIN_LAW_PRESSURE_PA)
-        return say(why, size, INPLANE_RING_BAD_DATA,
+        return say_why(why, size, INPLANE_RING_BAD_DATA,
                    "inflation_pressure = %g Pa: allowed at least %g Pa, or "
                    "sidewall_pressure_exponent = 0 (with sidewall_pressure_exponent = %g the "
                    "pressure law would leave the sidewall almost without stiffness)",
                    d->inflation_pressure, MIN_LAW_PRESSURE_PA, d->sidewall_pressure_exponent);
     if (d->rim_radius_m >= d->R)
-        return say(why, size, INPLANE_RING_BAD_DATA,
+        return say_why(why, size, INPLANE_RING_BAD_DATA,
                    "rim_radius_m = %g m: allowed below the tread radius R = %g m (the sidewall "
                    "spans from the rim to the tread)",
                    d->rim_radius_m, d->R);
@@ -507,7 +497,7 @@ int inplane_ring_build(const InPlaneRingData* d, int n_elements, int n_fields,
     if (status)
         return status;
     if (mass == NULL || stiffness == NULL || damping == NULL || work == NULL)
-        return say(why, why_size, INPLANE_RING_NULL, "a matrix or the scratch memory is missing");
+        return say_why(why, why_size, INPLANE_RING_NULL, "a matrix or the scratch memory is missing");
 
     Ring g;
     int n = n_elements;

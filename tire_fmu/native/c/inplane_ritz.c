@@ -41,17 +41,6 @@
 #define JACOBI_SWEEPS 60
 #define POWER_STEPS 2000
 
-static int say(char* why, size_t size, int status, const char* format, ...)
-{
-    if (why != NULL && size > 0) {
-        va_list args;
-        va_start(args, format);
-        vsnprintf(why, size, format, args);
-        va_end(args);
-    }
-    return status;
-}
-
 static int valid_shape(int n, int nf, int nz)
 {
     return n >= 8 && n <= 1600 && nf >= 2 && nf <= MAX_FIELDS && nz >= 0 && nz <= n;
@@ -459,14 +448,14 @@ static int read_blocks(const Grid* g, const double* m, int which, double* col, c
     double top = 0.0;
     for (size_t i = 0; i < nd * nd; ++i) {
         if (!isfinite(m[i]))
-            return say(why, size, INPLANE_RITZ_BAD_MATRIX,
+            return say_why(why, size, INPLANE_RITZ_BAD_MATRIX,
                        "%s[%zu, %zu] = %g: allowed a finite number", matrix_name(which),
                        i / nd, i % nd, m[i]);
         if (fabs(m[i]) > top)
             top = fabs(m[i]);
     }
     if (!(top > 0.0))
-        return say(why, size, INPLANE_RITZ_BAD_MATRIX, "%s = 0: allowed a definite matrix",
+        return say_why(why, size, INPLANE_RITZ_BAD_MATRIX, "%s = 0: allowed a definite matrix",
                    matrix_name(which));
     double tol = INPLANE_RITZ_CIRCULANT_TOLERANCE * top;
     for (int a = 0; a < nf; ++a)
@@ -477,7 +466,7 @@ static int read_blocks(const Grid* g, const double* m, int which, double* col, c
                     size_t r0 = (size_t)a * n + lag, c0 = (size_t)b * n;
                     double here = m[r * nd + c], first = m[r0 * nd + c0], mirror = m[c * nd + r];
                     if (fabs(here - first) > tol || fabs(here - mirror) > tol)
-                        return say(why, size, INPLANE_RITZ_BAD_MATRIX,
+                        return say_why(why, size, INPLANE_RITZ_BAD_MATRIX,
                                    "%s[%zu, %zu] = %.17g: allowed symmetric circulant field "
                                    "blocks (within %g of the largest entry: %.17g at [%zu, "
                                    "%zu], %.17g at [%zu, %zu]): the ring at rest with the rim "
@@ -495,31 +484,31 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
                        char* why, size_t why_size)
 {
     if (n_elements < 8 || n_elements > 1600)
-        return say(why, why_size, INPLANE_RITZ_BAD_SHAPE,
+        return say_why(why, why_size, INPLANE_RITZ_BAD_SHAPE,
                    "n_elements = %d: allowed an integer in [8, 1600]", n_elements);
     if (n_fields < 2 || n_fields > MAX_FIELDS)
-        return say(why, why_size, INPLANE_RITZ_BAD_SHAPE,
+        return say_why(why, why_size, INPLANE_RITZ_BAD_SHAPE,
                    "n_fields = %d: allowed 2 (massless sidewall), 3 (tied) or 4 (lumped)",
                    n_fields);
     if (n_zone < 0 || n_zone > n_elements)
-        return say(why, why_size, INPLANE_RITZ_BAD_SHAPE,
+        return say_why(why, why_size, INPLANE_RITZ_BAD_SHAPE,
                    "n_zone = %d: allowed an integer in [0, n_elements = %d]", n_zone,
                    n_elements);
     if (!(isfinite(f_max_hz) && f_max_hz >= INPLANE_RITZ_MIN_F_MAX_HZ
           && f_max_hz <= INPLANE_RITZ_MAX_F_MAX_HZ))
-        return say(why, why_size, INPLANE_RITZ_BAD_F_MAX,
+        return say_why(why, why_size, INPLANE_RITZ_BAD_F_MAX,
                    "f_max_hz = %g Hz: allowed a finite number in [%g, %g] Hz", f_max_hz,
                    INPLANE_RITZ_MIN_F_MAX_HZ, INPLANE_RITZ_MAX_F_MAX_HZ);
     if (max_columns < 0)
-        return say(why, why_size, INPLANE_RITZ_BAD_SHAPE,
+        return say_why(why, why_size, INPLANE_RITZ_BAD_SHAPE,
                    "max_columns = %d: allowed an integer >= 0", max_columns);
     if (mass == NULL || stiffness == NULL || basis == NULL || n_columns == NULL || work == NULL
         || (n_zone > 0 && zone_nodes == NULL))
-        return say(why, why_size, INPLANE_RITZ_NULL,
+        return say_why(why, why_size, INPLANE_RITZ_NULL,
                    "a matrix, the zone nodes, the basis, n_columns or the scratch is missing");
     for (int i = 0; i < n_zone; ++i)
         if (zone_nodes[i] < 0 || zone_nodes[i] >= n_elements)
-            return say(why, why_size, INPLANE_RITZ_BAD_ZONE,
+            return say_why(why, why_size, INPLANE_RITZ_BAD_ZONE,
                        "zone_nodes[%d] = %d: allowed a node in [0, %d]", i, zone_nodes[i],
                        n_elements - 1);
 
@@ -575,10 +564,10 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
         order_block(&g, colK, order, kh);
         memcpy(a, kh, sizeof kh);
         if (cx_cholesky(mh, nf))
-            return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
+            return say_why(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "mass: allowed a positive definite matrix (not so in order %d)", order);
         if (cx_cholesky(kh, nf)) /* the rim is held: K is definite */
-            return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
+            return say_why(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "stiffness: allowed a positive definite matrix, the rim held (not so in "
                        "order %d)", order);
         memcpy(chol + (size_t)order * 2 * nf * nf, kh, (size_t)nf * nf * sizeof *kh);
@@ -874,7 +863,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
     double threshold = INPLANE_RITZ_RCOND * sqrt(s_max2), mu = threshold * threshold;
     for (int i = 0; i < r_m; ++i)
         if (!(D[i] > 2.0 * threshold))
-            return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
+            return say_why(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "mass: allowed masses within 1e20 of each other (a mode's norm %g is "
                        "below %g times the basis's largest singular value)", D[i],
                        2.0 * INPLANE_RITZ_RCOND);
@@ -899,7 +888,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
             for (int b = 0; b < a; ++b)
                 L[(size_t)b * p + a] = L[(size_t)a * p + b];
         if (cholesky(L, p))
-            return say(why, why_size, INPLANE_RITZ_BAD_MATRIX,
+            return say_why(why, why_size, INPLANE_RITZ_BAD_MATRIX,
                        "stiffness: allowed a ring whose static shapes are finite");
         for (int i = 0; i < p; ++i) { /* row i of W: L w = row i of R */
             double* w = W + (size_t)i * p;
@@ -955,7 +944,7 @@ int inplane_ritz_build(const double* mass, const double* stiffness, int n_elemen
 
     int total = r_m + kept_static;
     if (total > max_columns)
-        return say(why, why_size, INPLANE_RITZ_TOO_MANY,
+        return say_why(why, why_size, INPLANE_RITZ_TOO_MANY,
                    "max_columns = %d: allowed at least the basis's %d columns (%d modes up to "
                    "%g Hz and %d static shapes)", max_columns, total, r_m, f_max_hz,
                    kept_static);

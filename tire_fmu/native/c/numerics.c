@@ -1,4 +1,6 @@
 /* numerics.c: complex arithmetic, dense eigenproblems, small dense solves, brentq, repr. */
+#include <stdarg.h>
+#include <stdio.h>
 #include "numerics.h"
 
 #include <float.h>
@@ -798,4 +800,15 @@ void value_text(double x, const char* unit, char* text, size_t size)
     } else {
         snprintf(text, size, "%s", buffer);
     }
+}
+
+int say_why(char* why, size_t size, int status, const char* format, ...)
+{
+    if (why != NULL && size > 0) {
+        va_list args;
+        va_start(args, format);
+        vsnprintf(why, size, format, args);
+        va_end(args);
+    }
+    return status;
 }

@@ -83,4 +83,8 @@ void value_text(double x, const char* unit, char* text, size_t size);
 #define FNV_OFFSET UINT64_C(14695981039346656037)
 uint64_t fnv1a(uint64_t hash, const unsigned char* bytes, size_t count);
 
+/* A builder's refusal: the sentence (printf's format) into why, at most size bytes (nothing
+ * when why is NULL), and status returned, so that `return say_why(why, size, 3, ...)` refuses
+ * in one line. */
+int say_why(char* why, size_t size, int status, const char* format, ...);
 #endif
