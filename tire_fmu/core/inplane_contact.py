@@ -574,7 +574,9 @@ class InPlaneSimulator:
         if offset or share:
             b0 += self._spin_correction(y, yd, ydd, offset, share)
         pen_const = self._pen0 + height * self._sec
-        if contact.any():  # the runs' ends (carry_edges); their edges from the step's start
+        # the runs' ends (carry_edges): the edges of the ring as it starts the step on the
+        # road as it ends it (explicit in the ring, as the carry is)
+        if contact.any():
             delta = np.maximum(entering_fractions(pen_const + self._jn @ y, contact),
                                self._carry_shift)
             e_conv += carry_edges(e, contact, stick, self._carry_base,

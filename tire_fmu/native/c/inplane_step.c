@@ -262,7 +262,7 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
         pen_const[i] = d->pen0[i] + height[i] * d->sec[i];
         any_contact |= s->contact[i];
     }
-    if (any_contact) { /* the field's ends, their edges from the step's start */
+    if (any_contact) { /* the field's ends: the ring at the step's start on its end's road */
         double *pen_start = rhs + 2 * p + 3 * ny, *delta = pen_start + p;
         matvec(d->jn, s->y, p, ny, pen_start);
         for (int i = 0; i < p; ++i) pen_start[i] += pen_const[i];
