@@ -36,7 +36,7 @@ static int sizes_ok(int ny, int np)
 size_t inplane_build_work_doubles(int ny, int np)
 {
     if (!sizes_ok(ny, np)) return 0;
-    return (size_t)ny * (size_t)ny + (size_t)ny;
+    return (size_t)ny * (size_t)ny + (size_t)ny * (size_t)np;
 }
 
 size_t inplane_build_work_ints(int ny)
@@ -146,35 +146,195 @@ static double share_at(double spin_rad_s, double radius_m)
     return share > 1.0 ? 1.0 : (share < -1.0 ? -1.0 : share);
 }
 
-/* out (rows x cols) = a (rows x inner) b (inner x cols) */
-static void product(const double* a, const double* b, int rows, int inner, int cols,
-                    double* out)
+/* c (rows x cols, row stride ldc) += sign a b, a (rows x inner, lda), b (inner x cols, ldb):
+ * four rows of c and two of b at a time, so that each entry of b read serves eight products
+ * (the plain loop reads one entry of b and one of c for each: memory-bound) */
+static void multiply_add_tile(int rows, int inner, int cols, double sign, const double* a,
+                              size_t lda, const double* b, size_t ldb, double* c, size_t ldc)
 {
-    int i, k, j;
-    for (i = 0; i < rows; i++) {
-        double* row = out + (size_t)i * cols;
-        for (j = 0; j < cols; j++) row[j] = 0.0;
+    int i = 0, k, j;
+    for (; i + 4 <= rows; i += 4) {
+        double *c0 = c + (size_t)i * ldc, *c1 = c0 + ldc, *c2 = c1 + ldc, *c3 = c2 + ldc;
+        const double* ai = a + (size_t)i * lda;
+        for (k = 0; k + 2 <= inner; k += 2) {
+            const double *b0 = b + (size_t)k * ldb, *b1 = b0 + ldb;
+            double a00 = sign * ai[k], a01 = sign * ai[k + 1];
+            double a10 = sign * ai[lda + k], a11 = sign * ai[lda + k + 1];
+            double a20 = sign * ai[2 * lda + k], a21 = sign * ai[2 * lda + k + 1];
+            double a30 = sign * ai[3 * lda + k], a31 = sign * ai[3 * lda + k + 1];
+            for (j = 0; j < cols; j++) {
+                double x = b0[j], y = b1[j];
+                c0[j] += a00 * x + a01 * y;
+                c1[j] += a10 * x + a11 * y;
+                c2[j] += a20 * x + a21 * y;
+                c3[j] += a30 * x + a31 * y;
+            }
+        }
+        for (; k < inner; k++) {
+            const double* b0 = b + (size_t)k * ldb;
+            double a0 = sign * ai[k], a1 = sign * ai[lda + k];
+            double a2 = sign * ai[2 * lda + k], a3 = sign * ai[3 * lda + k];
+            for (j = 0; j < cols; j++) {
+                double x = b0[j];
+                c0[j] += a0 * x;
+                c1[j] += a1 * x;
+                c2[j] += a2 * x;
+                c3[j] += a3 * x;
+            }
+        }
+    }
+    for (; i < rows; i++) {
+        double* ci = c + (size_t)i * ldc;
         for (k = 0; k < inner; k++) {
-            double aik = a[(size_t)i * inner + k];
-            const double* bk = b + (size_t)k * cols;
-            if (aik == 0.0) continue;
-            for (j = 0; j < cols; j++) row[j] += aik * bk[j];
+            const double* b0 = b + (size_t)k * ldb;
+            double a0 = sign * a[(size_t)i * lda + k];
+            for (j = 0; j < cols; j++) ci[j] += a0 * b0[j];
         }
     }
 }
 
-/* out (rows x cols) = a (rows x inner) b^T, b (cols x inner) */
-static void product_t(const double* a, const double* b, int rows, int inner, int cols,
-                      double* out)
+/* multiply_add_tile over chunks of CHUNK columns: a chunk of b's rows stays in the cache
+ * while every block of four rows of c reads it (a whole row of b would be read again from
+ * memory for each) */
+#ifndef CHUNK
+#define CHUNK 64
+#endif
+static void multiply_add(int rows, int inner, int cols, double sign, const double* a,
+                         size_t lda, const double* b, size_t ldb, double* c, size_t ldc)
 {
-    int i, k, j;
-    for (i = 0; i < rows; i++) {
-        const double* ai = a + (size_t)i * inner;
-        for (j = 0; j < cols; j++) {
-            const double* bj = b + (size_t)j * inner;
-            double sum = 0.0;
-            for (k = 0; k < inner; k++) sum += ai[k] * bj[k];
-            out[(size_t)i * cols + j] = sum;
+    int j;
+    for (j = 0; j < cols; j += CHUNK)
+        multiply_add_tile(rows, inner, cols - j < CHUNK ? cols - j : CHUNK, sign, a, lda,
+                          b + j, ldb, c + j, ldc);
+}
+
+/* out (rows x cols) = a (rows x inner) b (inner x cols) */
+static void product(const double* a, const double* b, int rows, int inner, int cols,
+                    double* out)
+{
+    memset(out, 0, sizeof(double) * (size_t)rows * (size_t)cols);
+    multiply_add(rows, inner, cols, 1.0, a, (size_t)inner, b, (size_t)cols, out,
+                 (size_t)cols);
+}
+
+/* out (rows x cols) = a (rows x inner) b^T, b (cols x inner); scratch: inner x cols */
+static void product_t(const double* a, const double* b, int rows, int inner, int cols,
+                      double* out, double* scratch)
+{
+    int j, k;
+    for (j = 0; j < cols; j++)
+        for (k = 0; k < inner; k++) scratch[(size_t)k * cols + j] = b[(size_t)j * inner + k];
+    product(a, scratch, rows, inner, cols, out);
+}
+
+/* numerics.c's lu_factor (the same partial pivoting: the largest |entry| of the column, whole
+ * rows swapped; -1 for a zero or non-finite pivot) in panels of LU_PANEL columns: the rest of
+ * the matrix is updated once per panel by one multiply_add, not once per column. */
+#define LU_PANEL 16
+static int blocked_lu(double* a, int n, int* pivot)
+{
+    int first, col, i, j, k;
+    for (first = 0; first < n; first += LU_PANEL) {
+        int last = first + LU_PANEL < n ? first + LU_PANEL : n; /* the panel: [first, last) */
+        for (col = first; col < last; col++) {
+            int best = col;
+            double big = fabs(a[(size_t)col * n + col]);
+            for (i = col + 1; i < n; i++) {
+                if (fabs(a[(size_t)i * n + col]) > big) {
+                    big = fabs(a[(size_t)i * n + col]);
+                    best = i;
+                }
+            }
+            pivot[col] = best;
+            if (big == 0.0 || !isfinite(big)) return -1;
+            if (best != col) {
+                for (j = 0; j < n; j++) {
+                    double t = a[(size_t)col * n + j];
+                    a[(size_t)col * n + j] = a[(size_t)best * n + j];
+                    a[(size_t)best * n + j] = t;
+                }
+            }
+            for (i = col + 1; i < n; i++) {
+                double* ai = a + (size_t)i * n;
+                double factor = ai[col] / a[(size_t)col * n + col];
+                ai[col] = factor;
+                if (factor == 0.0) continue;
+                for (j = col + 1; j < last; j++) ai[j] -= factor * a[(size_t)col * n + j];
+            }
+        }
+        if (last == n) break;
+        /* the panel's rows right of it: U12 = L11^-1 A12 */
+        for (i = first + 1; i < last; i++) {
+            double* ai = a + (size_t)i * n;
+            for (k = first; k < i; k++) {
+                double l = ai[k];
+                const double* ak = a + (size_t)k * n;
+                if (l == 0.0) continue;
+                for (j = last; j < n; j++) ai[j] -= l * ak[j];
+            }
+        }
+        multiply_add(n - last, last - first, n - last, -1.0, a + (size_t)last * n + first,
+                     (size_t)n, a + (size_t)first * n + last, (size_t)n,
+                     a + (size_t)last * n + last, (size_t)n);
+    }
+    return 0;
+}
+
+/* The inverse of the matrix blocked_lu left in lu (n x n) with its pivots, into x, CHUNK
+ * columns at a time (the columns of the solves are independent, and a chunk of x stays in
+ * the cache through them): L^-1, then U x = L^-1, both in blocks of four rows (the rows before
+ * or after a block enter it by one multiply_add_tile), then the columns swapped back, last
+ * pivot first (LAPACK's getri: P A = L U, so A^-1 = U^-1 L^-1 P). */
+static void inverse_from_lu(const double* lu, int n, const int* pivot, double* x)
+{
+    int i, j, k, top, first, c0;
+    memset(x, 0, sizeof(double) * (size_t)n * (size_t)n);
+    for (c0 = 0; c0 < n; c0 += CHUNK) {
+        int width = n - c0 < CHUNK ? n - c0 : CHUNK;
+        double* xc = x + c0; /* the chunk's columns */
+        for (i = c0; i < c0 + width; i++) xc[(size_t)i * n + (i - c0)] = 1.0;
+        /* L^-1 is unit lower triangular: its rows above c0 are zero in the chunk */
+        for (first = c0; first < n; first += 4) {
+            int last = first + 4 < n ? first + 4 : n;
+            if (first > c0)
+                multiply_add_tile(last - first, first - c0, width, -1.0,
+                                  lu + (size_t)first * n + c0, (size_t)n, xc + (size_t)c0 * n,
+                                  (size_t)n, xc + (size_t)first * n, (size_t)n);
+            for (i = first + 1; i < last; i++) {
+                double* xi = xc + (size_t)i * n;
+                for (k = first; k < i; k++) {
+                    double l = lu[(size_t)i * n + k];
+                    const double* xk = xc + (size_t)k * n;
+                    for (j = 0; j < width; j++) xi[j] -= l * xk[j];
+                }
+            }
+        }
+        for (top = n; top > 0;) {
+            first = top >= 4 ? top - 4 : 0;
+            if (top < n)
+                multiply_add_tile(top - first, n - top, width, -1.0,
+                                  lu + (size_t)first * n + top, (size_t)n, xc + (size_t)top * n,
+                                  (size_t)n, xc + (size_t)first * n, (size_t)n);
+            for (i = top - 1; i >= first; i--) {
+                double* xi = xc + (size_t)i * n;
+                double d = lu[(size_t)i * n + i];
+                for (k = i + 1; k < top; k++) {
+                    double u = lu[(size_t)i * n + k];
+                    const double* xk = xc + (size_t)k * n;
+                    for (j = 0; j < width; j++) xi[j] -= u * xk[j];
+                }
+                for (j = 0; j < width; j++) xi[j] /= d;
+            }
+            top = first;
+        }
+    }
+    for (k = n - 1; k >= 0; k--) {
+        int other = pivot[k];
+        if (other == k) continue;
+        for (i = 0; i < n; i++) {
+            double t = x[(size_t)i * n + k];
+            x[(size_t)i * n + k] = x[(size_t)i * n + other];
+            x[(size_t)i * n + other] = t;
         }
     }
 }
@@ -183,14 +343,14 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
                        double* work, int* iwork, char* why, size_t why_size)
 {
     int status = check_ring(in, spin_rad_s, out, work, iwork, why, why_size);
-    int ny, np, i, j, p;
+    int ny, np, j, p;
     size_t n2, e;
     double o = spin_rad_s, h, share, s_m, s_c, two_o, half_h, two_h;
-    double* column;
+    double* scratch;
     if (status) return status;
     ny = in->ny, np = in->np, h = in->h;
     n2 = (size_t)ny * (size_t)ny;
-    column = work + n2;
+    scratch = work + n2;
     share = in->hysteretic ? share_at(o, in->radius_m) : 0.0;
     s_m = 4.0 / (h * h), s_c = 2.0 / h, two_o = 2.0 * o;
     /* a0 first, into the scratch: nothing is written until it factors */
@@ -200,7 +360,7 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
         if (share != 0.0) k = k + share * in->kh[e];
         work[e] = s_m * in->m[e] + s_c * c + k;
     }
-    if (lu_factor(work, ny, iwork) != 0)
+    if (blocked_lu(work, ny, iwork) != 0)
         return say(why, why_size, INPLANE_BUILD_SINGULAR,
                    "spin_rad_s = %.17g: 4/h^2 M + 2/h C + K is singular at this spin (h = "
                    "%.17g s)", o, h);
@@ -213,15 +373,11 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
         out->k2[e] = in->k2[e];
         out->kh[e] = in->kh[e];
     }
-    for (j = 0; j < ny; j++) {
-        for (i = 0; i < ny; i++) column[i] = i == j ? 1.0 : 0.0;
-        lu_solve(work, ny, iwork, column);
-        for (i = 0; i < ny; i++) out->a0_inv[(size_t)i * ny + j] = column[i];
-    }
+    inverse_from_lu(work, ny, iwork, out->a0_inv);
     out->ring_spin = o;
     out->ring_share = share;
-    product_t(out->a0_inv, in->jnw, ny, ny, np, out->yn);
-    product_t(out->a0_inv, in->jxw, ny, ny, np, out->yx);
+    product_t(out->a0_inv, in->jnw, ny, ny, np, out->yn, scratch);
+    product_t(out->a0_inv, in->jxw, ny, ny, np, out->yx, scratch);
     product(in->jn, out->yn, np, ny, np, out->wnn);
     product(in->jn, out->yx, np, ny, np, out->wnx);
     half_h = 0.5 * h, two_h = 2.0 / h;
