@@ -11,12 +11,14 @@ from __future__ import annotations
 import ctypes
 import functools
 import math
+import re
 
 import numpy as np
 import pytest
 
 from tire_fmu.core.inplane import HYSTERESIS_FULL_SPEED_M_S, InPlaneTire
 from tire_fmu.core.inplane_contact import InPlaneSimulator
+from tire_fmu.core.parameters import ParameterError
 from tire_fmu.native.inplane_build import (
     InPlaneBuildInput,
     _declare,
@@ -258,3 +260,39 @@ def test_the_wrapper_raises_the_cs_sentence():
     sim = simulator(50, 0.01, "held")
     with pytest.raises(ValueError, match="spin_rad_s = nan"):
         c_step_matrices(sim, math.nan)
+
+
+def header_value(name: str) -> float:
+    from importlib import resources
+
+    text = (resources.files("tire_fmu.native") / "c" / "inplane_build.h").read_text()
+    match = re.search(rf"#define {name} (\S+)", text)
+    assert match, name
+    return float(match.group(1))
+
+
+def test_the_headers_step_range_is_the_simulators():
+    """The C refuses the steps the simulator refuses and takes the ones it takes."""
+    low, high = header_value("INPLANE_BUILD_MIN_STEP_S"), header_value("INPLANE_BUILD_MAX_STEP_S")
+    for step in (np.nextafter(low, 0.0), np.nextafter(high, 1.0)):
+        with pytest.raises(ParameterError, match="step_s"):
+            InPlaneSimulator(InPlaneTire(), 50, 5.0, DEFLECTION_M, step_s=float(step),
+                             f_max_hz=300.0)
+    for step in (low, high):
+        sim = InPlaneSimulator(InPlaneTire(), 50, 5.0, DEFLECTION_M, step_s=step,
+                               f_max_hz=300.0, wheel="held")
+        assert worst(c_step_matrices(sim, sim.spin_rad_s)["a0_inv"], sim._a0_inv) \
+            <= inverse_tolerance(sim)
+        outside = float(np.nextafter(step, 0.0 if step == low else 1.0))
+        status, why, _, untouched, _ = raw_call(sim, 1.0, set_field("h", outside))
+        assert status == 2 and untouched, why
+
+
+def test_the_scratch_sizes_refuse_sizes_out_of_range():
+    lib = load_library()
+    _declare(lib)
+    assert lib.inplane_build_work_doubles(0, 10) == 0
+    assert lib.inplane_build_work_doubles(10, 1) == 0
+    assert lib.inplane_build_work_doubles(8193, 10) == 0
+    assert lib.inplane_build_work_ints(0) == 0
+    assert lib.inplane_build_work_doubles(10, 3) == 10 * 10 + 10 * 3
