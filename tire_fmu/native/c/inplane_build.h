@@ -61,7 +61,8 @@ typedef struct {
     double carry_shift, spin_now;
 } InPlaneBuildOutput;
 
-/* Scratch of inplane_build_ring: doubles and ints; 0 for sizes out of range. */
+/* Scratch of inplane_build_ring (and inplane_build): ny^2 + ny np doubles (the LU, a
+ * transposed Jacobian) and ny ints (the pivots); 0 for sizes out of range. */
 size_t inplane_build_work_doubles(int ny, int np);
 size_t inplane_build_work_ints(int ny);
 
