@@ -19,7 +19,6 @@ import ctypes
 import os
 import statistics
 import sys
-import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -27,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np  # noqa: E402
 
+from benchmarks.record import timed  # noqa: E402
 from tire_fmu.core.inplane import InPlaneTire  # noqa: E402
 from tire_fmu.core.inplane_contact import InPlaneSimulator  # noqa: E402
 from tire_fmu.native.inplane_build import (  # noqa: E402
@@ -39,12 +39,6 @@ from tire_fmu.native.inplane_build import (  # noqa: E402
 from tire_fmu.native.kernel import load_library  # noqa: E402
 
 SPEED_M_S = 5.0
-
-
-def _timed(function, *args):
-    start = time.perf_counter()
-    function(*args)
-    return time.perf_counter() - start
 
 
 def _worst(sim, spin) -> float:
@@ -92,9 +86,9 @@ def main() -> None:
         call, data = _prepared_call(lib, sim, spin)
         times = {"python": [], "c": [], "wrapper": []}
         for _ in range(args.rounds):
-            times["python"].append(_timed(sim._set_spin, spin, SPEED_M_S))
-            times["c"].append(_timed(call))
-            times["wrapper"].append(_timed(c_step_matrices, sim, spin, lib))
+            times["python"].append(timed(sim._set_spin, spin, SPEED_M_S)[0])
+            times["c"].append(timed(call)[0])
+            times["wrapper"].append(timed(c_step_matrices, sim, spin, lib)[0])
         python, c, wrapper = (1e3 * statistics.median(times[k]) for k in times)
         print(f"{n:4d} {data.ny:4d} {data.np:4d} {python:9.2f} {c:9.2f} {wrapper:10.2f} "
               f"{python / c:9.2f} {_worst(sim, spin):9.1e}")

@@ -19,28 +19,17 @@ import math
 import os
 import statistics
 import sys
-import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tire_fmu.core.inplane import InPlaneTire  # noqa: E402
+from benchmarks.record import sidewall_tires, timed  # noqa: E402
 from tire_fmu.core.inplane_modes import critical_speed  # noqa: E402
 from tire_fmu.native.inplane_critical import c_critical_speed  # noqa: E402
 from tire_fmu.native.kernel import load_library  # noqa: E402
 
-TIRES = {
-    "tied": InPlaneTire(),
-    "lumped": InPlaneTire(sidewall_tangential="lumped"),
-    "massless": InPlaneTire(sidewall_mass=False),
-}
-
-
-def _timed(function, *args):
-    start = time.perf_counter()
-    result = function(*args)
-    return time.perf_counter() - start, result
+TIRES = sidewall_tires()
 
 
 def main() -> None:
@@ -56,9 +45,9 @@ def main() -> None:
         for name, model in TIRES.items():
             times = {"python": [], "c": []}
             for _ in range(args.rounds):
-                seconds, python = _timed(critical_speed, model, n)
+                seconds, python = timed(critical_speed, model, n)
                 times["python"].append(seconds)
-                seconds, built = _timed(c_critical_speed, model, n, library)
+                seconds, built = timed(c_critical_speed, model, n, library)
                 times["c"].append(seconds)
             median = {key: statistics.median(values) for key, values in times.items()}
             apart = (built.spin_rad_s / python.spin_rad_s - 1.0

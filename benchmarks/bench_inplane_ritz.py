@@ -18,7 +18,6 @@ import argparse
 import os
 import statistics
 import sys
-import time
 from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -27,25 +26,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import numpy as np  # noqa: E402
 import scipy.linalg  # noqa: E402
 
+from benchmarks.record import sidewall_tires, timed  # noqa: E402
 from tire_fmu.core.contact import contact_zone  # noqa: E402
 from tire_fmu.core.discretisation import Grid  # noqa: E402
-from tire_fmu.core.inplane import InPlaneTire  # noqa: E402
 from tire_fmu.core.inplane_contact import ritz_basis  # noqa: E402
 from tire_fmu.native.inplane_ring import c_inplane_ring, n_fields  # noqa: E402
 from tire_fmu.native.inplane_ritz import c_ritz_basis, c_ritz_basis_of  # noqa: E402
 from tire_fmu.native.kernel import load_library  # noqa: E402
 
-TIRES = {
-    "tied": InPlaneTire(),
-    "lumped": InPlaneTire(sidewall_tangential="lumped"),
-    "massless": InPlaneTire(sidewall_mass=False),
-}
-
-
-def _timed(function, *args):
-    start = time.perf_counter()
-    result = function(*args)
-    return time.perf_counter() - start, result
+TIRES = sidewall_tires()
 
 
 def main() -> None:
@@ -66,11 +55,11 @@ def main() -> None:
             mass, stiffness, _ = c_inplane_ring(model, n, library=library)
             times = {"python": [], "whole": [], "basis": []}
             for _ in range(args.rounds):
-                seconds, python = _timed(ritz_basis, model, n, zone, args.f_max)
+                seconds, python = timed(ritz_basis, model, n, zone, args.f_max)
                 times["python"].append(seconds)
-                seconds, built = _timed(c_ritz_basis, model, n, zone, args.f_max, library)
+                seconds, built = timed(c_ritz_basis, model, n, zone, args.f_max, library)
                 times["whole"].append(seconds)
-                seconds, _ = _timed(c_ritz_basis_of, mass, stiffness, n, n_fields(model), zone,
+                seconds, _ = timed(c_ritz_basis_of, mass, stiffness, n, n_fields(model), zone,
                                     args.f_max, library)
                 times["basis"].append(seconds)
             median = {key: statistics.median(values) for key, values in times.items()}

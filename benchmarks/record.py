@@ -14,6 +14,7 @@ import os
 import platform
 import shlex
 import sys
+import time
 from pathlib import Path
 
 
@@ -52,3 +53,18 @@ def write_record(path: str | Path, results: dict, load_at_start: float | None) -
     path.write_text(json.dumps(record, indent=1, sort_keys=False) + "\n")
     print(f"recorded {path}", file=sys.stderr)
     return path
+
+
+def timed(function, *args):
+    """(seconds, result) of one call: the C bricks' benchmarks time the Python and the C alike."""
+    start = time.perf_counter()
+    result = function(*args)
+    return time.perf_counter() - start, result
+
+
+def sidewall_tires() -> dict:
+    """The in-plane tire with each sidewall model, the C bricks' benchmark cases."""
+    from tire_fmu.core.inplane import InPlaneTire
+
+    return {"tied": InPlaneTire(), "lumped": InPlaneTire(sidewall_tangential="lumped"),
+            "massless": InPlaneTire(sidewall_mass=False)}

@@ -17,17 +17,6 @@
  * (a step moves the tread by far less than one spacing in any use). */
 #define MAX_SHIFT_SPACINGS 1e6
 
-static int say(char* why, size_t size, int status, const char* format, ...)
-{
-    if (why != NULL && size > 0) {
-        va_list args;
-        va_start(args, format);
-        vsnprintf(why, size, format, args);
-        va_end(args);
-    }
-    return status;
-}
-
 static int sizes_ok(int ny, int np)
 {
     return ny >= 1 && ny <= INPLANE_BUILD_MAX_NY && np >= 2 && np <= INPLANE_BUILD_MAX_NP;
@@ -53,7 +42,7 @@ static int finite_entries(const char* name, const double* a, int rows, int cols,
         if (!isfinite(a[i])) {
             char text[40];
             value_text(a[i], "", text, sizeof text);
-            return say(why, size, INPLANE_BUILD_BAD_INPUT,
+            return say_why(why, size, INPLANE_BUILD_BAD_INPUT,
                        "%s[%d, %d] = %s: the entries must be finite", name,
                        (int)(i / (size_t)cols), (int)(i % (size_t)cols), text);
         }
@@ -69,32 +58,32 @@ static int check_common(const InPlaneBuildInput* in, double spin, const void* ou
     int status, p;
     double spacing;
     if (in == NULL || out == NULL)
-        return say(why, size, INPLANE_BUILD_NULL, "the input and the output must be given");
+        return say_why(why, size, INPLANE_BUILD_NULL, "the input and the output must be given");
     if (!sizes_ok(in->ny, in->np))
-        return say(why, size, INPLANE_BUILD_BAD_SIZE,
+        return say_why(why, size, INPLANE_BUILD_BAD_SIZE,
                    "ny = %d, np = %d: the coordinates must number 1 to %d and the contact "
                    "points 2 to %d", in->ny, in->np, INPLANE_BUILD_MAX_NY,
                    INPLANE_BUILD_MAX_NP);
     if (!(isfinite(in->h) && in->h >= INPLANE_BUILD_MIN_STEP_S
           && in->h <= INPLANE_BUILD_MAX_STEP_S)) {
         value_text(in->h, "s", text, sizeof text);
-        return say(why, size, INPLANE_BUILD_BAD_STEP, "h = %s: the step must be in [%g, %g] s",
+        return say_why(why, size, INPLANE_BUILD_BAD_STEP, "h = %s: the step must be in [%g, %g] s",
                    text, INPLANE_BUILD_MIN_STEP_S, INPLANE_BUILD_MAX_STEP_S);
     }
     if (in->point_theta == NULL || in->jxw == NULL || in->jl == NULL)
-        return say(why, size, INPLANE_BUILD_NULL, "point_theta, jxw and jl must be given");
+        return say_why(why, size, INPLANE_BUILD_NULL, "point_theta, jxw and jl must be given");
     if ((status = finite_entries("point_theta", in->point_theta, 1, in->np, why, size)))
         return status;
     for (p = 1; p < in->np; p++) {
         if (!(in->point_theta[p] > in->point_theta[p - 1]))
-            return say(why, size, INPLANE_BUILD_BAD_INPUT,
+            return say_why(why, size, INPLANE_BUILD_BAD_INPUT,
                        "point_theta[%d] = %.17g after %.17g: the points' angles must increase",
                        p, in->point_theta[p], in->point_theta[p - 1]);
     }
     spacing = (in->point_theta[in->np - 1] - in->point_theta[0]) / (in->np - 1);
     if (!(isfinite(spin) && fabs(spin) * in->h <= MAX_SHIFT_SPACINGS * spacing)) {
         value_text(spin, "rad/s", text, sizeof text);
-        return say(why, size, INPLANE_BUILD_BAD_SPIN,
+        return say_why(why, size, INPLANE_BUILD_BAD_SPIN,
                    "spin_rad_s = %s: the spin must be finite and turn the tread by at most "
                    "%g point spacings a step (|spin| <= %.6g rad/s here)", text,
                    MAX_SHIFT_SPACINGS, MAX_SHIFT_SPACINGS * spacing / in->h);
@@ -117,14 +106,14 @@ static int check_ring(const InPlaneBuildInput* in, double spin, const InPlaneBui
         int rows = i < 7 ? in->ny : (i < 9 ? in->np : 1);
         int cols = i < 7 ? in->ny : (i < 9 ? in->ny : in->np);
         if (arrays[i] == NULL)
-            return say(why, size, INPLANE_BUILD_NULL, "%s must be given", names[i]);
+            return say_why(why, size, INPLANE_BUILD_NULL, "%s must be given", names[i]);
         if ((status = finite_entries(names[i], arrays[i], rows, cols, why, size)))
             return status;
     }
     if (in->hysteretic && !(isfinite(in->radius_m) && in->radius_m > 0.0)) {
         char text[40];
         value_text(in->radius_m, "m", text, sizeof text);
-        return say(why, size, INPLANE_BUILD_BAD_INPUT,
+        return say_why(why, size, INPLANE_BUILD_BAD_INPUT,
                    "radius_m = %s: a hysteretic tire's radius must be finite and positive",
                    text);
     }
@@ -133,7 +122,7 @@ static int check_ring(const InPlaneBuildInput* in, double spin, const InPlaneBui
         || out->yn == NULL || out->yx == NULL || out->wnn == NULL || out->wnx == NULL
         || out->kg_a == NULL || out->kg_b == NULL || out->kgn_a == NULL || out->kgn_b == NULL
         || out->kgx_a == NULL || out->kgx_b == NULL)
-        return say(why, size, INPLANE_BUILD_NULL,
+        return say_why(why, size, INPLANE_BUILD_NULL,
                    "the scratch and every output of the ring's part must be given");
     return 0;
 }
@@ -361,7 +350,7 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
         work[e] = s_m * in->m[e] + s_c * c + k;
     }
     if (blocked_lu(work, ny, iwork) != 0)
-        return say(why, why_size, INPLANE_BUILD_SINGULAR,
+        return say_why(why, why_size, INPLANE_BUILD_SINGULAR,
                    "spin_rad_s = %.17g: 4/h^2 M + 2/h C + K is singular at this spin (h = "
                    "%.17g s)", o, h);
     for (e = 0; e < n2; e++) {
@@ -408,7 +397,7 @@ int inplane_build_tread(const InPlaneBuildInput* in, double spin_rad_s, InPlaneB
         || out->kgx_a == NULL || out->kgx_b == NULL || out->gain == NULL || out->kg == NULL
         || out->kgn == NULL || out->kgx == NULL || out->carry == NULL
         || out->carry_weights == NULL || out->carry_base == NULL)
-        return say(why, why_size, INPLANE_BUILD_NULL,
+        return say_why(why, why_size, INPLANE_BUILD_NULL,
                    "the ring's kg parts and every output of the tread's part must be given");
     ny = in->ny, np = in->np, h = in->h;
     gain_scale = 0.5 * h * o;
@@ -456,7 +445,7 @@ int inplane_build(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBuildOu
     if (status) return status;
     if (out->gain == NULL || out->kg == NULL || out->kgn == NULL || out->kgx == NULL
         || out->carry == NULL || out->carry_weights == NULL || out->carry_base == NULL)
-        return say(why, why_size, INPLANE_BUILD_NULL,
+        return say_why(why, why_size, INPLANE_BUILD_NULL,
                    "every output of the tread's part must be given");
     status = inplane_build_ring(in, spin_rad_s, out, work, iwork, why, why_size);
     if (status) return status;
