@@ -1,10 +1,16 @@
 /* inplane_static.c: the in-plane tire's static footprint (see inplane_static.h).
  *
- * Each pass assembles K + Jn_A^T diag(kn_A) Jn_A and solves it by LU with partial pivoting
- * (numerics.c), as the core's np.linalg.solve does; the products are taken in the core's order
- * (jn_a (kn jn_c)) so that the two differ by the solves' rounding alone. On the unreduced
- * nodal coordinates a point's row of Jn holds only its interpolation's few nodes: the
- * assembly runs over a row's nonzero entries, which on a Ritz basis are all of them. */
+ * A pass's matrix is K plus a low-rank term from the points in contact, so each pass is
+ * solved by the Woodbury identity on K's one LU (numerics.c, partial pivoting):
+ *     (K + Jn_A^T D Jn_A)^-1 r = u - Z_A (I + D W_AA)^-1 D Jn_A u,   u = K^-1 r,
+ * with Z's columns z_i = K^-1 Jn_i^T and W = Jn Z, made for a point the first time it is in
+ * contact and kept for every later pass and deflection (the secant's trials share them).
+ * A pass then costs a small LU of the set's size instead of the core's LU of the
+ * coordinates'. Its rounding is not the core's np.linalg.solve's: the solve is refined from
+ * residuals summed in long double on the full system until it is the system's solution to
+ * its last digits, which the core's is to about cond(A) eps. The set's rules are the core's:
+ * a point in contact stays while its force kn pen is positive, one off the road joins when
+ * its pen is. */
 #include "inplane_static.h"
 
 #include <math.h>
@@ -12,8 +18,8 @@
 
 #include "numerics.h"
 
-/* Refinement steps per solve: one from LU's own rounding (partial pivoting without LAPACK's
- * blocking loses about cond(A) eps) to the solution's rounding, and one to make sure. */
+/* Refinement steps per pass: the first takes the Woodbury solve's rounding (a few cond eps)
+ * to the rounding of the residual, the second makes sure. */
 #define REFINEMENTS 2
 
 size_t inplane_static_work_doubles(int n_coords, int n_points)
@@ -21,15 +27,47 @@ size_t inplane_static_work_doubles(int n_coords, int n_points)
     if (n_coords < 1 || n_points < 1)
         return 0;
     size_t nc = (size_t)n_coords, p = (size_t)n_points;
-    return nc * nc + 3 * nc + 3 * p; /* the pass's matrix (then its LU), y, b, a residual;
-                                        pen0, the points' pushes (two parts) */
+    return nc * nc + p * nc /* K's LU, the points' z */
+           + 2 * p * p      /* W, the set's matrix (then its LU) */
+           + 4 * nc         /* y, b, a residual, u */
+           + 4 * p;         /* pen0, the pushes (two parts), the set's small vector */
 }
 
 size_t inplane_static_work_ints(int n_coords, int n_points)
 {
     if (n_coords < 1 || n_points < 1)
         return 0;
-    return 2 * (size_t)n_coords + 2 * (size_t)n_points; /* pivots, a row's nonzeros, 2 sets */
+    return (size_t)n_coords + 6 * (size_t)n_points; /* K's pivots; the set's pivots, its list,
+                                                      z made, two sets */
+}
+
+typedef struct {
+    double *k_lu, *z, *w, *s, *y, *b, *residual, *u, *pen0, *push, *small;
+    int *k_pivot, *s_pivot, *list, *have_z, *active, *fresh;
+    int count; /* points in the set (list) */
+} Scratch;
+
+static void lay_out(const InPlaneStaticData* d, double* work, int* iwork, Scratch* sc)
+{
+    size_t nc = (size_t)d->n_coords, p = (size_t)d->n_points;
+    sc->k_lu = work;
+    sc->z = sc->k_lu + nc * nc;
+    sc->w = sc->z + p * nc;
+    sc->s = sc->w + p * p;
+    sc->y = sc->s + p * p;
+    sc->b = sc->y + nc;
+    sc->residual = sc->b + nc;
+    sc->u = sc->residual + nc;
+    sc->pen0 = sc->u + nc;
+    sc->push = sc->pen0 + p;
+    sc->small = sc->push + 2 * p;
+    sc->k_pivot = iwork;
+    sc->s_pivot = sc->k_pivot + nc;
+    sc->list = sc->s_pivot + p;
+    sc->have_z = sc->list + p;
+    sc->active = sc->have_z + p;
+    sc->fresh = sc->active + p;
+    sc->count = 0;
 }
 
 static int all_finite(const double* x, size_t n)
@@ -94,18 +132,95 @@ static int check_deflection(const InPlaneStaticData* d, double deflection_m, cha
     return INPLANE_STATIC_OK;
 }
 
+/* K's LU, no point's z made yet. */
+static int prepare(const InPlaneStaticData* d, Scratch* sc, char* why, size_t size)
+{
+    int nc = d->n_coords, i;
+    memcpy(sc->k_lu, d->stiffness, sizeof(double) * (size_t)nc * (size_t)nc);
+    if (lu_factor(sc->k_lu, nc, sc->k_pivot) != 0)
+        return say_why(why, size, INPLANE_STATIC_SINGULAR,
+                       "stiffness is singular: allowed a stiffness definite with the rim held");
+    for (i = 0; i < d->n_points; i++)
+        sc->have_z[i] = 0;
+    return INPLANE_STATIC_OK;
+}
+
+/* z_i = K^-1 Jn_i^T and W's column i, the first time point i is in the set. */
+static void need_z(const InPlaneStaticData* d, Scratch* sc, int i)
+{
+    int nc = d->n_coords, p = d->n_points, j, k;
+    double* z = sc->z + (size_t)i * nc;
+    if (sc->have_z[i])
+        return;
+    memcpy(z, d->jn + (size_t)i * nc, sizeof(double) * (size_t)nc);
+    lu_solve(sc->k_lu, nc, sc->k_pivot, z);
+    for (j = 0; j < p; j++) {
+        const double* row = d->jn + (size_t)j * nc;
+        double sum = 0.0;
+        for (k = 0; k < nc; k++)
+            sum += row[k] * z[k];
+        sc->w[(size_t)j * p + i] = sum;
+    }
+    sc->have_z[i] = 1;
+}
+
+/* The set's list and the LU of I + D W_AA; -1 when that is singular. */
+static int factor_set(const InPlaneStaticData* d, Scratch* sc)
+{
+    int p = d->n_points, m = 0, a, c;
+    for (a = 0; a < p; a++)
+        if (sc->active[a]) {
+            need_z(d, sc, a);
+            sc->list[m++] = a;
+        }
+    sc->count = m;
+    for (a = 0; a < m; a++) {
+        int i = sc->list[a];
+        for (c = 0; c < m; c++)
+            sc->s[(size_t)a * m + c] = (a == c ? 1.0 : 0.0)
+                                       + d->kn[i] * sc->w[(size_t)i * p + sc->list[c]];
+    }
+    return m ? lu_factor(sc->s, m, sc->s_pivot) : 0;
+}
+
+/* x = (K + Jn_A^T D Jn_A)^-1 r by the Woodbury identity (r and x may be the same). */
+static void solve_set(const InPlaneStaticData* d, Scratch* sc, const double* r, double* x)
+{
+    int nc = d->n_coords, m = sc->count, a, k;
+    double* u = sc->u;
+    memcpy(u, r, sizeof(double) * (size_t)nc);
+    lu_solve(sc->k_lu, nc, sc->k_pivot, u);
+    for (a = 0; a < m; a++) {
+        int i = sc->list[a];
+        const double* row = d->jn + (size_t)i * nc;
+        double sum = 0.0;
+        for (k = 0; k < nc; k++)
+            sum += row[k] * u[k];
+        sc->small[a] = d->kn[i] * sum;
+    }
+    if (m)
+        lu_solve(sc->s, m, sc->s_pivot, sc->small);
+    for (k = 0; k < nc; k++)
+        x[k] = u[k];
+    for (a = 0; a < m; a++) {
+        const double* z = sc->z + (size_t)sc->list[a] * nc;
+        double h = sc->small[a];
+        for (k = 0; k < nc; k++)
+            x[k] -= h * z[k];
+    }
+}
+
 /* One step of iterative refinement: y += A^-1 (b - A y), the residual summed in long double
- * from K and the active rows (A's LU has overwritten A); push holds 2 n_points doubles, each
- * active point's kn (Jn y)_i as a long double's high and low parts. */
-static void refine(const InPlaneStaticData* d, const int* active, const double* b,
-                   const double* lu, const int* pivot, double* y, double* residual,
-                   double* push)
+ * from K and the active rows of Jn; push holds each active point's kn (Jn y)_i as a long
+ * double's high and low parts. */
+static void refine(const InPlaneStaticData* d, Scratch* sc)
 {
     int nc = d->n_coords, p = d->n_points, i, j;
+    double *y = sc->y, *push = sc->push, *residual = sc->residual;
     for (i = 0; i < p; i++) {
         const double* row = d->jn + (size_t)i * nc;
         long double along = 0.0L;
-        if (!active[i])
+        if (!sc->active[i])
             continue;
         for (j = 0; j < nc; j++)
             along += (long double)row[j] * y[j];
@@ -115,95 +230,69 @@ static void refine(const InPlaneStaticData* d, const int* active, const double* 
     }
     for (j = 0; j < nc; j++) {
         const double* row = d->stiffness + (size_t)j * nc;
-        long double sum = b[j];
+        long double sum = sc->b[j];
         for (i = 0; i < nc; i++)
             sum -= (long double)row[i] * y[i];
         for (i = 0; i < p; i++) {
             double jn = d->jn[(size_t)i * nc + j];
-            if (active[i] && jn != 0.0)
+            if (sc->active[i] && jn != 0.0)
                 sum -= (long double)jn * ((long double)push[2 * i] + push[2 * i + 1]);
         }
         residual[j] = (double)sum;
     }
-    lu_solve(lu, nc, pivot, residual);
+    solve_set(d, sc, residual, residual);
     for (j = 0; j < nc; j++)
         y[j] += residual[j];
 }
 
-/* The state at a checked deflection into work's y (returned), the set into iwork's first
- * set (returned through *set); passes into *passes. */
-static int solve_state(const InPlaneStaticData* d, double deflection_m, double* work, int* iwork,
-                       double** y_out, int** set_out, int* passes, char* why, size_t size)
+/* The state at a checked deflection, K prepared: y into sc->y, the set into sc->active;
+ * passes into *passes. */
+static int solve_state(const InPlaneStaticData* d, double deflection_m, Scratch* sc,
+                       int* passes, char* why, size_t size)
 {
     int nc = d->n_coords, p = d->n_points;
-    size_t nn = (size_t)nc * (size_t)nc;
-    double* a = work;
-    double* y = a + nn;
-    double* b = y + nc;
-    double* residual = b + nc;
-    double* pen0 = residual + nc;
-    double* push = pen0 + p;
-    int* pivot = iwork;
-    int* nonzero = pivot + nc;
-    int* active = nonzero + nc;
-    int* fresh = active + p;
     double r = d->radius_m;
     int i, j, k, pass;
 
     for (i = 0; i < p; i++) {
-        pen0[i] = r - (r - deflection_m) * d->sec[i];
-        active[i] = pen0[i] > 0.0;
+        sc->pen0[i] = r - (r - deflection_m) * d->sec[i];
+        sc->active[i] = sc->pen0[i] > 0.0;
     }
     for (pass = 1; pass <= d->max_passes; pass++) {
         int same = 1;
-        memcpy(a, d->stiffness, sizeof(double) * nn);
         for (j = 0; j < nc; j++)
-            b[j] = 0.0;
+            sc->b[j] = 0.0;
         for (i = 0; i < p; i++) {
             const double* row = d->jn + (size_t)i * nc;
-            double kn = d->kn[i], push = kn * pen0[i];
-            int count = 0;
-            if (!active[i])
+            double push = d->kn[i] * sc->pen0[i];
+            if (!sc->active[i])
                 continue;
             for (j = 0; j < nc; j++)
-                if (row[j] != 0.0)
-                    nonzero[count++] = j;
-            for (j = 0; j < count; j++) {
-                int aj = nonzero[j];
-                double* arow = a + (size_t)aj * nc;
-                b[aj] -= row[aj] * push;
-                for (k = 0; k < count; k++) {
-                    int ak = nonzero[k];
-                    arow[ak] += row[aj] * (kn * row[ak]);
-                }
-            }
+                sc->b[j] -= row[j] * push;
         }
-        if (lu_factor(a, nc, pivot) != 0)
+        if (factor_set(d, sc) != 0)
             return say_why(why, size, INPLANE_STATIC_SINGULAR,
                            "the static footprint's matrix at deflection_m = %g m is singular "
                            "(pass %d): allowed a stiffness definite on the set in contact",
                            deflection_m, pass);
-        memcpy(y, b, sizeof(double) * (size_t)nc);
-        lu_solve(a, nc, pivot, y);
+        solve_set(d, sc, sc->b, sc->y);
         for (k = 0; k < REFINEMENTS; k++)
-            refine(d, active, b, a, pivot, y, residual, push);
+            refine(d, sc);
         for (i = 0; i < p; i++) {
             const double* row = d->jn + (size_t)i * nc;
             double pen = 0.0;
             for (j = 0; j < nc; j++)
-                pen += row[j] * y[j];
-            pen += pen0[i];
-            fresh[i] = active[i] ? d->kn[i] * pen > 0.0 : pen > 0.0;
-            if (fresh[i] != active[i])
+                pen += row[j] * sc->y[j];
+            pen += sc->pen0[i];
+            sc->fresh[i] = sc->active[i] ? d->kn[i] * pen > 0.0 : pen > 0.0;
+            if (sc->fresh[i] != sc->active[i])
                 same = 0;
         }
         if (same) {
-            *y_out = y;
-            *set_out = active;
             *passes = pass;
             return INPLANE_STATIC_OK;
         }
-        memcpy(active, fresh, sizeof(int) * (size_t)p);
+        memcpy(sc->active, sc->fresh, sizeof(int) * (size_t)p);
     }
     return say_why(why, size, INPLANE_STATIC_UNSETTLED,
                    "the static footprint did not settle (deflection_m = %g m, max_passes = %d)",
@@ -223,41 +312,39 @@ int inplane_static_state(const InPlaneStaticData* data, double deflection_m, dou
                          int* active, double* load_n, int* passes, double* work, int* iwork,
                          char* why, size_t why_size)
 {
-    double* state;
-    int* set;
+    Scratch sc;
     int taken, status = check_data(data, work, iwork, why, why_size);
     if (status)
         return status;
     status = check_deflection(data, deflection_m, why, why_size);
     if (status)
         return status;
-    status = solve_state(data, deflection_m, work, iwork, &state, &set, &taken, why, why_size);
+    lay_out(data, work, iwork, &sc);
+    status = prepare(data, &sc, why, why_size);
+    if (status == INPLANE_STATIC_OK)
+        status = solve_state(data, deflection_m, &sc, &taken, why, why_size);
     if (status)
         return status;
     if (y != NULL)
-        memcpy(y, state, sizeof(double) * (size_t)data->n_coords);
+        memcpy(y, sc.y, sizeof(double) * (size_t)data->n_coords);
     if (active != NULL)
-        memcpy(active, set, sizeof(int) * (size_t)data->n_points);
+        memcpy(active, sc.active, sizeof(int) * (size_t)data->n_points);
     if (load_n != NULL)
-        *load_n = load_of(data, state);
+        *load_n = load_of(data, sc.y);
     if (passes != NULL)
         *passes = taken;
     return INPLANE_STATIC_OK;
 }
 
-static int load_at(const InPlaneStaticData* d, double deflection_m, double* load_n,
-                   double* work, int* iwork, char* why, size_t size)
+static int load_at(const InPlaneStaticData* d, double deflection_m, Scratch* sc,
+                   double* load_n, char* why, size_t size)
 {
-    double* state;
-    int* set;
     int taken, status = check_deflection(d, deflection_m, why, size);
-    if (status)
-        return status;
-    status = solve_state(d, deflection_m, work, iwork, &state, &set, &taken, why, size);
-    if (status)
-        return status;
-    *load_n = load_of(d, state);
-    return INPLANE_STATIC_OK;
+    if (status == INPLANE_STATIC_OK)
+        status = solve_state(d, deflection_m, sc, &taken, why, size);
+    if (status == INPLANE_STATIC_OK)
+        *load_n = load_of(d, sc->y);
+    return status;
 }
 
 int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
@@ -266,15 +353,19 @@ int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
 {
     double lo = INPLANE_STATIC_SECANT_LO_M, hi = INPLANE_STATIC_SECANT_HI_M;
     double f_lo, f_hi, mid = NAN, f_mid;
+    Scratch sc;
     int n, status = check_data(data, work, iwork, why, why_size);
     if (status)
         return status;
     if (!(isfinite(load_n) && load_n > 0.0))
         return say_why(why, why_size, INPLANE_STATIC_BAD_LOAD,
                        "load_n = %g N: allowed a finite number above 0 N", load_n);
-    status = load_at(data, lo, &f_lo, work, iwork, why, why_size);
+    lay_out(data, work, iwork, &sc);
+    status = prepare(data, &sc, why, why_size);
     if (status == INPLANE_STATIC_OK)
-        status = load_at(data, hi, &f_hi, work, iwork, why, why_size);
+        status = load_at(data, lo, &sc, &f_lo, why, why_size);
+    if (status == INPLANE_STATIC_OK)
+        status = load_at(data, hi, &sc, &f_hi, why, why_size);
     if (status)
         return status;
     for (n = 1; n <= INPLANE_STATIC_SECANT_ITERATIONS; n++) {
@@ -284,7 +375,7 @@ int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
                            "secant for load_n = %g N has no next deflection",
                            f_hi, lo, hi, load_n);
         mid = hi - (f_hi - load_n) * (hi - lo) / (f_hi - f_lo);
-        status = load_at(data, mid, &f_mid, work, iwork, why, why_size);
+        status = load_at(data, mid, &sc, &f_mid, why, why_size);
         if (status)
             return status;
         if (fabs(f_mid - load_n) < INPLANE_STATIC_SECANT_TOLERANCE * load_n)

@@ -42,13 +42,14 @@ enum {
     INPLANE_STATIC_BAD_DATA = 3,       /* a non-finite entry, or R <= 0 */
     INPLANE_STATIC_BAD_DEFLECTION = 4, /* the deflection non-finite, negative or >= R */
     INPLANE_STATIC_BAD_LOAD = 5,       /* the load non-finite or <= 0 */
-    INPLANE_STATIC_SINGULAR = 6,       /* a pass's matrix is singular */
+    INPLANE_STATIC_SINGULAR = 6,       /* K, or a pass's set matrix, is singular */
     INPLANE_STATIC_UNSETTLED = 7,      /* the set did not settle in max_passes passes */
     INPLANE_STATIC_FLAT_SECANT = 8     /* the secant's two loads equal: no next deflection */
 };
 
-/* Doubles and ints of scratch the two functions need (n_coords^2 + 3 n_coords + 3 n_points, and
- * 2 n_coords + 2 n_points); 0 for sizes out of range. */
+/* Doubles and ints of scratch the two functions need (n_coords^2 + n_points n_coords +
+ * 2 n_points^2 + 4 (n_coords + n_points), and n_coords + 6 n_points); 0 for sizes out of
+ * range. */
 size_t inplane_static_work_doubles(int n_coords, int n_points);
 size_t inplane_static_work_ints(int n_coords, int n_points);
 
