@@ -93,6 +93,9 @@ def test_the_c_footprint_is_the_cores(case):
         expected = deflection_for_load(model, load, n, **options)
         search = c_deflection_search(sim, load)
         assert 1 <= search.iterations <= 40
+        at_search = c_static_footprint(sim, search.deflection_m)
+        np.testing.assert_array_equal(search.y, at_search.y)
+        np.testing.assert_array_equal(search.active, at_search.active)
         y = sim.static_state(expected)
         foot = c_static_footprint(sim, expected)
         state = c_static_state(sim, expected)

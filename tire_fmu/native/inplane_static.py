@@ -48,10 +48,13 @@ class StaticFootprint:
 
 @dataclass(frozen=True)
 class DeflectionSearch:
-    """The C's deflection for a load (m) and the secant's iterations."""
+    """The C's deflection for a load (m), the secant's iterations, and the static state at
+    the deflection (as :class:`StaticFootprint`'s y and active)."""
 
     deflection_m: float
     iterations: int
+    y: np.ndarray
+    active: np.ndarray
 
 
 def _declare(lib) -> None:
@@ -68,8 +71,8 @@ def _declare(lib) -> None:
     lib.inplane_deflection_for_load.restype = ctypes.c_int
     lib.inplane_deflection_for_load.argtypes = [
         ctypes.POINTER(InPlaneStaticData), ctypes.c_double, ctypes.POINTER(ctypes.c_double),
-        ctypes.POINTER(ctypes.c_int), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_char_p,
-        ctypes.c_size_t]
+        ctypes.POINTER(ctypes.c_int), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+        ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t]
     lib._inplane_static_declared = True
 
 
@@ -138,19 +141,23 @@ def c_static_load_n(sim: InPlaneSimulator, deflection_m: float | None = None,
 def c_deflection_search(sim: InPlaneSimulator, load_n: float, library=None
                         ) -> DeflectionSearch:
     """The deflection carrying ``load_n`` at rest on ``sim`` (built at rest, as
-    ``deflection_for_load`` builds its own) by the C's secant, with its iterations."""
+    ``deflection_for_load`` builds its own) by the C's secant, with its iterations and the
+    static state there."""
     lib = load_library() if library is None else library
     _declare(lib)
     foot = _Footprint(sim, lib)
     deflection, iterations = ctypes.c_double(np.nan), ctypes.c_int(0)
+    y = np.empty(foot.n_coords)
+    active = np.empty(foot.n_points, dtype=np.intc)
     why = ctypes.create_string_buffer(_WHY_SIZE)
     status = lib.inplane_deflection_for_load(ctypes.byref(foot.data), float(load_n),
                                              ctypes.byref(deflection),
-                                             ctypes.byref(iterations), foot.work.ctypes.data,
+                                             ctypes.byref(iterations), y.ctypes.data,
+                                             active.ctypes.data, foot.work.ctypes.data,
                                              foot.iwork.ctypes.data, why, _WHY_SIZE)
     if status:
         _raise(status, why, "inplane_deflection_for_load")
-    return DeflectionSearch(deflection.value, iterations.value)
+    return DeflectionSearch(deflection.value, iterations.value, y, active.astype(bool))
 
 
 def c_deflection_for_load(sim: InPlaneSimulator, load_n: float, library=None) -> float:

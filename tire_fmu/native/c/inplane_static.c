@@ -1,7 +1,8 @@
 /* inplane_static.c: the in-plane tire's static footprint (see inplane_static.h).
  *
  * A pass's matrix is K plus a low-rank term from the points in contact, so each pass is
- * solved by the Woodbury identity on K's one LU (numerics.c, partial pivoting):
+ * solved by the Woodbury identity on K's one factor (Cholesky's; numerics.c's LU for a K
+ * that is not symmetric definite):
  *     (K + Jn_A^T D Jn_A)^-1 r = u - Z_A (I + D W_AA)^-1 D Jn_A u,   u = K^-1 r,
  * with Z's columns z_i = K^-1 Jn_i^T and W = Jn Z, made for a point the first time it is in
  * contact and kept for every later pass and deflection (the secant's trials share them).
@@ -21,6 +22,9 @@
 /* Refinement steps per pass: the first takes the Woodbury solve's rounding (a few cond eps)
  * to the rounding of the residual, the second makes sure. */
 #define REFINEMENTS 2
+/* K counts as symmetric (for Cholesky's factor) when its halves differ by at most this share
+ * of its largest entry: the Ritz products' rounding, far below any physical asymmetry. */
+#define SYMMETRIC 1e-12
 
 size_t inplane_static_work_doubles(int n_coords, int n_points)
 {
@@ -41,10 +45,62 @@ size_t inplane_static_work_ints(int n_coords, int n_points)
                                                       z made, two sets */
 }
 
+/* Cholesky's L of a symmetric definite a (row major, its lower triangle read, L written
+ * over it) by rows, each entry a dot product of two rows' beginnings (four sums, for the
+ * pipeline: the kernel's -O2 does not vectorise); -1 at a pivot not above 0. */
+static int cholesky_factor(double* a, int n)
+{
+    int i, j, k;
+    for (i = 0; i < n; i++) {
+        double* ri = a + (size_t)i * n;
+        for (j = 0; j <= i; j++) {
+            const double* rj = a + (size_t)j * n;
+            double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, sum;
+            for (k = 0; k + 3 < j; k += 4) {
+                s0 += ri[k] * rj[k];
+                s1 += ri[k + 1] * rj[k + 1];
+                s2 += ri[k + 2] * rj[k + 2];
+                s3 += ri[k + 3] * rj[k + 3];
+            }
+            for (; k < j; k++)
+                s0 += ri[k] * rj[k];
+            sum = ri[j] - ((s0 + s1) + (s2 + s3));
+            if (i == j) {
+                if (!(sum > 0.0) || !isfinite(sum))
+                    return -1;
+                ri[i] = sqrt(sum);
+            } else {
+                ri[j] = sum / rj[j];
+            }
+        }
+    }
+    return 0;
+}
+
+/* x = (L L^T)^-1 x, L from cholesky_factor. */
+static void cholesky_solve(const double* l, int n, double* x)
+{
+    int i, k;
+    for (i = 0; i < n; i++) {
+        const double* ri = l + (size_t)i * n;
+        double sum = x[i];
+        for (k = 0; k < i; k++)
+            sum -= ri[k] * x[k];
+        x[i] = sum / ri[i];
+    }
+    for (i = n - 1; i >= 0; i--) {
+        double sum = x[i] / l[(size_t)i * n + i];
+        x[i] = sum;
+        for (k = 0; k < i; k++)
+            x[k] -= l[(size_t)i * n + k] * sum;
+    }
+}
+
 typedef struct {
     double *k_lu, *z, *w, *s, *y, *b, *residual, *u, *pen0, *push, *small;
     int *k_pivot, *s_pivot, *list, *have_z, *active, *fresh;
-    int count; /* points in the set (list) */
+    int count;    /* points in the set (list) */
+    int cholesky; /* k_lu holds K's Cholesky factor (else its LU) */
 } Scratch;
 
 static void lay_out(const InPlaneStaticData* d, double* work, int* iwork, Scratch* sc)
@@ -132,17 +188,42 @@ static int check_deflection(const InPlaneStaticData* d, double deflection_m, cha
     return INPLANE_STATIC_OK;
 }
 
-/* K's LU, no point's z made yet. */
+/* K's factor, no point's z made yet: Cholesky's where K is symmetric and definite (at rest
+ * with the rim held it is, to the Ritz products' rounding, which the refinement's residual on
+ * the whole K takes out), else the LU. */
 static int prepare(const InPlaneStaticData* d, Scratch* sc, char* why, size_t size)
 {
-    int nc = d->n_coords, i;
-    memcpy(sc->k_lu, d->stiffness, sizeof(double) * (size_t)nc * (size_t)nc);
+    int nc = d->n_coords, i, j;
+    size_t nn = (size_t)nc * (size_t)nc;
+    double big = 0.0, skew = 0.0;
+    for (i = 0; i < nc; i++)
+        for (j = 0; j <= i; j++) {
+            double upper = d->stiffness[(size_t)j * nc + i];
+            double lower = d->stiffness[(size_t)i * nc + j];
+            if (fabs(lower) > big)
+                big = fabs(lower);
+            if (fabs(upper - lower) > skew)
+                skew = fabs(upper - lower);
+        }
+    for (i = 0; i < d->n_points; i++)
+        sc->have_z[i] = 0;
+    memcpy(sc->k_lu, d->stiffness, sizeof(double) * nn);
+    sc->cholesky = skew <= SYMMETRIC * big && cholesky_factor(sc->k_lu, nc) == 0;
+    if (sc->cholesky)
+        return INPLANE_STATIC_OK;
+    memcpy(sc->k_lu, d->stiffness, sizeof(double) * nn);
     if (lu_factor(sc->k_lu, nc, sc->k_pivot) != 0)
         return say_why(why, size, INPLANE_STATIC_SINGULAR,
                        "stiffness is singular: allowed a stiffness definite with the rim held");
-    for (i = 0; i < d->n_points; i++)
-        sc->have_z[i] = 0;
     return INPLANE_STATIC_OK;
+}
+
+static void k_solve(const InPlaneStaticData* d, const Scratch* sc, double* x)
+{
+    if (sc->cholesky)
+        cholesky_solve(sc->k_lu, d->n_coords, x);
+    else
+        lu_solve(sc->k_lu, d->n_coords, sc->k_pivot, x);
 }
 
 /* z_i = K^-1 Jn_i^T and W's column i, the first time point i is in the set. */
@@ -153,7 +234,7 @@ static void need_z(const InPlaneStaticData* d, Scratch* sc, int i)
     if (sc->have_z[i])
         return;
     memcpy(z, d->jn + (size_t)i * nc, sizeof(double) * (size_t)nc);
-    lu_solve(sc->k_lu, nc, sc->k_pivot, z);
+    k_solve(d, sc, z);
     for (j = 0; j < p; j++) {
         const double* row = d->jn + (size_t)j * nc;
         double sum = 0.0;
@@ -189,7 +270,7 @@ static void solve_set(const InPlaneStaticData* d, Scratch* sc, const double* r, 
     int nc = d->n_coords, m = sc->count, a, k;
     double* u = sc->u;
     memcpy(u, r, sizeof(double) * (size_t)nc);
-    lu_solve(sc->k_lu, nc, sc->k_pivot, u);
+    k_solve(d, sc, u);
     for (a = 0; a < m; a++) {
         int i = sc->list[a];
         const double* row = d->jn + (size_t)i * nc;
@@ -348,8 +429,8 @@ static int load_at(const InPlaneStaticData* d, double deflection_m, Scratch* sc,
 }
 
 int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
-                                double* deflection_m, int* iterations, double* work,
-                                int* iwork, char* why, size_t why_size)
+                                double* deflection_m, int* iterations, double* y, int* active,
+                                double* work, int* iwork, char* why, size_t why_size)
 {
     double lo = INPLANE_STATIC_SECANT_LO_M, hi = INPLANE_STATIC_SECANT_HI_M;
     double f_lo, f_hi, mid = NAN, f_mid;
@@ -389,5 +470,9 @@ int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
         *deflection_m = mid;
     if (iterations != NULL)
         *iterations = n > INPLANE_STATIC_SECANT_ITERATIONS ? INPLANE_STATIC_SECANT_ITERATIONS : n;
+    if (y != NULL)
+        memcpy(y, sc.y, sizeof(double) * (size_t)data->n_coords);
+    if (active != NULL)
+        memcpy(active, sc.active, sizeof(int) * (size_t)data->n_points);
     return INPLANE_STATIC_OK;
 }

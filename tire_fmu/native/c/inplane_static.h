@@ -63,10 +63,11 @@ int inplane_static_state(const InPlaneStaticData* data, double deflection_m, dou
 
 /* The deflection (m) that carries load_n at rest, the core's secant from 0.005 and 0.04 m to
  * 1e-9 of the load in at most 40 iterations (the last one's deflection when none meets it, as
- * the core returns); the iterations taken (each a new deflection) into *iterations. Either
- * output may be NULL; on a problem as inplane_static_state. */
+ * the core returns); the iterations taken (each a new deflection) into *iterations, and the
+ * static state and set at the deflection (inplane_static_state's, without its second solve)
+ * into y and active. Any output may be NULL; on a problem as inplane_static_state. */
 int inplane_deflection_for_load(const InPlaneStaticData* data, double load_n,
-                                double* deflection_m, int* iterations, double* work,
-                                int* iwork, char* why, size_t why_size);
+                                double* deflection_m, int* iterations, double* y, int* active,
+                                double* work, int* iwork, char* why, size_t why_size);
 
 #endif
