@@ -227,3 +227,24 @@ def test_a_set_that_does_not_settle_is_the_cores_error(small, monkeypatch):
     status, why, outputs = _call(lib, _Footprint(small, lib), deflection)
     assert status == native_static.UNSETTLED and "did not settle" in why
     assert _untouched(outputs)
+
+
+def test_a_stiffness_not_symmetric_is_solved_by_lu(small):
+    """K made asymmetric (beyond the Cholesky's share) takes the LU: its state is still a
+    frictionless contact in equilibrium with that K, and close to the symmetric one's."""
+    lib = load_library()
+    _declare(lib)
+    foot = _Footprint(small, lib)
+    k = foot.arrays[0]
+    symmetric = c_static_footprint(small, 0.02)
+    rng = np.random.default_rng(3)
+    k += 1e-9 * np.abs(k).max() * np.triu(rng.standard_normal(k.shape), 1)
+    status, why, (y, active, load, passes) = _call(lib, foot, 0.02)
+    assert status == 0, why
+    active = active.astype(bool)
+    pen0 = small.model.tire.R - (small.model.tire.R - 0.02) * small._sec
+    pen = pen0 + foot.arrays[1] @ y
+    force = np.where(active, small._kn * pen, 0.0)
+    assert (force[active] > 0).all() and (pen[~active] <= 0).all()
+    assert np.abs(k @ y + foot.arrays[1].T @ force).max() < EQUILIBRIUM * load
+    assert np.abs(y - symmetric.y).max() < 1e-3 * np.abs(symmetric.y).max()

@@ -8,8 +8,9 @@
  * contact and kept for every later pass and deflection (the secant's trials share them).
  * A pass then costs a small LU of the set's size instead of the core's LU of the
  * coordinates'. Its rounding is not the core's np.linalg.solve's: the solve is refined from
- * residuals summed in long double on the full system until it is the system's solution to
- * its last digits, which the core's is to about cond(A) eps. The set's rules are the core's:
+ * residuals summed in long double on the full system (once, before the set is judged; once
+ * more on the last pass) until it is the system's solution to its last digits, which the
+ * core's is to about cond(A) eps. The set's rules are the core's:
  * a point in contact stays while its force kn pen is positive, one off the road joins when
  * its pen is. */
 #include "inplane_static.h"
@@ -19,9 +20,6 @@
 
 #include "numerics.h"
 
-/* Refinement steps per pass: the first takes the Woodbury solve's rounding (a few cond eps)
- * to the rounding of the residual, the second makes sure. */
-#define REFINEMENTS 2
 /* K counts as symmetric (for Cholesky's factor) when its halves differ by at most this share
  * of its largest entry: the Ritz products' rounding, far below any physical asymmetry. */
 #define SYMMETRIC 1e-12
@@ -45,26 +43,33 @@ size_t inplane_static_work_ints(int n_coords, int n_points)
                                                       z made, two sets */
 }
 
+/* a . b in four sums (for the pipeline: the kernel's -O2 does not vectorise). */
+static double dot(const double* a, const double* b, int n)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    int k;
+    for (k = 0; k + 3 < n; k += 4) {
+        s0 += a[k] * b[k];
+        s1 += a[k + 1] * b[k + 1];
+        s2 += a[k + 2] * b[k + 2];
+        s3 += a[k + 3] * b[k + 3];
+    }
+    for (; k < n; k++)
+        s0 += a[k] * b[k];
+    return (s0 + s1) + (s2 + s3);
+}
+
 /* Cholesky's L of a symmetric definite a (row major, its lower triangle read, L written
- * over it) by rows, each entry a dot product of two rows' beginnings (four sums, for the
- * pipeline: the kernel's -O2 does not vectorise); -1 at a pivot not above 0. */
+ * over it) by rows, each entry a dot product of two rows' beginnings; -1 at a pivot not
+ * above 0. */
 static int cholesky_factor(double* a, int n)
 {
-    int i, j, k;
+    int i, j;
     for (i = 0; i < n; i++) {
         double* ri = a + (size_t)i * n;
         for (j = 0; j <= i; j++) {
             const double* rj = a + (size_t)j * n;
-            double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, sum;
-            for (k = 0; k + 3 < j; k += 4) {
-                s0 += ri[k] * rj[k];
-                s1 += ri[k + 1] * rj[k + 1];
-                s2 += ri[k + 2] * rj[k + 2];
-                s3 += ri[k + 3] * rj[k + 3];
-            }
-            for (; k < j; k++)
-                s0 += ri[k] * rj[k];
-            sum = ri[j] - ((s0 + s1) + (s2 + s3));
+            double sum = ri[j] - dot(ri, rj, j);
             if (i == j) {
                 if (!(sum > 0.0) || !isfinite(sum))
                     return -1;
@@ -83,10 +88,7 @@ static void cholesky_solve(const double* l, int n, double* x)
     int i, k;
     for (i = 0; i < n; i++) {
         const double* ri = l + (size_t)i * n;
-        double sum = x[i];
-        for (k = 0; k < i; k++)
-            sum -= ri[k] * x[k];
-        x[i] = sum / ri[i];
+        x[i] = (x[i] - dot(ri, x, i)) / ri[i];
     }
     for (i = n - 1; i >= 0; i--) {
         double sum = x[i] / l[(size_t)i * n + i];
@@ -229,19 +231,14 @@ static void k_solve(const InPlaneStaticData* d, const Scratch* sc, double* x)
 /* z_i = K^-1 Jn_i^T and W's column i, the first time point i is in the set. */
 static void need_z(const InPlaneStaticData* d, Scratch* sc, int i)
 {
-    int nc = d->n_coords, p = d->n_points, j, k;
+    int nc = d->n_coords, p = d->n_points, j;
     double* z = sc->z + (size_t)i * nc;
     if (sc->have_z[i])
         return;
     memcpy(z, d->jn + (size_t)i * nc, sizeof(double) * (size_t)nc);
     k_solve(d, sc, z);
-    for (j = 0; j < p; j++) {
-        const double* row = d->jn + (size_t)j * nc;
-        double sum = 0.0;
-        for (k = 0; k < nc; k++)
-            sum += row[k] * z[k];
-        sc->w[(size_t)j * p + i] = sum;
-    }
+    for (j = 0; j < p; j++)
+        sc->w[(size_t)j * p + i] = dot(d->jn + (size_t)j * nc, z, nc);
     sc->have_z[i] = 1;
 }
 
@@ -273,11 +270,7 @@ static void solve_set(const InPlaneStaticData* d, Scratch* sc, const double* r, 
     k_solve(d, sc, u);
     for (a = 0; a < m; a++) {
         int i = sc->list[a];
-        const double* row = d->jn + (size_t)i * nc;
-        double sum = 0.0;
-        for (k = 0; k < nc; k++)
-            sum += row[k] * u[k];
-        sc->small[a] = d->kn[i] * sum;
+        sc->small[a] = d->kn[i] * dot(d->jn + (size_t)i * nc, u, nc);
     }
     if (m)
         lu_solve(sc->s, m, sc->s_pivot, sc->small);
@@ -333,7 +326,7 @@ static int solve_state(const InPlaneStaticData* d, double deflection_m, Scratch*
 {
     int nc = d->n_coords, p = d->n_points;
     double r = d->radius_m;
-    int i, j, k, pass;
+    int i, j, pass;
 
     for (i = 0; i < p; i++) {
         sc->pen0[i] = r - (r - deflection_m) * d->sec[i];
@@ -357,19 +350,15 @@ static int solve_state(const InPlaneStaticData* d, double deflection_m, Scratch*
                            "(pass %d): allowed a stiffness definite on the set in contact",
                            deflection_m, pass);
         solve_set(d, sc, sc->b, sc->y);
-        for (k = 0; k < REFINEMENTS; k++)
-            refine(d, sc);
+        refine(d, sc);
         for (i = 0; i < p; i++) {
-            const double* row = d->jn + (size_t)i * nc;
-            double pen = 0.0;
-            for (j = 0; j < nc; j++)
-                pen += row[j] * sc->y[j];
-            pen += sc->pen0[i];
+            double pen = dot(d->jn + (size_t)i * nc, sc->y, nc) + sc->pen0[i];
             sc->fresh[i] = sc->active[i] ? d->kn[i] * pen > 0.0 : pen > 0.0;
             if (sc->fresh[i] != sc->active[i])
                 same = 0;
         }
         if (same) {
+            refine(d, sc);
             *passes = pass;
             return INPLANE_STATIC_OK;
         }
