@@ -10,7 +10,8 @@
  * coordinates'. Its rounding is not the core's np.linalg.solve's: the solve is refined from
  * residuals summed in long double on the full system (once, before the set is judged; once
  * more on the last pass) until it is the system's solution to its last digits, which the
- * core's is to about cond(A) eps. The set's rules are the core's:
+ * core's is to about cond(A) eps (where long double is double, as with MSVC, the refinement
+ * still leaves a backward-stable solve of the core's accuracy). The set's rules are the core's:
  * a point in contact stays while its force kn pen is positive, one off the road joins when
  * its pen is. */
 #include "inplane_static.h"
