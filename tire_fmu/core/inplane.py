@@ -53,7 +53,6 @@ from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse
 
 from .parameters import ParameterError, Problem, TireParameters
 
@@ -388,6 +387,8 @@ class InPlaneRing:
         -m_s Ω² [LᵀL - (R/ℓ) E_v] and the circulatory Ω C D1 of material damping."""
         n, omega = self.n_elements, self.spin_rad_s
         # D1 has two entries a row: C D1 as a sparse product (dense, it cost N³)
+        import scipy.sparse  # not at import: the FMUs' start loads only what they use
+
         d1 = scipy.sparse.kron(scipy.sparse.eye_array(self._n_built),
                                scipy.sparse.csr_array(self._ops["d1"]), format="csr")
         k = omega * np.asarray((d1.T @ self._built_damping.T).T)
@@ -459,6 +460,8 @@ class InPlaneRing:
             ring = out
         if self.n_fields != 3:  # the tie is the identity
             return ring
+        import scipy.sparse  # not at import: the FMUs' start loads only what they use
+
         tie = scipy.sparse.csr_array(self._tie)
         return np.asarray(tie.T @ (tie.T @ ring.T).T)
 

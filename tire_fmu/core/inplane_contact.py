@@ -53,7 +53,6 @@ import struct
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse
 
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
@@ -227,6 +226,8 @@ class InPlaneSimulator:
             to_abs[:nr, nr] = ring.rim_patterns[:, 2]
             to_abs[nr + 2, nr] = 1.0
         # to_abs is an identity and the turn's column: sparse, its products cost N², not N³
+        import scipy.sparse  # not at import: the FMUs' start loads only what they use
+
         to_abs_sparse = scipy.sparse.csr_array(to_abs)
 
         def on_y(a):
