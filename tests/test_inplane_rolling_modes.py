@@ -168,6 +168,29 @@ def test_a_brake_step_at_speed_rings_at_the_rolling_rotational_mode():
     assert np.sqrt(np.mean((step.fx(t) - fx) ** 2)) < 0.1 * np.ptp(fx)
 
 
+def test_without_sliding_the_run_is_the_linearisation(deflection):
+    """A -1 kN m brake step at 10 m/s (wheel free, N = 100, 10 mm points), which leaves every
+    point sticking: with no set to change, the run is the linear system the rolling modes
+    come from, so Fx rings at their rotational mode and decays at its rate within a per cent,
+    and the linear step response follows the run to a small share of its swing. (At -3 kN m
+    a point slides on and off through the ringing and the run decays faster than any frozen
+    set: bench_inplane_brake_ringing.py.)"""
+    sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
+    at = 0.05
+    run = sim.run(at + 0.1, torque_n_m=lambda t: -1000.0 if t >= at else 0.0)
+    modes = rolling_modes(sim, -1000.0, 100.0)
+    assert modes.sliding_points == 0
+    after = run.time_s > at + 0.005
+    assert run.sliding_points[after].max() == 0
+    f_rot, _, decay_rot = rotational(modes)
+    step = torque_step(sim, 0.0, -1000.0)
+    t, fx = run.time_s[after] - at, run.rim_fx_n[after]
+    (fitted, *_), _ = fit_ringing(t, fx, step.dominant(4))
+    assert fitted[0] == pytest.approx(f_rot, rel=0.005)
+    assert fitted[1] == pytest.approx(decay_rot, rel=0.02)
+    assert np.sqrt(np.mean((step.fx(t) - fx) ** 2)) < 0.01 * np.ptp(fx)
+
+
 def test_bad_inputs_are_named(deflection):
     sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
     with pytest.raises(ParameterError, match="f_max_hz"):
