@@ -270,14 +270,15 @@ def test_a_refusal_writes_nothing():
     why = ctypes.create_string_buffer(256)
     for bad in ({"deflection_m": 2.0}, {"point_spacing_m": 0.0}):
         assert lib.inplane_points_build(ctypes.byref(struct(**bad)), ctypes.byref(pointers),
-                                        why, 256) != 0
+                                        None, why, 256) != 0
         assert next(iter(bad)) in why.value.decode()
     wrong = native.InPlanePoints(p + 1, *(out[k].ctypes.data_as(ctypes.POINTER(ctypes.c_double))
                                           for k in JACOBIANS + POINT_DATA))
-    assert lib.inplane_points_build(ctypes.byref(struct()), ctypes.byref(wrong), why, 256) == 1
+    assert lib.inplane_points_build(ctypes.byref(struct()), ctypes.byref(wrong), None, why,
+                                    256) == 1
     assert f"n_points = {p + 1}: must be {p}" in why.value.decode()
     for value in out.values():
         assert np.all(value == 7.0)
-    assert lib.inplane_points_build(ctypes.byref(struct()), ctypes.byref(pointers), why,
-                                    256) == 0
+    assert lib.inplane_points_build(ctypes.byref(struct()), ctypes.byref(pointers), None,
+                                    why, 256) == 0
     assert not np.all(out["jn"] == 7.0)

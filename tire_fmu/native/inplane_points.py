@@ -52,8 +52,8 @@ def _declare(lib) -> None:
                                          ctypes.c_size_t]
     lib.inplane_points_build.restype = ctypes.c_int
     lib.inplane_points_build.argtypes = [ctypes.POINTER(InPlanePointsInput),
-                                         ctypes.POINTER(InPlanePoints), ctypes.c_char_p,
-                                         ctypes.c_size_t]
+                                         ctypes.POINTER(InPlanePoints), ctypes.c_void_p,
+                                         ctypes.c_char_p, ctypes.c_size_t]
     lib._inplane_points_declared = True
 
 
@@ -103,7 +103,7 @@ def c_points(n_elements: int, n_fields: int, wheel_free: int, basis, radius_m: f
     out.update({name: np.empty(p) for name in POINT_DATA})
     points = InPlanePoints(p, *(out[name].ctypes.data_as(_DOUBLE_P)
                                 for name in JACOBIANS + POINT_DATA))
-    status = lib.inplane_points_build(ctypes.byref(inputs), ctypes.byref(points), why,
+    status = lib.inplane_points_build(ctypes.byref(inputs), ctypes.byref(points), None, why,
                                       _WHY_SIZE)
     if status:
         raise ValueError(f"inplane_points_build refused the input (status {status}): "

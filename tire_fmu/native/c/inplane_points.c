@@ -126,8 +126,8 @@ static void add_row(double* row, double a, const double* basis, int k, int r)
         row[c] += a * b[c];
 }
 
-int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out, char* why,
-                         size_t why_size)
+int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out,
+                         const Memory* mem, char* why, size_t why_size)
 {
     Zone zone;
     int carry = 0, m = 0, status, N, P, S, r, p, s, psi;
@@ -147,7 +147,9 @@ int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out,
         return say_why(why, why_size, INPLANE_POINTS_NULL, "an output array is missing (NULL)");
     N = in->n_elements;
     R = in->radius_m;
-    if (zone_build(&zone, mem_default(), N, R, in->k_cw, in->beta, carry, m) != 0)
+    if (mem == NULL)
+        mem = mem_default();
+    if (zone_build(&zone, mem, N, R, in->k_cw, in->beta, carry, m) != 0)
         return say_why(why, why_size, INPLANE_POINTS_NO_MEMORY,
                        "out of memory for a zone of %d points", P);
     S = zone.n_support;
@@ -195,6 +197,6 @@ int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out,
         out->sec[p] = zone.sec[p];
         out->s0[p] = in->speed_m_s - in->spin_rad_s * R * c;
     }
-    zone_free(&zone, mem_default());
+    zone_free(&zone, mem);
     return INPLANE_POINTS_OK;
 }

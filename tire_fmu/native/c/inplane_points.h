@@ -19,6 +19,8 @@
 
 #include <stddef.h>
 
+#include "tire.h"
+
 typedef struct {
     int n_elements;         /* N, 4 .. 100000 */
     int n_fields;           /* the ring's fields, w and v first: 2 .. 4 */
@@ -59,9 +61,10 @@ enum {
 int inplane_points_count(const InPlanePointsInput* in, int* n_points, char* why,
                          size_t why_size);
 
-/* Fills out (out->n_points must be inplane_points_count's). On a problem returns its status,
- * with why as above, and writes none of the outputs. */
-int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out, char* why,
-                         size_t why_size);
+/* Fills out (out->n_points must be inplane_points_count's), with the zone's scratch from mem
+ * (NULL: calloc and free). On a problem returns its status, with why as above, and writes
+ * none of the outputs. */
+int inplane_points_build(const InPlanePointsInput* in, const InPlanePoints* out,
+                         const Memory* mem, char* why, size_t why_size);
 
 #endif
