@@ -145,3 +145,17 @@ def test_bad_input_is_refused_and_nothing_written(n, free, basis_shape, n_basis,
 def test_the_wrapper_refuses_a_basis_of_the_wrong_rows():
     with pytest.raises(ValueError, match="allowed"):
         c_spin_terms_of(InPlaneTire(), 16, True, np.eye(10))
+
+
+def test_a_missing_output_is_refused():
+    lib = load_library()
+    _declare(lib)
+    m = InPlaneTire()
+    out = InPlaneTermsOutput()  # every pointer NULL
+    work = np.zeros(lib.inplane_terms_work_doubles(16, n_fields(m), 1, 0))
+    why = ctypes.create_string_buffer(512)
+    status = lib.inplane_terms_build(ctypes.byref(ring_data(m)), 16, n_fields(m), 1, None, 0,
+                                     ctypes.byref(out), work.ctypes.data, why, 512)
+    assert status != 0 and "missing" in why.value.decode()
+    assert lib.inplane_terms_ny(16, n_fields(m), 1, 0) == n_fields(m) * 16 + 1
+    assert lib.inplane_terms_ny(4, n_fields(m), 1, 0) == 0

@@ -221,7 +221,9 @@ int inplane_terms_build(const InPlaneRingData* data, int n_elements, int n_field
     if (free_spin)
         out->to_abs[(size_t)(nr + 2) * ny + ny - 1] = 1.0;
 
-    /* spin 0: the mass, the hysteretic loss, and the spin polynomials' values at 0 */
+    /* spin 0: the mass, the hysteretic loss, and the spin polynomials' values at 0. The ring's
+     * builds cannot refuse: its data, mesh and fields were checked above, its spins are
+     * finite and its memory is given */
     inplane_ring_build(data, n_elements, n_fields, 0.0, 1, 0, mass, stiffness, damping,
                        hysteretic, ring_work, NULL, 0);
     project(&g, mass, out->m);
