@@ -1149,11 +1149,11 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
         carried = np.concatenate([[0.0], e[:-1]])
         ahead = np.concatenate([[0.0], slip_speed[:-1]])
         entering = ~np.concatenate([[False], c[:-1]])
-        new_delta = entering_fractions(pen, (pen > 0) & (f_n > 0))
+        new_contact = (pen > 0) & (f_n > 0)
+        new_delta = entering_fractions(pen, new_contact)
         e_trial = np.where(entering, spacing / omega * new_delta * slip_speed,
                            carried + spacing / (2 * omega) * (ahead + slip_speed))
         tread = sim._kx * e_trial + sim._cx * slip_speed
-        new_contact = (pen > 0) & (f_n > 0)
         new_stick = np.abs(tread) <= sim._mu * np.maximum(f_n, 0) * (1 + 1e-12)
         new_sign = np.where(new_stick, sign, np.sign(tread))
         # the edges move with the solve: their fractions settle with the sets
