@@ -202,7 +202,8 @@ def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
     for name in names:  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
     # the compiled kernels' ctypes (the radial step's and the in-plane step's)
-    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py"):
+    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py", "inplane_ring.py",
+                 "inplane_critical.py"):
         shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"

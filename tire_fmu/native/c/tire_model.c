@@ -689,6 +689,23 @@ int model_step(Model* model, double h, double* values)
     return after_step(model, values);
 }
 
+/* the layer's checks are the radial model's rules: it has none of its own, and never
+ * refuses a step as it goes */
+const char* model_step_problem(const Model* model, double h, char* why, size_t size)
+{
+    (void)model;
+    (void)h;
+    (void)why;
+    (void)size;
+    return NULL;
+}
+
+const char* model_step_refusal(const Model* model)
+{
+    (void)model;
+    return "";
+}
+
 int model_refresh(Model* model, double* values)
 {
     if (kernel_outputs_with(model->kernel, values + SPEC_BLOCK_INPUTS_FIRST, NULL) != KERNEL_OK) {
