@@ -36,10 +36,11 @@ from ..publish import published_file
 
 DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
 #: The C files of the FMU, in compile order, and the headers they include.
-C_SOURCES = ("fmi2_layer.c", "tire_model.c", "ring.c", "contact.c", "contract_pack.c", "road.c",
-             "kernel.c", "memory.c", "numerics.c")
-C_HEADERS = ("model.h", "tire.h", "numerics.h", "contract.h", "contract_pack.h", "kernel.h",
-             "fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
+C_SOURCES = ("fmi2_layer.c", "tire_model.c", "model_problems.c", "ring.c", "contact.c",
+             "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c")
+C_HEADERS = ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h",
+             "contract_pack.h", "kernel.h", "fmi2Functions.h", "fmi2FunctionTypes.h",
+             "fmi2TypesPlatform.h")
 GENERATED = ("spec.h", "export.h")
 C_STANDARD = "C99"
 WARNING_FLAGS = ("-Wall", "-Wextra")

@@ -25,9 +25,9 @@
 #include "inplane_static.h"
 #include "inplane_step.h"
 #include "model.h"
+#include "model_problems.h"
 #include "spec.h"
 
-#define MAX_PROBLEMS 48
 #define MESSAGE_SIZE 1024
 #define FLAGS SPEC_STATE_MODEL_FLAGS
 #define ROAD_MIN_CAPACITY 64
@@ -123,50 +123,10 @@ void model_preview(const double* values, double* out_values)
 
 /* -- the problems, in the core's words ------------------------------------------------------- */
 
-typedef struct {
-    int count;
-    char text[MAX_PROBLEMS][MESSAGE_SIZE];
-} Problems;
-
-static char* next_problem(Problems* p)
-{
-    if (p->count >= MAX_PROBLEMS) return NULL;
-    return p->text[p->count++];
-}
-
-#define PROBLEM(p, ...)                                                \
-    do {                                                               \
-        char* slot_ = next_problem(p);                                 \
-        if (slot_ != NULL) snprintf(slot_, MESSAGE_SIZE, __VA_ARGS__); \
-    } while (0)
-
-static int variable_index(const char* name)
-{
-    int vr;
-    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
-        if (strcmp(SPEC_VARIABLES[vr].name, name) == 0) return vr;
-    }
-    return -1;
-}
-
 static double value_of(const double* values, const char* name)
 {
     int vr = variable_index(name);
     return vr < 0 ? NAN : values[vr];
-}
-
-/* parameters.render: "name = value: must be allowed (reason)" */
-static void add_problem(Problems* p, const char* name, double value, const char* unit,
-                        const char* allowed, const char* reason)
-{
-    char text[64], line[MESSAGE_SIZE / 2];
-    value_text(value, unit, text, sizeof text);
-    snprintf(line, sizeof line, SPEC_MSG_PROBLEM, name, text, allowed);
-    if (reason != NULL && reason[0] != '\0') {
-        PROBLEM(p, SPEC_MSG_REASON, line, reason);
-    } else {
-        PROBLEM(p, "%s", line);
-    }
 }
 
 /* "a number in [low, high] unit" (the core's f"{kind} in [{low:g}, {high:g}] {unit}") */
@@ -187,36 +147,10 @@ static int outside(const SpecRange* r, double value)
  * above zero and, with none of those, what InPlaneTire refuses */
 static void data_problems(const double* values, Problems* p)
 {
-    char text[64], allowed[160];
-    int field, tire_problems = 0;
+    char allowed[160];
+    int field;
     double radius = values[SPEC_VR_R];
-    for (field = 0; field < SPEC_N_TIRE_FIELDS; field++) {
-        const SpecField* f = &SPEC_TIRE_FIELDS[field];
-        double value = value_of(values, f->name);
-        int below;
-        if (!isfinite(value)) {
-            py_repr(value, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_NOT_FINITE, f->name, text, f->range_text, f->description);
-            tire_problems++;
-            continue;
-        }
-        below = f->low_inclusive ? value < f->low : value <= f->low;
-        if (below || value > f->high) {
-            value_text(value, f->unit, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, text, f->range_text, f->description);
-            tire_problems++;
-        } else if (f->integer && value != floor(value)) {
-            value_text(value, f->unit, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_INTEGER, f->name, text, f->range_text, f->description);
-            tire_problems++;
-        }
-    }
-    if (tire_problems == 0 && values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT] > 0.0 &&
-        values[SPEC_VR_INFLATION_PRESSURE] < SPEC_MIN_LAW_PRESSURE_PA) {
-        value_text(values[SPEC_VR_INFLATION_PRESSURE], "Pa", text, sizeof text);
-        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, text, SPEC_MIN_LAW_PRESSURE_PA,
-                values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
-    }
+    tire_field_problems(values, p);
     for (field = 0; field < SPEC_N_TANGENTIAL_FIELDS; field++) {
         const SpecRange* r = &SPEC_TANGENTIAL_FIELDS[field];
         double value = value_of(values, r->name);
