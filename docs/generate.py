@@ -342,6 +342,14 @@ def _brake_ringing_gaps(key: str, fitted: str) -> list[float]:
     return [case["run_fit"][0][fitted] / case[key] - 1 for case in cases if "run_fit" in case]
 
 
+@value("brake-slip-gap")
+def brake_slip_gap() -> str:
+    """The slip the brake run settles at against steady_rolling's, the largest of the cases."""
+    cases = record("bench_inplane_brake_ringing")["results"]["cases"]
+    gaps = [c["settled_slip"] / c["steady_slip"] - 1 for c in cases if "settled_slip" in c]
+    return f"{100 * max(abs(g) for g in gaps):.1f} %"
+
+
 @value("brake-ringing-frequency-gap")
 def brake_ringing_frequency_gap() -> str:
     gaps = _brake_ringing_gaps("rotational_hz", "frequency_hz")
@@ -359,8 +367,9 @@ def inplane_brake_ringing_table() -> str:
     data = record("bench_inplane_brake_ringing")
     res = data["results"]
     lines = ["| N | points | step | `rolling_modes`: rotational | run, fit: rotational | "
-             "next modes: `rolling_modes` / run | single damped cosine | periodogram |",
-             "|---|---|---|---|---|---|---|---|"]
+             "next modes: `rolling_modes` / run | single damped cosine | periodogram | "
+             "settled slip: run / `steady_rolling` |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for case in res["cases"]:
         eig = case["step_modes"]
         head = (f"| {case['n_elements']} | {case['spacing_m'] * 1e3:g} mm | "
@@ -369,7 +378,7 @@ def inplane_brake_ringing_table() -> str:
         if "run_fit" not in case:
             lines.append(head + "(linearisation only) | "
                          + ", ".join(f"{m['frequency_hz']:.2f}" for m in eig[1:3])
-                         + " Hz | | |")
+                         + " Hz | | | |")
             continue
         fit = case["run_fit"]
         error = (fit[0]["frequency_hz"] / case["rotational_hz"] - 1) * 100
@@ -378,7 +387,8 @@ def inplane_brake_ringing_table() -> str:
                      + ", ".join(f"{e['frequency_hz']:.2f} / {r['frequency_hz']:.2f}"
                                  for e, r in zip(eig[1:3], fit[1:3]))
                      + f" Hz | {case['single_fit_hz']:.2f} Hz, "
-                     f"{case['single_fit_decay_1_s']:.1f} 1/s | {case['periodogram_hz']:.2f} Hz |")
+                     f"{case['single_fit_decay_1_s']:.1f} 1/s | {case['periodogram_hz']:.2f} Hz | "
+                     f"{case['settled_slip'] * 100:.3f} / {case['steady_slip'] * 100:.3f} % |")
     rest = res["rest"]
     lines += ["", f"A {res['torque_n_m']:g} N m brake step at {res['speed_m_s']:g} m/s, wheel "
               f"free, axle held, {res['load_n'] / 1e3:.1f} kN. The run's Fx from "
