@@ -270,6 +270,37 @@ def test_a_change_of_speed_settles_where_the_tire_built_at_the_new_speed_rolls(d
                                                         rel=1e-5)
 
 
+def test_braking_from_20_m_s_to_rest_rolls_as_the_full_tire_built_at_each_speed(deflection):
+    """The road slows from 20 m/s at 25 m/s² to 5 m/s, stays there, and slows to rest: the
+    step follows the wheel's spin down (the reduced ring's speed terms rebuilt as it moves).
+    At 5 m/s it rolls with the drag and spin of the steady solve of the full tire (every DOF)
+    built at 5 m/s, and at rest it carries the static load: the wheel still, the tread's
+    elements holding what the stop left in them (less than 1e-3 of the load)."""
+    from tire_fmu.core.inplane_contact import steady_rolling
+
+    def road(t):
+        if t < 0.1:
+            return 20.0
+        if t < 0.7:
+            return 20.0 - 25.0 * (t - 0.1)
+        return 5.0 if t < 1.9 else max(5.0 - 25.0 * (t - 1.9), 0.0)
+
+    sim = InPlaneSimulator(MODEL, 100, 20.0, deflection, point_spacing_m=SPACING,
+                           f_max_hz=150.0, backend="auto")
+    run = sim.run(2.8, speed_m_s=road, record_every=10)
+    full = steady_rolling(InPlaneSimulator(MODEL, 100, 5.0, deflection,
+                                           point_spacing_m=SPACING, backend="auto"))
+    at_5 = (run.time_s > 1.5) & (run.time_s < 1.9)
+    assert run.rim_fx_n[at_5].mean() == pytest.approx(full.rim_fx_n, rel=0.01)
+    assert run.spin_rad_s[at_5].mean() == pytest.approx(full.spin_rad_s, rel=1e-5)
+    at_rest = run.time_s > 2.5
+    assert run.speed_m_s[-1] == 0.0
+    load = sim.static_load_n()
+    assert run.rim_fz_n[at_rest].mean() == pytest.approx(load, rel=1e-4)
+    assert abs(run.rim_fx_n[at_rest].mean()) < 1e-3 * load
+    assert abs(run.spin_rad_s[at_rest].mean()) * MODEL.tire.R < 0.01  # below 1 cm/s
+
+
 def test_a_decelerating_road_brakes_the_free_wheel_through_the_footprint(deflection):
     """The road slows at 20 m/s² from 10 m/s: the free wheel follows it, decelerating at
     a/R, and the road's pull on the footprint is what turns its inertia, I α / R."""
