@@ -66,7 +66,7 @@ def python_matrices(sim, spin: float, speed: float) -> dict:
     sim._set_spin(spin, speed)
     names = ("c", "k", "c1", "k1s", "k2", "kh", "a0_inv", "yn", "yx", "wnn", "wnx", "gain",
              "kg", "kgn", "kgx", "carry", "carry_weights", "carry_base", "carry_shift",
-             "ring_spin", "ring_share", "spin_now")
+             "ring_spin", "ring_share", "spin_now") + (("a0_psi",) if sim._driven else ())
     result = {name: np.array(getattr(sim, "_" + name), copy=True) for name in names}
     for name in ("kg", "kgn", "kgx"):
         result[name + "_parts"] = tuple(np.array(a) for a in getattr(sim, f"_{name}_parts"))
@@ -108,6 +108,8 @@ def assert_agree(sim, spin: float, speed: float) -> dict:
 
 CASES = [(n, spacing, wheel, speed) for n in (50, 100) for spacing in (0.01, 0.005)
          for wheel in ("free", "held") for speed in SPINS_OF_SPEEDS]
+# a driven wheel: the ring's rows inverted apart, the turn's column kept
+CASES += [(50, 0.01, "driven", speed) for speed in SPINS_OF_SPEEDS]
 
 
 @pytest.mark.parametrize("n, spacing, wheel, speed", CASES)

@@ -63,6 +63,8 @@ from .parameters import ParameterError, Problem
 #: The arithmetic a step runs on: the C of native/c/inplane_step.c, numpy's (the readable
 #: reference), or the C when it can be had.
 BACKENDS = ("numpy", "compiled", "auto")
+#: How the wheel turns (InPlaneSimulator's ``wheel``).
+WHEELS = ("free", "held", "driven")
 #: Most active-set passes one step may take before it is refused.
 MAX_SET_PASSES = 50
 #: Passes after which the sets may only shrink (see the step).
@@ -127,11 +129,14 @@ class StepState:
 class InPlaneSimulator:
     """Unreduced in-plane tire on a road moving at ``speed_m_s`` under a held axle.
 
-    ``wheel`` is ``"free"`` (ψ a DOF with the wheel inertia; apply ``torque_n_m``) or
-    ``"held"`` (spin fixed at the nominal V/R). ``obstacle`` starts ``obstacle_ahead_m`` in
-    front of the contact centre (road distance). ``f_max_hz`` steps a reduced ring instead
-    (:func:`ritz_basis`: the free ring's modes up to it and the static shapes of every zone
-    node's radial and tangential load); None steps every DOF."""
+    ``wheel`` is ``"free"`` (ψ a DOF with the wheel inertia; apply ``torque_n_m``),
+    ``"held"`` (spin fixed at the nominal V/R) or ``"driven"`` (ψ a DOF whose rate a host
+    gives, as it models the wheel's body itself: :class:`InPlaneStepper`'s ``wheel_rate``;
+    its equation is not stepped, the rim's moment My is what the host's wheel feels).
+    ``obstacle`` starts ``obstacle_ahead_m`` in front of the contact centre (road distance).
+    ``f_max_hz`` steps a reduced ring instead (:func:`ritz_basis`: the free ring's modes up to
+    it and the static shapes of every zone node's radial and tangential load); None steps
+    every DOF."""
 
     model: InPlaneTire
     n_elements: int = 100
@@ -148,6 +153,9 @@ class InPlaneSimulator:
     backend: str = "numpy"
     library: object = field(default=None, repr=False)
     _state: dict = field(default_factory=dict, repr=False)
+    #: a driven wheel (set by _build), and its spin less the tread's at the step's end
+    _driven = False
+    _driven_rate = 0.0
 
     def __post_init__(self) -> None:
         problems = []
@@ -155,8 +163,8 @@ class InPlaneSimulator:
             problems.append(Problem("speed_m_s", self.speed_m_s, "m/s", "in [0, 150] m/s"))
         if not (math.isfinite(self.step_s) and 1e-7 <= self.step_s <= 1e-2):
             problems.append(Problem("step_s", self.step_s, "s", "in [1e-07, 0.01] s"))
-        if self.wheel not in ("free", "held"):
-            problems.append(Problem("wheel", self.wheel, "", "'free' or 'held'"))
+        if self.wheel not in WHEELS:
+            problems.append(Problem("wheel", self.wheel, "", "'free', 'held' or 'driven'"))
         if self.f_max_hz is not None and not (math.isfinite(self.f_max_hz)
                                               and 1.0 <= self.f_max_hz <= 1e5):
             problems.append(Problem("f_max_hz", self.f_max_hz, "Hz",
@@ -217,7 +225,10 @@ class InPlaneSimulator:
         zone = contact_zone(Grid(self.n_elements, t.R), t.k_cw, t.beta, self.zone_length_m,
                             self.point_spacing_m)
         nr, n = ring.n_ring_dof, self.n_elements
-        free_spin = self.wheel == "free"
+        # a driven wheel's turn is a coordinate as a free one's, its rate given
+        free_spin = self.wheel in ("free", "driven")
+        self._driven = self.wheel == "driven"
+        self._driven_rate = 0.0  # a driven wheel's spin less the tread's, at the step's end
         ny = nr + (1 if free_spin else 0)
         # y = [ring rim-relative, ψ]: ring absolute = ring_rel + P_ψ ψ, the rim's x, z held
         to_abs = np.zeros((ring.n_dof, ny))
@@ -328,7 +339,14 @@ class InPlaneSimulator:
         if self._ring_share:
             self._k = self._k + self._ring_share * self._kh
         a0 = 4.0 / h**2 * self._m + 2.0 / h * self._c + self._k
-        self._a0_inv = np.linalg.inv(a0)
+        if self._driven:
+            # the turn is given: the step solves the ring's rows for the ring's coordinates,
+            # the turn's column a load (its row of the inverse zero: no force moves it)
+            self._a0_inv = np.zeros_like(a0)
+            self._a0_inv[:-1, :-1] = np.linalg.inv(a0[:-1, :-1])
+            self._a0_psi = a0[:, -1].copy()
+        else:
+            self._a0_inv = np.linalg.inv(a0)
         self._yn = self._a0_inv @ self._jnw.T  # ring response to unit point forces
         self._yx = self._a0_inv @ self._jxw.T
         self._wnn, self._wnx = self._jn @ self._yn, self._jn @ self._yx
@@ -484,6 +502,9 @@ class InPlaneSimulator:
         start at rest at 0: the run starts from the static state."""
         if speed_m_s is not None and vehicle_mass_kg is not None:
             raise ValueError("run: give speed_m_s (a road) or vehicle_mass_kg (a vehicle)")
+        if self._driven:
+            raise ValueError("run: wheel = 'driven' takes its spin from a host: step it with "
+                             "InPlaneStepper(sim).advance(..., wheel_rate_rad_s=...)")
         if vehicle_mass_kg is not None and not (math.isfinite(vehicle_mass_kg)
                                                 and vehicle_mass_kg > 0):
             raise ParameterError([Problem("vehicle_mass_kg", vehicle_mass_kg, "kg", "> 0 kg")])
@@ -591,7 +612,12 @@ class InPlaneSimulator:
                  + 0.5 * h * (self._s0 + rim_old[1] + s0_new))
         # the ring's step is linear: y = z0 - Y_n f_n + Y_x f_x with the points' forces,
         # so each pass solves for the 2P forces only (module doc: point laws)
-        z0 = self._a0_inv @ b0
+        if self._driven:  # the turn at the step's end, trapezoidal from the rate given
+            psi_new = self._driven_psi(y, yd)
+            z0 = self._a0_inv @ (b0 - self._a0_psi * psi_new)
+            z0[-1] = psi_new
+        else:
+            z0 = self._a0_inv @ b0
         n_z0 = self._jn @ z0
         t0 = self._kx * gamma + self._cx * (s0_new - self._jxw @ r)
         t_z0 = t0 + self._kg @ z0
@@ -628,6 +654,11 @@ class InPlaneSimulator:
                                        slip_sign * limit / np.maximum(self._kx, 1e-300)),
                      0.0)
         return StepState(y, yd, ydd, e, contact, stick, slip_sign, f_n)
+
+    def _driven_psi(self, y, yd) -> float:
+        """A driven wheel's turn at the step's end: the trapezoid of its rates, the step's
+        start's and the given one (so that the step's ψ̇ is the host's exactly)."""
+        return float(y[-1] + 0.5 * self.step_s * (yd[-1] + self._driven_rate))
 
     def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, n_z0, t_z0):
         """(f_n, f_x) of the step for given sets: the point laws with y eliminated, solved
@@ -823,8 +854,12 @@ class InPlaneStepper:
         e = np.zeros(sim._zone.n_points)
         self._rim = np.zeros(6)
         forces = sim._contact_and_rates(y, np.zeros(ny), e, 0.0, self._rim)
-        ydd = np.linalg.solve(sim._m, sim._f_ext(0.0, torque_n_m, self._rim) + forces[0]
-                              - sim._k @ y)
+        load = sim._f_ext(0.0, torque_n_m, self._rim) + forces[0] - sim._k @ y
+        if sim._driven:  # the host's wheel starts at its steady spin: ψ̈ = 0
+            ydd = np.zeros(ny)
+            ydd[:-1] = np.linalg.solve(sim._m[:-1, :-1], load[:-1])
+        else:
+            ydd = np.linalg.solve(sim._m, load)
         self.state = StepState(y, np.zeros(ny), ydd, e, *forces[1:5])
         self.steps = 0
         self._end = np.zeros(6)  # x, vx, z, vz, road z, road vz at the end of the last step
@@ -835,12 +870,18 @@ class InPlaneStepper:
 
     def advance(self, step_s: float, x_m: float = 0.0, vx_m_s: float = 0.0, z_m: float = 0.0,
                 vz_m_s: float = 0.0, torque_n_m: float = 0.0, road_z_m: float = 0.0,
-                road_vz_m_s: float = 0.0) -> InPlaneOutputs:
+                road_vz_m_s: float = 0.0, wheel_rate_rad_s: float = 0.0) -> InPlaneOutputs:
         """Advance by ``step_s`` (a whole number of the simulator's steps) to the rim's
         state (and with ``host_road`` the road's at the zone front) given for the step's end;
-        returns the outputs there."""
+        returns the outputs there. A driven wheel (``sim.wheel == "driven"``) spins at
+        ``speed / R + wheel_rate_rad_s`` at the step's end, linearly from its spin at the
+        start (its turn itself is immaterial: a rigid turn of the rim and tire stores
+        nothing); ``torque_n_m`` is then not read."""
         sim, h = self.sim, self.sim.step_s
         count = steps_in(step_s, h)
+        if sim._driven:  # the wheel's spin at the start and the end (rad/s)
+            spin_start = sim.spin_total_rad_s(self.state.yd)
+            spin_end = sim.spin_rad_s + wheel_rate_rad_s
         start = self._end
         end = np.array([x_m, vx_m_s, z_m, vz_m_s, road_z_m, road_vz_m_s], dtype=float)
         rim, road, plate = self._rim, self.road, sim.speed_m_s == 0.0
@@ -852,6 +893,9 @@ class InPlaneStepper:
             rim_old, rim = rim, np.array([*x, *z])
             if sim._free_spin:
                 self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
+            if sim._driven:
+                spin = spin_start + (spin_end - spin_start) * (k / count)
+                sim._driven_rate = spin - sim._spin_now
             distance = sim.speed_m_s * time + rim[0]
             if road is not None:
                 front, front_rate, _ = hermite(start[4], start[5], end[4], end[5], step_s,
@@ -983,6 +1027,14 @@ STEPPER_STATE_HEAD = "<8sIIIq"
 STEPPER_STATE_MAGIC = b"INPLANE2"
 
 
+def _not_driven(sim: InPlaneSimulator, what: str) -> None:
+    """The modes and steady states are the tire's with its wheel free or held: a driven
+    wheel's turn is the host's, not the tire's."""
+    if sim.wheel == "driven":
+        raise ValueError(f"{what}: wheel = 'driven' turns as a host says; build the simulator "
+                         "with wheel = 'free' (the wheel's inertia in the tire) or 'held'")
+
+
 def steps_in(step_s: float, simulator_step_s: float) -> int:
     """How many simulator steps make a host's step; refused unless a whole number."""
     count = int(round(step_s / simulator_step_s)) if math.isfinite(step_s) else 0
@@ -1016,6 +1068,7 @@ def loaded_modes(sim: InPlaneSimulator, f_max_hz: float = 200.0) -> LoadedModes:
     The mode whose kinetic energy is most in the wheel's rotation ψ is labelled rotational."""
     if sim.speed_m_s != 0.0:
         raise ValueError("loaded_modes: the tire at rest only (speed_m_s = 0)")
+    _not_driven(sim, "loaded_modes")
     import scipy.linalg
 
     y = sim.static_state()
@@ -1079,6 +1132,7 @@ def steady_rolling(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> SteadyRoll
     tolerance the tests state)."""
     if sim.obstacle is not None:
         raise ValueError("steady_rolling: a flat road only (obstacle = None)")
+    _not_driven(sim, "steady_rolling")
     if sim.spin_rad_s <= 0.0:
         raise ValueError("steady_rolling: the tire must roll (speed_m_s > 0)")
     sim._take_spins(sim.spin_rad_s, sim.spin_rad_s, sim.speed_m_s)  # after a run: nominal

@@ -35,7 +35,8 @@ class InPlaneBuildInput(ctypes.Structure):
     _fields_ = ([(name, ctypes.c_int) for name in ("ny", "np", "hysteretic")]
                 + [(name, ctypes.c_double) for name in ("h", "radius_m")]
                 + [(name, _P) for name in ("m", *_TERMS, *_POINT_MATRICES, "kx", "cx",
-                                           "point_theta")])
+                                           "point_theta")]
+                + [("driven", ctypes.c_int)])
 
 
 class InPlaneBuildOutput(ctypes.Structure):
@@ -43,7 +44,8 @@ class InPlaneBuildOutput(ctypes.Structure):
                 + [(name, ctypes.c_double) for name in ("ring_spin", "ring_share")]
                 + [(name, _P) for name, _ in _TREAD]
                 + [("carry_base", ctypes.POINTER(ctypes.c_int))]
-                + [(name, ctypes.c_double) for name in ("carry_shift", "spin_now")])
+                + [(name, ctypes.c_double) for name in ("carry_shift", "spin_now")]
+                + [("a0_psi", _P)])
 
 
 def _declare(lib) -> None:
@@ -73,7 +75,8 @@ def build_input(sim) -> tuple[InPlaneBuildInput, list]:
         sim._jn, sim._jnw, sim._jxw, sim._jl, sim._kx, sim._cx, sim._zone.point_theta)]
     data = InPlaneBuildInput(int(sim._ny), int(sim._zone.n_points),
                              int(bool(sim.model.tangential.loss_factor)), float(sim.step_s),
-                             float(sim.model.tire.R), *(a.ctypes.data_as(_P) for a in arrays))
+                             float(sim.model.tire.R), *(a.ctypes.data_as(_P) for a in arrays),
+                             int(getattr(sim, "_driven", False)))
     return data, arrays
 
 
@@ -83,6 +86,7 @@ def output_arrays(ny: int, n_points: int) -> dict:
               "pp": (n_points, n_points), "p4": (n_points, 4)}
     arrays = {name: np.zeros(shapes[shape]) for name, shape in _RING + _TREAD}
     arrays["carry_base"] = np.zeros(n_points, dtype=np.int32)
+    arrays["a0_psi"] = np.zeros(ny)
     return arrays
 
 
@@ -91,6 +95,8 @@ def build_output(arrays: dict) -> InPlaneBuildOutput:
     for name, _ in _RING + _TREAD:
         setattr(out, name, arrays[name].ctypes.data_as(_P))
     out.carry_base = arrays["carry_base"].ctypes.data_as(ctypes.POINTER(ctypes.c_int))
+    if "a0_psi" in arrays:  # read with a driven wheel only
+        out.a0_psi = arrays["a0_psi"].ctypes.data_as(_P)
     return out
 
 
@@ -98,7 +104,8 @@ def c_step_matrices(sim, spin_rad_s: float, library=None) -> dict:
     """What ``sim._set_spin(spin_rad_s, speed)`` builds, computed by the C from ``sim``'s
     inputs: a dict named as the simulator's attributes without the underscore (c, k, c1, k1s,
     k2, kh, a0_inv, yn, yx, wnn, wnx, kg_parts, kgn_parts, kgx_parts, ring_spin, ring_share,
-    gain, kg, kgn, kgx, carry, carry_base, carry_weights, carry_shift, spin_now). ValueError
+    gain, kg, kgn, kgx, carry, carry_base, carry_weights, carry_shift, spin_now; a0_psi for a
+    driven wheel). ValueError
     with the C's sentence (parameter, value, allowed) when it refuses the input."""
     lib = load_library() if library is None else library
     _declare(lib)
@@ -118,6 +125,8 @@ def c_step_matrices(sim, spin_rad_s: float, library=None) -> dict:
     for name in ("kg", "kgn", "kgx"):
         result[name + "_parts"] = (arrays[name + "_a"], arrays[name + "_b"])
     result["carry_base"] = arrays["carry_base"]
+    if data.driven:
+        result["a0_psi"] = arrays["a0_psi"]
     for name in ("ring_spin", "ring_share", "carry_shift", "spin_now"):
         result[name] = getattr(out, name)
     return result

@@ -33,7 +33,8 @@ class _Step(ctypes.Structure):
                 + [(name, ctypes.c_double) for name in ("h", "mu", "spin", "dspin", "dshare")]
                 + [(name, _P) for name in _MATRICES + _VECTORS]
                 + [("carry_base", ctypes.POINTER(ctypes.c_int)), ("carry_weights", _P),
-                   ("carry_shift", ctypes.c_double), ("min_entering", ctypes.c_double)])
+                   ("carry_shift", ctypes.c_double), ("min_entering", ctypes.c_double),
+                   ("driven", ctypes.c_int), ("psi_new", ctypes.c_double), ("a0_psi", _P)])
 
 
 class _State(ctypes.Structure):
@@ -95,7 +96,11 @@ class InPlaneKernel:
                                *(a.ctypes.data_as(_P) for a in arrays.values()),
                                base.ctypes.data_as(ctypes.POINTER(ctypes.c_int)),
                                sim._carry_weights.ctypes.data_as(_P), sim._carry_shift,
-                               MIN_ENTERING_FRACTION)
+                               MIN_ENTERING_FRACTION, int(sim._driven), 0.0, None)
+            if sim._driven:
+                a0_psi = _doubles(sim._a0_psi)
+                self._keep.append(a0_psi)
+                self._step.a0_psi = a0_psi.ctypes.data_as(_P)
             self._built_for = key
         else:
             self._s0[:] = sim._s0
@@ -109,6 +114,8 @@ class InPlaneKernel:
         data.spin, data.dspin = self.sim._spin_now, self.sim._ring_offset(state.yd)
         data.dshare = self.sim._share_offset(state.yd)
         data.carry_shift = self.sim._carry_shift
+        if self.sim._driven:
+            data.psi_new = self.sim._driven_psi(state.y, state.yd)
         if self._buffers is None:
             ins, outs, in_struct, out_struct, extra = self._make_buffers(data.ny, data.np)
             height_buffer, rate_buffer, rims = extra

@@ -33,7 +33,8 @@ class InPlaneModelInput(ctypes.Structure):
                 + [(name, ctypes.c_int) for name in ("n_elements", "n_fields", "wheel_free")]
                 + [(name, ctypes.c_double) for name in (
                     "f_max_hz", "zone_length_m", "point_spacing_m", "load_n", "speed_m_s",
-                    "spin_rad_s", "step_s")])
+                    "spin_rad_s", "step_s")]
+                + [("driven", ctypes.c_int)])
 
 
 class InPlaneModel(ctypes.Structure):
@@ -87,11 +88,12 @@ def _copy(pointer, shape, dtype=np.float64) -> np.ndarray:
 
 def model_input(model: InPlaneTire, n_elements: int, *, f_max_hz: float, zone_length_m: float,
                 point_spacing_m: float, load_n: float, speed_m_s: float, spin_rad_s: float,
-                step_s: float, wheel_free: bool) -> InPlaneModelInput:
+                step_s: float, wheel_free: bool, driven: bool = False) -> InPlaneModelInput:
     return InPlaneModelInput(ring_data(model), float(model.tire.k_cw), int(n_elements),
-                             n_fields(model), int(bool(wheel_free)), float(f_max_hz),
+                             n_fields(model), int(bool(wheel_free or driven)), float(f_max_hz),
                              float(zone_length_m), float(point_spacing_m), float(load_n),
-                             float(speed_m_s), float(spin_rad_s), float(step_s))
+                             float(speed_m_s), float(spin_rad_s), float(step_s),
+                             int(bool(driven)))
 
 
 def build_model(inputs: InPlaneModelInput, library=None) -> tuple[int, str, InPlaneModel]:

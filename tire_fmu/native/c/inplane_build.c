@@ -121,7 +121,8 @@ static int check_ring(const InPlaneBuildInput* in, double spin, const InPlaneBui
         || out->k1s == NULL || out->k2 == NULL || out->kh == NULL || out->a0_inv == NULL
         || out->yn == NULL || out->yx == NULL || out->wnn == NULL || out->wnx == NULL
         || out->kg_a == NULL || out->kg_b == NULL || out->kgn_a == NULL || out->kgn_b == NULL
-        || out->kgx_a == NULL || out->kgx_b == NULL)
+        || out->kgx_a == NULL || out->kgx_b == NULL || (in->driven && out->a0_psi == NULL)
+        || (in->driven && in->ny < 2))
         return say_why(why, size, INPLANE_BUILD_NULL,
                    "the scratch and every output of the ring's part must be given");
     return 0;
@@ -348,7 +349,15 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
         if (share != 0.0) k = k + share * in->kh[e];
         work[e] = s_m * in->m[e] + s_c * c + k;
     }
-    if (blocked_lu(work, ny, iwork) != 0)
+    if (in->driven) {
+        /* the turn's column kept, the other rows and columns packed at their own stride
+         * (forward: each entry moves to an index at most its own) */
+        int i, n = ny - 1;
+        for (i = 0; i < ny; i++) out->a0_psi[i] = work[(size_t)i * ny + n];
+        for (i = 0; i < n; i++)
+            for (j = 0; j < n; j++) work[(size_t)i * n + j] = work[(size_t)i * ny + j];
+    }
+    if (blocked_lu(work, in->driven ? ny - 1 : ny, iwork) != 0)
         return say_why(why, why_size, INPLANE_BUILD_SINGULAR,
                    "spin_rad_s = %.17g: 4/h^2 M + 2/h C + K is singular at this spin (h = "
                    "%.17g s)", o, h);
@@ -361,7 +370,20 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
         out->k2[e] = in->k2[e];
         out->kh[e] = in->kh[e];
     }
-    inverse_from_lu(work, ny, iwork, out->a0_inv);
+    if (in->driven) {
+        /* the ring's inverse at stride ny - 1, spread to stride ny from the last entry back,
+         * the turn's row and column zero */
+        int i, n = ny - 1;
+        inverse_from_lu(work, n, iwork, out->a0_inv);
+        for (i = n - 1; i >= 0; i--) {
+            for (j = n - 1; j >= 0; j--)
+                out->a0_inv[(size_t)i * ny + j] = out->a0_inv[(size_t)i * n + j];
+            out->a0_inv[(size_t)i * ny + n] = 0.0;
+        }
+        for (j = 0; j < ny; j++) out->a0_inv[(size_t)n * ny + j] = 0.0;
+    } else {
+        inverse_from_lu(work, ny, iwork, out->a0_inv);
+    }
     out->ring_spin = o;
     out->ring_share = share;
     product_t(out->a0_inv, in->jnw, ny, ny, np, out->yn, scratch);

@@ -41,6 +41,10 @@ typedef struct {
     const double *m, *c0, *c1, *k0, *k1, *k2, *kh;
     const double *jn, *jnw, *jxw, *jl;
     const double *kx, *cx, *point_theta;
+    /* 1: the last coordinate is a driven wheel's turn, given (the simulator's wheel =
+     * "driven"): a0_inv is the inverse of a0's other rows and columns, its row and column of
+     * the turn zero, and a0_psi is a0's column of the turn */
+    int driven;
 } InPlaneBuildInput;
 
 /* What it writes, named as the simulator's attributes. The ring's part (inplane_build_ring):
@@ -59,6 +63,7 @@ typedef struct {
     double *gain, *kg, *kgn, *kgx, *carry, *carry_weights;
     int* carry_base;
     double carry_shift, spin_now;
+    double* a0_psi; /* ny: with driven only (else unread, may be NULL) */
 } InPlaneBuildOutput;
 
 /* Scratch of inplane_build_ring (and inplane_build): ny^2 + ny np doubles (the LU, a

@@ -88,8 +88,9 @@ static size_t terms_size(int k, size_t ny, size_t nd)
 }
 
 /* The build's arrays: the ring's (ny x ny: 0..6; ny x np: 7, 8; np x np: 9, 10; np x ny:
- * 11, 12; np x np: 13..16), the tread's (np x ny: 17, 18; np x np: 19..21; np x 4: 22). */
-#define N_BUILD 23
+ * 11, 12; np x np: 13..16), the tread's (np x ny: 17, 18; np x np: 19..21; np x 4: 22), a
+ * driven wheel's column (ny: 23). */
+#define N_BUILD 24
 static double** build_field(InPlaneBuildOutput* b, int k)
 {
     double** all[N_BUILD];
@@ -98,7 +99,7 @@ static double** build_field(InPlaneBuildOutput* b, int k)
     all[10] = &b->wnx; all[11] = &b->kg_a; all[12] = &b->kg_b; all[13] = &b->kgn_a;
     all[14] = &b->kgn_b; all[15] = &b->kgx_a; all[16] = &b->kgx_b; all[17] = &b->gain;
     all[18] = &b->kg; all[19] = &b->kgn; all[20] = &b->kgx; all[21] = &b->carry;
-    all[22] = &b->carry_weights;
+    all[22] = &b->carry_weights; all[23] = &b->a0_psi;
     return all[k];
 }
 
@@ -111,7 +112,8 @@ static size_t build_size(int k, size_t ny, size_t np)
     if (k < 17) return np * np;
     if (k < 19) return np * ny;
     if (k < 22) return np * np;
-    return np * 4;
+    if (k < 23) return np * 4;
+    return ny;
 }
 
 void inplane_model_free(InPlaneModel* model)
@@ -195,6 +197,10 @@ static int assemble(const InPlaneModelInput* in, InPlaneModel* out, Scratch* s, 
     if (free_spin != 0 && free_spin != 1)
         return say_why(why, size, INPLANE_MODEL_TERMS,
                        "wheel_free = %d: must be 0 (held) or 1 (free)", free_spin);
+    if (in->driven != 0 && !(in->driven == 1 && free_spin == 1))
+        return say_why(why, size, INPLANE_MODEL_TERMS,
+                       "driven = %d: must be 0, or 1 with wheel_free = 1 (a driven wheel's "
+                       "turn is a coordinate, as a free one's)", in->driven);
     n_dof = nf * N;
     rows = n_dof + free_spin;
 
@@ -390,6 +396,7 @@ static int assemble(const InPlaneModelInput* in, InPlaneModel* out, Scratch* s, 
     out->build_in.kx = out->points.kx;
     out->build_in.cx = out->points.cx;
     out->build_in.point_theta = out->point_theta;
+    out->build_in.driven = in->driven;
     status = inplane_build(&out->build_in, in->spin_rad_s, &out->build, s->build_work,
                            s->build_iwork, text, sizeof text);
     if (status != INPLANE_BUILD_OK)

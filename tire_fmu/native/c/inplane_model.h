@@ -38,6 +38,8 @@ typedef struct {
     double speed_m_s;       /* the road's speed against the axle (m/s) */
     double spin_rad_s;      /* the wheel's spin the step is built at (rad/s) */
     double step_s;          /* the step h (s), as inplane_build.h */
+    int driven;             /* 1: the wheel's turn (wheel_free 1) is a host's, given
+                               (inplane_build.h's driven); 0: free or held */
 } InPlaneModelInput;
 
 /* Sizes: n_dof = n_fields N (the ring's rim-relative DOFs), n_basis the Ritz columns r,

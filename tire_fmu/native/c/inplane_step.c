@@ -261,7 +261,10 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
                    + 0.5 * h * (d->s0[i] + rim_old[1] + s0_new);
         t0[i] = d->kx[i] * gamma[i] + d->cx[i] * (s0_new - vp2[i]);
     }
+    if (d->driven) /* the given turn's column is a load; the ring's rows are solved */
+        for (int k = 0; k < ny; ++k) b0[k] -= d->a0_psi[k] * d->psi_new;
     matvec(d->a0_inv, b0, ny, ny, z0);
+    if (d->driven) z0[ny - 1] = d->psi_new;
     matvec(d->jn, z0, p, ny, n_z0);
     matvec(d->kg, z0, p, ny, vp);
     for (int i = 0; i < p; ++i) {

@@ -19,6 +19,12 @@ typedef struct {
     const int* carry_base;
     const double* carry_weights;
     double carry_shift, min_entering;
+    /* a driven wheel (the host gives its spin): the turn psi, the last coordinate, is psi_new
+     * at the step's end, and a0_psi (ny) is the step matrix's column of it (a0_inv's row and
+     * column of psi zero); unread for free and held wheels */
+    int driven;
+    double psi_new;
+    const double* a0_psi;
 } InPlaneStep;
 
 typedef struct {
