@@ -4,19 +4,15 @@ again with fmpy's build, libcosimpy and ecospy against fmpy."""
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
-import stat
 import subprocess
-import sys
 import zipfile
-from importlib import metadata
 from pathlib import Path
 
 import numpy as np
 import pytest
-from native_support import OUTPUTS, Opened, relative_errors, road_drop, run
+from native_support import OUTPUTS, Opened, in_host, relative_errors, road_drop, run
 
 from tire_fmu.fmu.interface import fmu_variables
 
@@ -133,35 +129,11 @@ def test_sources_build_elsewhere_with_fmpy(native_fmu_path, tmp_path):
     assert relative_errors(shipped, again).max() < 1e-12
 
 
-def _tbb_library_folder() -> str:
-    for file in metadata.files("tbb") or ():
-        if file.name.startswith("libtbb.so"):
-            return str(Path(file.locate()).parent)
-    raise AssertionError("the tbb wheel (test extra) has no libtbb.so")
-
-
-def _in_host(fmu, host: str, load: float, speed: float, tmp_path) -> np.ndarray:
-    out = tmp_path / f"{host}.json"
-    env = dict(os.environ)
-    if host == "ecospy":
-        env["LD_LIBRARY_PATH"] = os.pathsep.join(
-            [_tbb_library_folder(), env.get("LD_LIBRARY_PATH", "")])
-        from importlib.util import find_spec  # importing ecospy here would need libtbb loaded
-
-        for proxy in Path(find_spec("ecospy").origin).parent.glob("binaries/proxyfmu"):
-            proxy.chmod(proxy.stat().st_mode | stat.S_IXUSR)  # the wheel ships it without
-    result = subprocess.run([sys.executable, str(HERE / "other_hosts.py"), str(fmu), host,
-                             repr(load), repr(speed), "400", str(out)], capture_output=True,
-                            text=True, timeout=300, env=env)
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    return np.array(json.loads(out.read_text()))
-
-
 @pytest.mark.parametrize("host", ["libcosimpy", "ecospy"])
 @pytest.mark.parametrize("load, speed", [(27700.0, 0.0), (40000.0, 15.0)])
 def test_other_hosts_give_fmpys_outputs(native_fmu_path, host, load, speed, tmp_path):
-    reference = _in_host(native_fmu_path, "fmpy", load, speed, tmp_path)
-    other = _in_host(native_fmu_path, host, load, speed, tmp_path)
+    reference = in_host(native_fmu_path, "fmpy", load, speed, tmp_path)
+    other = in_host(native_fmu_path, host, load, speed, tmp_path)
     assert reference.shape == other.shape == (400, len(OUTPUTS))
     if speed == 0.0:
         assert (reference[:, 2] == 0.0).any()  # through a lift-off
