@@ -1,6 +1,8 @@
 """Helpers for the in-plane FMUs' tests (TireInPlane, TireInPlaneNative): an fmpy instance
 with its log, the variables' names."""
 
+from ctypes import byref
+
 import fmpy
 import numpy as np
 from fmpy import extract, read_model_description
@@ -11,6 +13,7 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
+from fmpy.logging import addLoggerProxy
 
 from vehicle_demo.cosim import printed
 
@@ -22,7 +25,10 @@ OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin
 class Instance:
     """One in-plane FMU instance (TireInPlane or TireInPlaneNative) in fmpy, with its log."""
 
-    def __init__(self, path, **parameters):
+    def __init__(self, path, format_log: bool = False, **parameters):
+        """``format_log``: the log through fmpy's printf proxy, for an FMU whose messages are
+        formats with arguments (the native ones); it keeps one logger per process, so only
+        the last such instance's log is its own."""
         md = read_model_description(path)
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.types = {v.name: v.type for v in md.modelVariables}
@@ -33,6 +39,8 @@ class Instance:
                 (status, printed(message))))
         self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
         self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
+        if format_log:
+            addLoggerProxy(byref(self.callbacks))
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
                              modelIdentifier=md.coSimulation.modelIdentifier,
                              instanceName="inplane")

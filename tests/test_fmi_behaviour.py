@@ -1094,7 +1094,10 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               # every parameter's range above
               "MIN_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
               "MAX_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
-              "MAX_CONTACT_POINTS": "test_a_spacing_that_makes_too_many_contact_points_..."}
+              "MAX_CONTACT_POINTS": "test_a_spacing_that_makes_too_many_contact_points_...",
+              # in test_inplane_fmu_limits.py, against both in-plane FMUs
+              "MAX_TORQUE_N_M": "test_a_torque_beyond_its_limit_is_refused_alike",
+              "INPLANE_CRITICAL_SPEED_FRACTION": "test_a_speed_near_the_critical_speed_..."}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",
@@ -1104,5 +1107,10 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "SUBSTEP_WORK_BASE", "SUBSTEP_WORK_PER_MODE", "SUBSTEP_WORK_PER_ORDER_NODE",
              "SUBSTEP_WORK_PER_SUPPORT", "SUBSTEP_WORK_PER_POINT", "SUBSTEP_WORK_PER_NODE_PAIR",
              "SUBSTEP_WORK_PER_RATE_ENTRY", "DEFAULT_POINT_SPACING_M", "POINT_SPACING_SLACK",
-             "MOST_POINTS_PER_NODE", "SIDEWALL_TIE_FACTOR", "HYSTERESIS_FULL_SPEED_M_S"}
+             "MOST_POINTS_PER_NODE", "SIDEWALL_TIE_FACTOR", "HYSTERESIS_FULL_SPEED_M_S",
+             # the in-plane step's (held to the Python by both FMUs' agreement)
+             "INPLANE_MAX_DEFLECTION_FRACTION", "INPLANE_HOST_ROAD_MARGIN_M",
+             "INPLANE_SPIN_REBUILD_FRACTION", "INPLANE_RING_REBUILD_FRACTION",
+             "INPLANE_MAX_SET_PASSES", "INPLANE_SETTLE_PASSES", "INPLANE_MIN_ENTERING_FRACTION",
+             "INPLANE_STATE_SPIN_FACTOR"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)

@@ -47,6 +47,11 @@ def python_path(tmp_path_factory):
     return build_inplane_fmu(tmp_path_factory.mktemp("inplane_python"))
 
 
+def instance(path, **parameters) -> Instance:
+    """An instance of either FMU, the native one's log formatted (its messages are formats)."""
+    return Instance(str(path), format_log="Native" in str(path), **parameters)
+
+
 # -- the runs --------------------------------------------------------------------------------
 
 CLEAT = cleat(0.02, 0.02)
@@ -93,7 +98,7 @@ RUNS = {  # parameters, inputs at the end of each step, communication step, step
 
 def outputs_of(path, parameters, signal, h, steps):
     """(steps + 1, 7) outputs and (steps + 1,) in_contact, from before the first step on."""
-    fmu = Instance(str(path), **parameters).start()
+    fmu = instance(path, **parameters).start()
     rows, contact = [fmu.outputs()], [fmu.fmu.getBoolean([fmu.vr["in_contact"]])[0]]
     for k in range(1, steps + 1):
         rows.append(fmu.step(h, **signal(k * h)))
@@ -131,7 +136,7 @@ def test_the_native_fmu_gives_the_python_fmus_outputs(native_path, python_path, 
 def _refused(path, **parameters):
     """The status of fmi2ExitInitializationMode and the parameter problems logged, by name:
     {name: (the value it says, the message)}."""
-    fmu = Instance(str(path), **parameters)
+    fmu = instance(path, **parameters)
     try:
         fmu.start()
         status = 0
@@ -183,7 +188,7 @@ def test_a_speed_above_the_critical_fraction_is_refused(native_path, python_path
 def test_a_step_not_a_whole_multiple_of_step_size_is_refused_and_changes_nothing(
         native_path, python_path):
     def run(path, refuse: bool):
-        fmu = Instance(str(path), speed=10.0).start()
+        fmu = instance(path, speed=10.0).start()
         rows = [fmu.step(1e-3, **braking(k * 1e-3)) for k in range(1, 6)]
         if refuse:
             with pytest.raises(FMICallException) as error:
@@ -203,7 +208,7 @@ def test_a_step_not_a_whole_multiple_of_step_size_is_refused_and_changes_nothing
 
 def test_fmu_states_round_trip_bit_for_bit(native_path):
     h = 5e-4
-    fmu = Instance(str(native_path), speed=10.0).start()
+    fmu = instance(native_path, speed=10.0).start()
     for k in range(1, 21):
         fmu.step(h, **rim_moving(k * h) | braking(k * h))
     state, t = fmu.fmu.getFMUstate(), fmu.t
@@ -222,7 +227,7 @@ def test_fmu_states_round_trip_bit_for_bit(native_path):
     fmu.fmu.freeFMUstate(state)
     fmu.close()
     # a fresh instance, never initialised, given the bytes: the same tire and the same bits
-    fresh = Instance(str(native_path))
+    fresh = instance(native_path)
     fresh.fmu.setFMUstate(fresh.fmu.deSerializeFMUstate(data))
     assert np.array_equal(run_on(fresh), first)
     fresh.close()
@@ -235,9 +240,14 @@ def test_it_declares_tireinplanes_variables_and_ships_its_sources(native_path, p
     native, python = (read_model_description(str(p)) for p in (native_path, python_path))
     assert native.coSimulation.modelIdentifier == "TireInPlaneNative"
 
+    def start(v):
+        if v.causality == "output":
+            return None
+        return v.start.lower() in ("true", "1") if v.type == "Boolean" else float(v.start)
+
     def variables(md):
-        return [(v.name, v.type, v.causality, v.variability, v.unit,
-                 None if v.causality == "output" else float(v.start)) for v in md.modelVariables]
+        return [(v.name, v.type, v.causality, v.variability, v.unit, start(v))
+                for v in md.modelVariables]
 
     assert variables(native) == variables(python)
     assert "Needs no Python" in native.description
@@ -261,7 +271,9 @@ def test_the_cli_builds_it(tmp_path, capsys):
 
     code = main(["build-fmu", str(tmp_path), "--inplane", "--native", "--platform", "linux64",
                  "--tangential", "friction_coefficient=0.6"])
-    assert code == 0, capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert err.count("\n") == 1 and "TireInPlaneNative.fmu" in err  # "wrote PATH"
     md = read_model_description(str(tmp_path / "TireInPlaneNative.fmu"))
     starts = {v.name: v.start for v in md.modelVariables}
     assert md.coSimulation.modelIdentifier == "TireInPlaneNative"

@@ -949,7 +949,7 @@ class InPlaneStepper:
         if speed != self.sim.speed_m_s:
             return f"its road speed {speed!r} m/s is not this tire's {self.sim.speed_m_s!r}"
         for value in (spin, ring_spin):
-            if not abs(value) <= 10.0 * max(self.sim.spin_rad_s, 1.0):
+            if not abs(value) <= STATE_SPIN_FACTOR * max(self.sim.spin_rad_s, 1.0):
                 return f"its wheel spin {value!r} rad/s is beyond what this tire can hold"
         return None
 
@@ -976,6 +976,8 @@ class InPlaneStepper:
 #: A host's road is kept this far behind the zone's rear (m): the rim may move back by up to
 #: the largest displacement an FMU input takes.
 HOST_ROAD_MARGIN_M = 1.0
+#: A state's spins may be at most this many times the nominal one (or 1 rad/s).
+STATE_SPIN_FACTOR = 10.0
 #: The stepper's state: magic, coordinates, points, road samples, steps taken.
 STEPPER_STATE_HEAD = "<8sIIIq"
 STEPPER_STATE_MAGIC = b"INPLANE2"

@@ -41,6 +41,8 @@ DEFAULT_HOST_POINT_SPACING_M = 0.01
 MAX_HOST_LOAD_N = 1.0e5
 #: The speed may be at most this fraction of the mesh's critical speed.
 CRITICAL_SPEED_FRACTION = 0.95
+#: The static deflection must stay below this fraction of the tread radius.
+MAX_DEFLECTION_FRACTION = 0.2
 #: The operating point's ranges (inclusive): (low, high, unit) by HostSettings field.
 HOST_RANGES = {
     "load_n": (0.0, MAX_HOST_LOAD_N, "N"),
@@ -51,6 +53,12 @@ HOST_RANGES = {
     "point_spacing_m": (1e-4, 0.1, "m"),
     "step_s": (1e-6, 1e-3, "s"),
 }
+
+
+#: The FMUs' names for HostSettings' fields (their parameters and messages).
+FMU_NAMES = {"load_n": "load", "speed_m_s": "speed", "n_elements": "n_elements",
+             "f_max_hz": "f_max", "zone_length_m": "contact_zone_length",
+             "point_spacing_m": "contact_point_spacing", "step_s": "step_size"}
 
 
 @dataclass(frozen=True)
@@ -184,10 +192,11 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
     # tire's to a fraction of a per cent), so that rim_Fz starts at the load
     deflection = deflection_for_load(tire, settings.load_n, n, f_max_hz=settings.f_max_hz,
                                      **options)
-    if not 0.0 < deflection < 0.2 * tire.tire.R:
+    most = MAX_DEFLECTION_FRACTION * tire.tire.R
+    if not 0.0 < deflection < most:
         raise ParameterError([Problem("load_n", settings.load_n, "N",
-                                      f"a load the tire carries below {0.2 * tire.tire.R:g} m "
-                                      "of deflection")])
+                                      f"a load the tire carries below {most:g} m of "
+                                      "deflection")])
     sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
                            wheel="free" if settings.wheel_free else "held",
                            f_max_hz=settings.f_max_hz, backend=backend, library=library,

@@ -19,6 +19,8 @@ MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
 #: finite enough that no product inside a step can overflow.
 MAX_DISPLACEMENT_M = 10.0
 MAX_VELOCITY_M_S = 1000.0
+#: The largest torque on the wheel an FMU takes (N m): ten times a truck wheel's brake.
+MAX_TORQUE_N_M = 3.0e5
 #: Largest displacement and rate a state may hold (m, m/s): the tread's excursion at the zone
 #: nodes from any one mode, penetrations, the rim and road it saw. A step of an FMU moves the
 #: rim and road at most MAX_DISPLACEMENT_M + MAX_VELOCITY_M_S x 1 s = 1010 m from equilibrium;

@@ -201,10 +201,9 @@ def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
     names = ("__init__.py", "interface.py", "spec.py") + (("slave.py",) if with_slave else ())
     for name in names:  # the table and wording it uses
         shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
-    # the compiled kernels' ctypes (the radial step's, the in-plane step's and the in-plane
-    # critical speed's, which the in-plane host imports at a rolling start)
-    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py",
-                 "inplane_critical.py", "inplane_ring.py"):
+    # the compiled kernels' ctypes (the radial step's and the in-plane step's)
+    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py", "inplane_ring.py",
+                 "inplane_critical.py"):
         shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)
     requirements = folder / "requirements.txt"
     requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"

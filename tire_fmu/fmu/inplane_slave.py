@@ -21,8 +21,9 @@ import struct
 import time
 
 import tire_fmu
+from tire_fmu.core.inplane import TANGENTIAL_RANGES
 from tire_fmu.core.inplane_contact import ContactSetError, steps_in
-from tire_fmu.core.inplane_host import HostSettings, build_host_stepper
+from tire_fmu.core.inplane_host import FMU_NAMES, HostSettings, build_host_stepper
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError
 from tire_fmu.fmu.interface import (
     INPLANE_IN_CONTACT,
@@ -38,11 +39,10 @@ from tire_fmu.fmu.spec import MESSAGES, STATE_MODEL_FLAGS, Phase, fmu_message
 
 MODEL_IDENTIFIER = "TireInPlane"
 #: The in-plane FMU's names for the core's settings (HostSettings), for its messages.
-INPLANE_FMU_NAMES = {"load_n": "load", "speed_m_s": "speed", "f_max_hz": "f_max",
-                     "zone_length_m": "contact_zone_length",
-                     "point_spacing_m": "contact_point_spacing", "step_s": "step_size"}
-_TANGENTIAL = ("EA", "k_t1", "k_t2", "rim_radius_m", "wheel_mass_kg", "wheel_inertia_kg_m2",
-               "k_tx", "friction_coefficient")
+INPLANE_FMU_NAMES = FMU_NAMES
+#: Every tangential datum is a parameter (loss_factor too: it was once left out of the build,
+#: so the FMU ran without the hysteretic loss whatever it was given)
+_TANGENTIAL = tuple(TANGENTIAL_RANGES)
 
 
 class TireInPlane(TireModal):

@@ -51,6 +51,7 @@ from tire_fmu.core.contact_dynamics import (
 )
 from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError, validate, value_text
+from tire_fmu.core.step_limits import MAX_TORQUE_N_M
 from tire_fmu.fmu.interface import (
     BAKED_PARAMETERS_FILE,
     FMU_NAMES,
@@ -84,8 +85,6 @@ from tire_fmu.fmu.spec import (
 )
 
 MODEL_IDENTIFIER = "TireModal"
-#: The largest torque on the wheel an FMU takes (N m): ten times a truck wheel's brake.
-MAX_TORQUE_N_M = 3.0e5
 _REFUSED = -3  # the step kernels' status for a step their rules refuse (kernel.h)
 # the hot path's constants as module globals (cheaper to read than attributes)
 _RUNNING = Phase.RUNNING

@@ -34,6 +34,8 @@ from ..core import (
     contact_dynamics,
     free_ring,
     inplane,
+    inplane_contact,
+    inplane_host,
     kernel_numpy,
     modal_form,
     model,
@@ -89,6 +91,7 @@ CONSTANTS: dict[str, float | int] = {
     # the inputs a step accepts (beyond them a product inside the step could overflow)
     "MAX_DISPLACEMENT_M": contact_dynamics.MAX_DISPLACEMENT_M,
     "MAX_VELOCITY_M_S": contact_dynamics.MAX_VELOCITY_M_S,
+    "MAX_TORQUE_N_M": step_limits.MAX_TORQUE_N_M,
     # what an FMU state may hold (a state is checked for what it means)
     "MAX_STATE_DISPLACEMENT_M": contact_dynamics.MAX_STATE_DISPLACEMENT_M,
     "MAX_STATE_VELOCITY_M_S": contact_dynamics.MAX_STATE_VELOCITY_M_S,
@@ -132,6 +135,17 @@ CONSTANTS: dict[str, float | int] = {
     "SIDEWALL_TIE_FACTOR": parameters.SIDEWALL_TIE_FACTOR,
     # the in-plane ring's hysteretic loss: the road speed of its full share
     "HYSTERESIS_FULL_SPEED_M_S": inplane.HYSTERESIS_FULL_SPEED_M_S,
+    # the in-plane FMU's operating point and its step's rules (core/inplane_host.py,
+    # core/inplane_contact.py)
+    "INPLANE_CRITICAL_SPEED_FRACTION": inplane_host.CRITICAL_SPEED_FRACTION,
+    "INPLANE_MAX_DEFLECTION_FRACTION": inplane_host.MAX_DEFLECTION_FRACTION,
+    "INPLANE_HOST_ROAD_MARGIN_M": inplane_contact.HOST_ROAD_MARGIN_M,
+    "INPLANE_SPIN_REBUILD_FRACTION": inplane_contact.SPIN_REBUILD_FRACTION,
+    "INPLANE_RING_REBUILD_FRACTION": inplane_contact.RING_REBUILD_FRACTION,
+    "INPLANE_MAX_SET_PASSES": inplane_contact.MAX_SET_PASSES,
+    "INPLANE_SETTLE_PASSES": inplane_contact.SETTLE_PASSES,
+    "INPLANE_MIN_ENTERING_FRACTION": inplane_contact.MIN_ENTERING_FRACTION,
+    "INPLANE_STATE_SPIN_FACTOR": inplane_contact.STATE_SPIN_FACTOR,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -463,6 +477,22 @@ VALUE_REFERENCES = {"INPUTS_FIRST": INPUTS.start, "N_INPUTS": INPUTS.stop - INPU
                     "IN_CONTACT": IN_CONTACT}
 
 
+def value_references(variables: tuple[FmuVariable, ...]) -> dict[str, int]:
+    """The hot path's blocks of a variable table, as :data:`VALUE_REFERENCES` (the radial
+    FMU's): the inputs first, then the Real outputs, then in_contact."""
+    inputs = [vr for vr, v in enumerate(variables) if v.causality == "input"]
+    outputs = [vr for vr, v in enumerate(variables)
+               if v.causality == "output" and v.type == "Real"]
+    in_contact = [v.name for v in variables].index("in_contact")
+    if inputs != list(range(len(inputs))) or outputs != list(
+            range(len(inputs), len(inputs) + len(outputs))) or in_contact != len(
+            inputs) + len(outputs):
+        raise ValueError("the variable table's inputs, Real outputs and in_contact must be "
+                         "contiguous blocks, in that order, from value reference 0")
+    return {"INPUTS_FIRST": 0, "N_INPUTS": len(inputs), "OUTPUTS_FIRST": len(inputs),
+            "N_OUTPUTS": len(outputs), "IN_CONTACT": in_contact}
+
+
 def fmu_message(text: str) -> str:
     """A core message in the FMU's names for the parameters and for "no limit"."""
     for core, fmu in FMU_WORDING:
@@ -526,7 +556,7 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     for name, value in CONSTANTS.items():
         lines.append(f"#define SPEC_{name} {_c_number(value)}")
     lines.append("")
-    for name, value in VALUE_REFERENCES.items():
+    for name, value in value_references(variables).items():
         lines.append(f"#define SPEC_BLOCK_{name} {value}")
     lines.append(f"#define SPEC_N_VARIABLES {len(variables)}")
     for vr, v in enumerate(variables):
@@ -567,6 +597,23 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
                      f"{_c_string(f.description)}, {_c_string(f.range_text())}, "
                      f"{_c_number(f.low)}, {_c_number(f.high)}, {int(f.low_inclusive)}, "
                      f"{int(f.integer)}}},")
+    lines += ["};", "",
+              "/* the in-plane FMU's ranges (inclusive), in the order of the core's checks: "
+              "the tangential data (core/inplane.py's TANGENTIAL_RANGES), then the operating "
+              "point (core/inplane_host.py's HOST_RANGES, by FMU name) */",
+              "typedef struct {", "    const char *name, *unit;", "    double low, high;",
+              "    int integer;", "} SpecRange;", "",
+              f"#define SPEC_N_TANGENTIAL_FIELDS {len(inplane.TANGENTIAL_RANGES)}",
+              "static const SpecRange SPEC_TANGENTIAL_FIELDS[SPEC_N_TANGENTIAL_FIELDS] = {"]
+    for name, (low, high, unit) in inplane.TANGENTIAL_RANGES.items():
+        lines.append(f"    {{{_c_string(name)}, {_c_string(unit)}, {_c_number(float(low))}, "
+                     f"{_c_number(float(high))}, 0}},")
+    lines += ["};", f"#define SPEC_N_INPLANE_RANGES {len(inplane_host.HOST_RANGES)}",
+              "static const SpecRange SPEC_INPLANE_RANGES[SPEC_N_INPLANE_RANGES] = {"]
+    for name, (low, high, unit) in inplane_host.HOST_RANGES.items():
+        fmu_name = inplane_host.FMU_NAMES[name]
+        lines.append(f"    {{{_c_string(fmu_name)}, {_c_string(unit)}, {_c_number(float(low))}, "
+                     f"{_c_number(float(high))}, {int(name == 'n_elements')}}},")
     lines += ["};", ""]
     lines.append(f"#define SPEC_STATE_MAGIC {_c_string(STATE_MAGIC)}")
     lines.append(f"#define SPEC_STATE_VERSION {STATE_VERSION}")

@@ -85,10 +85,10 @@ class NativeKind:
 
 RADIAL = NativeKind(
     "radial", "TireModalNative",
-    ("fmi2_layer.c", "tire_model.c", "ring.c", "contact.c", "contract_pack.c", "road.c",
-     "kernel.c", "memory.c", "numerics.c"),
-    ("model.h", "tire.h", "numerics.h", "contract.h", "contract_pack.h", "kernel.h",
-     *FMI_HEADERS),
+    ("fmi2_layer.c", "tire_model.c", "model_problems.c", "ring.c", "contact.c",
+     "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c"),
+    ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "contract_pack.h",
+     "kernel.h", *FMI_HEADERS),
     lambda start_values: fmu_variables(parameter_values=start_values),
     "Open in-plane ring tire (0-300 Hz), native C: builds its free-ring modal model and "
     "static footprint for the parameters at initialisation, then steps with the unilateral "
@@ -97,13 +97,13 @@ RADIAL = NativeKind(
 
 INPLANE = NativeKind(
     "inplane", "TireInPlaneNative",
-    ("fmi2_layer.c", "inplane_tire_model.c", "inplane_model.c", "inplane_step.c",
-     "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c", "inplane_build.c",
-     "inplane_static.c", "inplane_points.c", "inplane_terms.c", "contact.c", "numerics.c",
-     "memory.c"),
-    ("model.h", "tire.h", "numerics.h", "contract.h", "inplane_model.h", "inplane_build.h",
-     "inplane_critical.h", "inplane_points.h", "inplane_ring.h", "inplane_ritz.h",
-     "inplane_static.h", "inplane_terms.h", *FMI_HEADERS),
+    ("fmi2_layer.c", "inplane_tire_model.c", "model_problems.c", "inplane_model.c",
+     "inplane_step.c", "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c",
+     "inplane_build.c", "inplane_static.c", "inplane_points.c", "inplane_terms.c", "contact.c",
+     "numerics.c", "memory.c"),
+    ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "inplane_model.h",
+     "inplane_step.h", "inplane_build.h", "inplane_critical.h", "inplane_points.h",
+     "inplane_ring.h", "inplane_ritz.h", "inplane_static.h", "inplane_terms.h", *FMI_HEADERS),
     inplane_fmu_variables,
     "Open in-plane ring tire with tangential tread motion, the wheel's rotation and Coulomb "
     "friction in the footprint (0-300 Hz), native C: Fx, Fz and the axle moment My from the "
@@ -358,8 +358,9 @@ def build_native_fmu(out: str | Path, start_values: dict | None = None,
                      model_identifier: str | None = None,
                      validate: bool = True, kind: str | NativeKind = "radial") -> Path:
     """Write the native FMU of ``kind`` ("radial": TireModalNative, "inplane":
-    TireInPlaneNative; see :data:`KINDS`) to ``out`` (a ``.fmu`` path, or a folder for
-    ``<model_identifier>.fmu``; the identifier defaults to the kind's) and return its path.
+    TireInPlaneNative; see :data:`KINDS`) to ``out`` (a ``.fmu`` path, or a folder, created
+    if missing, for ``<model_identifier>.fmu``; the identifier defaults to the kind's) and
+    return its path.
 
     ``start_values`` (FMU parameter name -> value, see :func:`parameter_start_values`) become
     the parameters' start values: an operating point frozen as defaults, still settable before
@@ -376,7 +377,8 @@ def build_native_fmu(out: str | Path, start_values: dict | None = None,
     if unknown:
         raise NativeBuildError(f"platforms {unknown}: known {sorted(chains)}")
     out = Path(out)
-    if out.is_dir():
+    if out.is_dir() or out.suffix.lower() != ".fmu":  # a folder, as build_inplane_fmu takes
+        out.mkdir(parents=True, exist_ok=True)
         out = out / f"{model_identifier}.fmu"
     if not out.parent.is_dir():
         raise NativeBuildError(f"{out}: folder {out.parent} does not exist")

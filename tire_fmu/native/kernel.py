@@ -29,7 +29,8 @@ KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c", "inplane_step.
                   "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c", "inplane_build.c",
                   "inplane_static.c", "contact.c", "inplane_points.c", "inplane_terms.c",
                   "inplane_model.c")
-KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h", "inplane_ring.h",
+KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h", "inplane_step.h",
+                  "inplane_ring.h",
                   "inplane_ritz.h", "inplane_critical.h", "inplane_build.h", "inplane_static.h",
                   "inplane_points.h", "inplane_terms.h", "inplane_model.h")
 KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")

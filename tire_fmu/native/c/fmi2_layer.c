@@ -446,10 +446,11 @@ static const char* type_name(SpecType type)
     return type == SPEC_REAL ? "Real" : type == SPEC_INTEGER ? "Integer" : "Boolean";
 }
 
-/* The largest magnitude an input may have: a position (m) or a rate (m/s). NaN fails the
- * comparison with it, so one test refuses both. */
+/* The largest magnitude an input may have: a position (m), a rate (m/s) or a torque (N.m).
+ * NaN fails the comparison with it, so one test refuses both. */
 static double input_limit(const SpecVariable* v)
 {
+    if (v->unit[0] == 'N') return SPEC_MAX_TORQUE_N_M;
     return v->unit[0] == 'm' && v->unit[1] == '/' ? SPEC_MAX_VELOCITY_M_S
                                                    : SPEC_MAX_DISPLACEMENT_M;
 }
@@ -730,9 +731,21 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
             return refuse(inst, call, why);
         }
     }
+    if (model_step_problem(inst->model, h_value, why, sizeof why) != NULL) {
+        number(t, currentCommunicationPoint);
+        number(h, h_value);
+        snprintf(call, sizeof call, SPEC_MSG_STEP_CALL, t, h);
+        return refuse(inst, call, why);
+    }
     /* the model's own clock goes on: the host's t, within rounding of it, would bring its
      * clock's rounding into the road history (core/clock.py) */
     status = model_step(inst->model, communicationStepSize, inst->values);
+    if (status == MODEL_DISCARD) {  /* refused and undone by the model: nothing changed */
+        number(t, currentCommunicationPoint);
+        number(h, h_value);
+        snprintf(call, sizeof call, SPEC_MSG_STEP_CALL, t, h);
+        return refuse(inst, call, model_step_refusal(inst->model));
+    }
     if (status == MODEL_ERROR) {
         return step_failed(inst, currentCommunicationPoint, SPEC_MSG_OUT_OF_MEMORY);
     }

@@ -127,8 +127,7 @@ static int check_ring(const InPlaneBuildInput* in, double spin, const InPlaneBui
     return 0;
 }
 
-/* core/inplane.py's hysteresis_share */
-static double share_at(double spin_rad_s, double radius_m)
+double inplane_hysteresis_share(double spin_rad_s, double radius_m)
 {
     double full = SPEC_HYSTERESIS_FULL_SPEED_M_S / radius_m;
     double share = spin_rad_s / full;
@@ -340,7 +339,7 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
     ny = in->ny, np = in->np, h = in->h;
     n2 = (size_t)ny * (size_t)ny;
     scratch = work + n2;
-    share = in->hysteretic ? share_at(o, in->radius_m) : 0.0;
+    share = in->hysteretic ? inplane_hysteresis_share(o, in->radius_m) : 0.0;
     s_m = 4.0 / (h * h), s_c = 2.0 / h, two_o = 2.0 * o;
     /* a0 first, into the scratch: nothing is written until it factors */
     for (e = 0; e < n2; e++) {

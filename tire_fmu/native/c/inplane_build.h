@@ -76,6 +76,10 @@ int inplane_build_ring(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBu
 int inplane_build_tread(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBuildOutput* out,
                         char* why, size_t why_size);
 
+/* core/inplane.py's hysteresis_share: the hysteretic loss's share at this spin, in [-1, 1]
+ * (linear up to SPEC_HYSTERESIS_FULL_SPEED_M_S of the tread, of the sign of the rolling). */
+double inplane_hysteresis_share(double spin_rad_s, double radius_m);
+
 /* Both at one spin: the simulator's _set_spin. */
 int inplane_build(const InPlaneBuildInput* in, double spin_rad_s, InPlaneBuildOutput* out,
                   double* work, int* iwork, char* why, size_t why_size);

@@ -16,23 +16,7 @@
 #include <stddef.h>
 #include <string.h>
 
-typedef struct {
-    int ny, np, free_spin, max_passes, settle_passes;
-    double h, mu, spin, dspin, dshare;
-    const double *m, *c, *a0_inv, *yn, *yx, *wnn, *wnx, *kg, *kgn, *kgx, *gain, *carry;
-    const double *jn, *jxw, *jl, *rim_inertia, *c1, *k1s, *k2, *kh;
-    const double *kn, *cn, *kx, *cx, *pen0, *sec, *s0;
-    /* the carry's stencils (carry_stencil: base, 4 weights per point), the step's shift in
-     * spacings and the least entering fraction (entering_fractions, carry_edges) */
-    const int* carry_base;
-    const double* carry_weights;
-    double carry_shift, min_entering;
-} InPlaneStep;
-
-typedef struct {
-    double *y, *yd, *ydd, *e, *slip_sign, *f_n;
-    int *contact, *stick;
-} InPlaneState;
+#include "inplane_step.h"
 
 /* out = a x; four rows at a time with four partial sums each, so that the products overlap
  * (the compiler may not reorder a single sum's additions) */

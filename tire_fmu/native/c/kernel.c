@@ -1538,14 +1538,6 @@ static double largest_abs(const unsigned char* in, size_t first, int count)
     return big;
 }
 
-double clock_resolved_until(double h)
-{
-    int exponent;
-    frexp(h, &exponent);
-    return ldexp(1.0, exponent + 52);
-}
-
-int clock_resolves(double time, double h) { return fabs(time) + h < clock_resolved_until(h); }
 
 /* the road history as the reader keeps it (core: kernel_numpy.history_problems) */
 static void history_problems(const TireKernel* kn, const unsigned char* in, size_t t0,

@@ -30,8 +30,14 @@ void model_preview(const double* values, double* out_values);
 /* build from the parameters in values; outputs written into values. MODEL_ERROR after logging
  * every problem (nothing changed then) */
 int model_initialise(Model* model, const double* values, double start_time, double* out_values);
-/* one communication step from model_time to + h with the inputs in values */
+/* why the model cannot take a step of h by a rule of its own (into why, returned), or NULL:
+ * the layer then refuses the step and nothing changes */
+const char* model_step_problem(const Model* model, double h, char* why, size_t size);
+/* one communication step from model_time to + h with the inputs in values: MODEL_OK;
+ * MODEL_DISCARD when the model refused the step as it went and undid it (nothing changed:
+ * model_step_refusal says why); MODEL_ERROR when it failed (out of memory) */
 int model_step(Model* model, double h, double* values);
+const char* model_step_refusal(const Model* model);
 /* the outputs at model_time for the inputs in values (direct feedthrough) */
 int model_refresh(Model* model, double* values);
 /* the model's clock: start + the compensated sum of its steps (it never takes the host's t) */

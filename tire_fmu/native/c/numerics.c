@@ -812,3 +812,13 @@ int say_why(char* why, size_t size, int status, const char* format, ...)
     }
     return status;
 }
+
+/* the clock (core/clock.py) */
+double clock_resolved_until(double h)
+{
+    int exponent;
+    frexp(h, &exponent);
+    return ldexp(1.0, exponent + 52);
+}
+
+int clock_resolves(double time, double h) { return fabs(time) + h < clock_resolved_until(h); }

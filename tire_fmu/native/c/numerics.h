@@ -87,4 +87,9 @@ uint64_t fnv1a(uint64_t hash, const unsigned char* bytes, size_t count);
  * when why is NULL), and status returned, so that `return say_why(why, size, 3, ...)` refuses
  * in one line. */
 int say_why(char* why, size_t size, int status, const char* format, ...);
+/* The clock (core/clock.py): whether a clock of doubles resolves the step h from time, and
+ * up to which time it does. */
+int clock_resolves(double time, double h);
+double clock_resolved_until(double h);
+
 #endif

@@ -27,6 +27,7 @@
 #define SPEC_KERNEL_CACHE_SIZE 32
 #define SPEC_MAX_DISPLACEMENT_M 10.0
 #define SPEC_MAX_VELOCITY_M_S 1000.0
+#define SPEC_MAX_TORQUE_N_M 300000.0
 #define SPEC_MAX_STATE_DISPLACEMENT_M 10000.0
 #define SPEC_MAX_STATE_VELOCITY_M_S 1000000.0
 #define SPEC_ACTIVE_SET_PER_NODE 2
@@ -62,6 +63,15 @@
 #define SPEC_MIN_LAW_PRESSURE_PA 10000.0
 #define SPEC_SIDEWALL_TIE_FACTOR 100.0
 #define SPEC_HYSTERESIS_FULL_SPEED_M_S 0.5
+#define SPEC_INPLANE_CRITICAL_SPEED_FRACTION 0.95
+#define SPEC_INPLANE_MAX_DEFLECTION_FRACTION 0.2
+#define SPEC_INPLANE_HOST_ROAD_MARGIN_M 1.0
+#define SPEC_INPLANE_SPIN_REBUILD_FRACTION 0.002
+#define SPEC_INPLANE_RING_REBUILD_FRACTION 0.05
+#define SPEC_INPLANE_MAX_SET_PASSES 50
+#define SPEC_INPLANE_SETTLE_PASSES 12
+#define SPEC_INPLANE_MIN_ENTERING_FRACTION 0.001
+#define SPEC_INPLANE_STATE_SPIN_FACTOR 10.0
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -184,6 +194,36 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
     {"sidewall_max_order", "", "highest circumferential order n in which the sidewall moves on its own; above it the sidewall is tied to the tread's static shape (0 = every order, the paper's lumped sidewall)", "[0, 100000]", 0.0, 100000.0, 1, 1},
     {"sidewall_pressure_exponent", "", "exponent e of the sidewall stiffness law: k_r1, k_r2 and sidewall_shear scale with (inflation_pressure/reference_pressure)^e (0 = off, the paper's pressure-free sidewall)", "[0, 3]", 0.0, 3.0, 1, 0},
     {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1, 0},
+};
+
+/* the in-plane FMU's ranges (inclusive), in the order of the core's checks: the tangential data (core/inplane.py's TANGENTIAL_RANGES), then the operating point (core/inplane_host.py's HOST_RANGES, by FMU name) */
+typedef struct {
+    const char *name, *unit;
+    double low, high;
+    int integer;
+} SpecRange;
+
+#define SPEC_N_TANGENTIAL_FIELDS 9
+static const SpecRange SPEC_TANGENTIAL_FIELDS[SPEC_N_TANGENTIAL_FIELDS] = {
+    {"EA", "N", 1000.0, 1000000000000.0, 0},
+    {"k_t1", "N/m^2", 100.0, 1000000000000.0, 0},
+    {"k_t2", "N/m^2", 100.0, 1000000000000.0, 0},
+    {"rim_radius_m", "m", 0.001, 10.0, 0},
+    {"wheel_mass_kg", "kg", 0.001, 100000.0, 0},
+    {"wheel_inertia_kg_m2", "kg*m^2", 1e-06, 100000.0, 0},
+    {"k_tx", "N/m^2", 0.0, 1000000000000.0, 0},
+    {"friction_coefficient", "", 0.0, 3.0, 0},
+    {"loss_factor", "", 0.0, 1.0, 0},
+};
+#define SPEC_N_INPLANE_RANGES 7
+static const SpecRange SPEC_INPLANE_RANGES[SPEC_N_INPLANE_RANGES] = {
+    {"load", "N", 0.0, 100000.0, 0},
+    {"speed", "m/s", 0.0, 150.0, 0},
+    {"n_elements", "", 8.0, 1600.0, 1},
+    {"f_max", "Hz", 1.0, 100000.0, 0},
+    {"contact_zone_length", "m", 0.01, 2.0, 0},
+    {"contact_point_spacing", "m", 0.0001, 0.1, 0},
+    {"step_size", "s", 1e-06, 0.001, 0},
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"

@@ -204,9 +204,4 @@ void road_rebuild(RoadReader* road, const Memory* mem);
 int road_set_history(RoadReader* road, const Memory* mem, const double* t, const double* z,
                      const double* v, int count);
 
-/* -- the clock (core/clock.py) --------------------------------------------------------------- */
-/* whether a clock of doubles resolves the step h from time, and up to which time it does */
-int clock_resolves(double time, double h);
-double clock_resolved_until(double h);
-
 #endif

@@ -13,10 +13,10 @@
 #include "contract_pack.h"
 #include "kernel.h"
 #include "model.h"
+#include "model_problems.h"
 #include "spec.h"
 
 #define PI 3.14159265358979323846
-#define MAX_PROBLEMS 32
 #define MESSAGE_SIZE 1024
 
 struct Model {
@@ -90,32 +90,6 @@ void model_preview(const double* values, double* out_values)
 
 /* -- the problems, in the core's words ------------------------------------------------------- */
 
-typedef struct {
-    int count;
-    char text[MAX_PROBLEMS][MESSAGE_SIZE];
-} Problems;
-
-static char* next_problem(Problems* p)
-{
-    if (p->count >= MAX_PROBLEMS) return NULL;
-    return p->text[p->count++];
-}
-
-#define PROBLEM(p, ...)                                     \
-    do {                                                    \
-        char* slot_ = next_problem(p);                      \
-        if (slot_ != NULL) snprintf(slot_, MESSAGE_SIZE, __VA_ARGS__); \
-    } while (0)
-
-static int variable_index(const char* name)
-{
-    int vr;
-    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
-        if (strcmp(SPEC_VARIABLES[vr].name, name) == 0) return vr;
-    }
-    return -1;
-}
-
 static void tire_from_values(const double* values, Tire* t)
 {
     t->R = values[SPEC_VR_R];
@@ -135,9 +109,6 @@ static void tire_from_values(const double* values, Tire* t)
     t->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
 }
 
-static void add_problem(Problems* p, const char* name, double value, const char* unit,
-                        const char* allowed, const char* reason);
-
 /* what the Python FMU checks before it builds: truncation, tire data, operating point; the
  * count of problems beyond the truncation's (with none, the model is still built, for the
  * problems only the model finds) */
@@ -147,7 +118,6 @@ static int plain_problems(const double* values, Problems* p)
     int truncation_problems;
     double f_max = values[SPEC_VR_F_MAX];
     double n_modes = values[SPEC_VR_N_MODES];
-    int field, tire_problems = 0;
     if (f_max != 0.0 && !(0 < f_max && f_max <= SPEC_F_MAX_LIMIT_HZ)) {
         value_text(f_max, "Hz", text, sizeof text);
         PROBLEM(p, SPEC_MSG_F_MAX_RANGE, text, SPEC_F_MAX_LIMIT_HZ);
@@ -156,33 +126,7 @@ static int plain_problems(const double* values, Problems* p)
         PROBLEM(p, SPEC_MSG_N_MODES_RANGE, (int)n_modes, SPEC_N_MODES_LIMIT);
     }
     truncation_problems = p->count;
-    for (field = 0; field < SPEC_N_TIRE_FIELDS; field++) {
-        const SpecField* f = &SPEC_TIRE_FIELDS[field];
-        double value = values[variable_index(f->name)];
-        int below;
-        if (!isfinite(value)) {
-            py_repr(value, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_NOT_FINITE, f->name, text, f->range_text, f->description);
-            tire_problems++;
-            continue;
-        }
-        below = f->low_inclusive ? value < f->low : value <= f->low;
-        if (below || value > f->high) {
-            value_text(value, f->unit, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, text, f->range_text, f->description);
-            tire_problems++;
-        } else if (f->integer && value != floor(value)) {
-            value_text(value, f->unit, text, sizeof text);
-            PROBLEM(p, SPEC_MSG_FIELD_INTEGER, f->name, text, f->range_text, f->description);
-            tire_problems++;
-        }
-    }
-    if (tire_problems == 0 && values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT] > 0.0 &&
-        values[SPEC_VR_INFLATION_PRESSURE] < SPEC_MIN_LAW_PRESSURE_PA) {
-        value_text(values[SPEC_VR_INFLATION_PRESSURE], "Pa", text, sizeof text);
-        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, text, SPEC_MIN_LAW_PRESSURE_PA,
-                values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
-    }
+    tire_field_problems(values, p);
     {
         double n = values[SPEC_VR_N_ELEMENTS];
         if (!(SPEC_MIN_ELEMENTS <= n && n <= SPEC_MAX_ELEMENTS)) {
@@ -218,21 +162,6 @@ static int plain_problems(const double* values, Problems* p)
         }
     }
     return p->count - truncation_problems;
-}
-
-/* one problem as the core renders it (parameters.render): name = value: must be allowed
- * (reason) */
-static void add_problem(Problems* p, const char* name, double value, const char* unit,
-                        const char* allowed, const char* reason)
-{
-    char text[64], line[MESSAGE_SIZE / 2]; /* and the reason at most the other half */
-    value_text(value, unit, text, sizeof text);
-    snprintf(line, sizeof line, SPEC_MSG_PROBLEM, name, text, allowed);
-    if (reason != NULL && reason[0] != '\0') {
-        PROBLEM(p, SPEC_MSG_REASON, line, reason);  /* the reason at most MESSAGE_SIZE / 2 */
-    } else {
-        PROBLEM(p, "%s", line);
-    }
 }
 
 static const char* field_unit(const char* name)
@@ -687,6 +616,23 @@ int model_step(Model* model, double h, double* values)
         return MODEL_ERROR;
     }
     return after_step(model, values);
+}
+
+/* the layer's checks are the radial model's rules: it has none of its own, and never
+ * refuses a step as it goes */
+const char* model_step_problem(const Model* model, double h, char* why, size_t size)
+{
+    (void)model;
+    (void)h;
+    (void)why;
+    (void)size;
+    return NULL;
+}
+
+const char* model_step_refusal(const Model* model)
+{
+    (void)model;
+    return "";
 }
 
 int model_refresh(Model* model, double* values)

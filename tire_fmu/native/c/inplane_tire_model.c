@@ -1,0 +1,1254 @@
+/* inplane_tire_model.c: the in-plane tire (tangential tread motion, the wheel's rotation,
+ * friction in the footprint) as a model of the generic FMI layer (model.h): the native twin of
+ * the Python FMU TireInPlane (tire_fmu/fmu/inplane_slave.py), with its variables.
+ *
+ * At initialisation the parameters are checked as core/inplane_host.py's build_host_stepper
+ * checks them, in its order and words (every problem of the data at once; then the critical
+ * speed, which needs the tire; then what needs the built model: the deflection and the
+ * footprint against the zone), and the model is built by one call, inplane_model_build. Each
+ * step then does what core/inplane_contact.py's InPlaneStepper.advance does, line for line:
+ * the rim's motion on the cubic through the step's end values (hermite), a free wheel's step
+ * following its spin (_follow_spin: the tread's terms rebuilt when the spin has moved by
+ * SPEC_INPLANE_SPIN_REBUILD_FRACTION, the ring's by SPEC_INPLANE_RING_REBUILD_FRACTION), the
+ * host's road kept along the road as it passes (HostRoad), and inplane_step.c's step. A step
+ * whose sets do not settle is undone and refused (MODEL_DISCARD), as the Python FMU rolls
+ * back. The FMU state's model part is the Python stepper's state bytes (INPLANE2) after the
+ * layer's two flags. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+#include "inplane_critical.h"
+#include "inplane_model.h"
+#include "inplane_static.h"
+#include "inplane_step.h"
+#include "model.h"
+#include "model_problems.h"
+#include "spec.h"
+
+#define MESSAGE_SIZE 1024
+#define FLAGS SPEC_STATE_MODEL_FLAGS
+#define ROAD_MIN_CAPACITY 64
+
+/* the stepper part of a state (core/inplane_contact.py's STEPPER_STATE_HEAD "<8sIIIq":
+ * magic, coordinates, points, road samples, steps taken) */
+#define STEPPER_MAGIC "INPLANE2"
+#define STEPPER_HEAD (8 + 4 + 4 + 4 + 8)
+#define STEPPER_SCALARS 15 /* end (6), rim (6), spin, road speed, the ring's spin */
+
+struct Model {
+    ModelHost host;
+    int built;
+    double built_for[SPEC_N_VARIABLES];
+    InPlaneModel m;   /* every matrix, built by inplane_model_build */
+    InPlaneStep step; /* what inplane_step reads: pointers into m */
+    int ny, np, nr, free_spin, hysteretic;
+    double h, radius, speed, critical;
+    double* cos_theta;    /* np: the points' cos theta (for the slip's reference s0) */
+    double *x_lo, *x_hi;  /* np: the road each point's arc covers (m, at the deflection) */
+    double *height, *rate;
+    double* rim_rows;     /* 7 x 3 x ny: the rim's rows k0 k1 k2 kh c0 c1 m on the coordinates */
+    double* work;
+    int* iwork;
+    double* build_work;
+    int* build_iwork;
+    /* the state (now), the step's result (next) and the step's checkpoint (saved) */
+    InPlaneState now, next, saved;
+    double* state_doubles;
+    int* state_ints;
+    long long steps, saved_steps;
+    double end[6], rim[6], saved_end[6], saved_rim[6];
+    double spin_now, speed_now, saved_spin, saved_speed, saved_ring_spin;
+    /* the host's road: rows s, z, at of road_capacity each, live samples [road_lo, road_hi) */
+    double* road;
+    int road_capacity, road_lo, road_hi, saved_lo, saved_hi;
+    double saved_last[3];
+    double front_m, keep_m;
+    double start_time;
+    int in_contact;
+    char refusal[MESSAGE_SIZE];
+};
+
+static void say(const Model* model, int status, const char* category, const char* text)
+{
+    if (model->host.log != NULL) model->host.log(model->host.layer, status, category, text);
+}
+
+Model* model_create(const ModelHost* host)
+{
+    Model* model = (Model*)mem_alloc(&host->mem, 1, sizeof(Model));
+    if (model == NULL) return NULL;
+    memset(model, 0, sizeof *model);
+    model->host = *host;
+    return model;
+}
+
+static void model_clear(Model* model)
+{
+    const Memory* mem = &model->host.mem;
+    void* owned[] = {model->cos_theta, model->x_lo, model->x_hi, model->height, model->rate,
+                     model->rim_rows, model->work, model->iwork, model->build_work,
+                     model->build_iwork, model->state_doubles, model->state_ints, model->road};
+    size_t i;
+    inplane_model_free(&model->m);
+    for (i = 0; i < sizeof owned / sizeof owned[0]; i++) mem_free(mem, owned[i]);
+    {
+        ModelHost host = model->host;
+        memset(model, 0, sizeof *model);
+        model->host = host;
+    }
+}
+
+void model_destroy(Model* model)
+{
+    Memory mem;
+    if (model == NULL) return;
+    mem = model->host.mem;
+    model_clear(model);
+    mem_free(&mem, model);
+}
+
+void model_preview(const double* values, double* out_values)
+{
+    /* before initialisation the forces echo the static load (a load that is no number is not
+     * echoed: no output is ever non-finite) */
+    double load = values[SPEC_VR_LOAD];
+    if (!isfinite(load)) return;
+    out_values[SPEC_VR_RIM_FZ] = load;
+    out_values[SPEC_VR_CONTACT_FZ] = load;
+    out_values[SPEC_VR_IN_CONTACT] = load > 0 ? 1.0 : 0.0;
+}
+
+/* -- the problems, in the core's words ------------------------------------------------------- */
+
+static double value_of(const double* values, const char* name)
+{
+    int vr = variable_index(name);
+    return vr < 0 ? NAN : values[vr];
+}
+
+/* "a number in [low, high] unit" (the core's f"{kind} in [{low:g}, {high:g}] {unit}") */
+static void range_words(const SpecRange* r, char* out, size_t size)
+{
+    snprintf(out, size, "%s in [%g, %g]%s%s", r->integer ? "an integer" : "a number", r->low,
+             r->high, r->unit[0] ? " " : "", r->unit);
+}
+
+static int outside(const SpecRange* r, double value)
+{
+    return !(isfinite(value) && r->low <= value && value <= r->high &&
+             (!r->integer || value == floor(value)));
+}
+
+/* settings_problems of core/inplane_host.py: the tire data (parameters.tire_problems), the
+ * tangential data (inplane.tangential_problems), the operating point (HOST_RANGES), the load
+ * above zero and, with none of those, what InPlaneTire refuses */
+static void data_problems(const double* values, Problems* p)
+{
+    char allowed[160];
+    int field;
+    double radius = values[SPEC_VR_R];
+    tire_field_problems(values, p);
+    for (field = 0; field < SPEC_N_TANGENTIAL_FIELDS; field++) {
+        const SpecRange* r = &SPEC_TANGENTIAL_FIELDS[field];
+        double value = value_of(values, r->name);
+        if (outside(r, value)) {
+            range_words(r, allowed, sizeof allowed);
+            add_problem(p, r->name, value, r->unit, allowed, "");
+        }
+    }
+    if (isfinite(values[SPEC_VR_RIM_RADIUS_M]) && values[SPEC_VR_RIM_RADIUS_M] >= radius) {
+        snprintf(allowed, sizeof allowed, "below the tread radius R = %g m", radius);
+        add_problem(p, "rim_radius_m", values[SPEC_VR_RIM_RADIUS_M], "m", allowed,
+                    "the sidewall spans from the rim to the tread");
+    }
+    for (field = 0; field < SPEC_N_INPLANE_RANGES; field++) {
+        const SpecRange* r = &SPEC_INPLANE_RANGES[field];
+        double value = value_of(values, r->name);
+        if (outside(r, value)) {
+            range_words(r, allowed, sizeof allowed);
+            add_problem(p, r->name, value, r->unit, allowed, "");
+        }
+    }
+    if (values[SPEC_VR_LOAD] == 0.0) {
+        add_problem(p, "load", 0.0, "N", "> 0 N",
+                    "the in-plane tire is built pressed onto the road");
+    }
+    if (p->count == 0 && values[SPEC_VR_SIDEWALL_SHEAR] > 0.0) {
+        add_problem(p, "sidewall_shear", values[SPEC_VR_SIDEWALL_SHEAR], "N",
+                    "0 for the in-plane ring",
+                    "its sidewall masses have no circumferential coupling; to move the "
+                    "sidewall's band out of the high orders tie it instead (sidewall_max_order, "
+                    "e.g. 8)");
+    }
+}
+
+static void ring_data_of(const double* values, InPlaneRingData* d)
+{
+    d->R = values[SPEC_VR_R];
+    d->b = values[SPEC_VR_B];
+    d->inflation_pressure = values[SPEC_VR_INFLATION_PRESSURE];
+    d->rhoA = values[SPEC_VR_RHOA];
+    d->m_s = values[SPEC_VR_M_S];
+    d->k_r1 = values[SPEC_VR_K_R1];
+    d->k_r2 = values[SPEC_VR_K_R2];
+    d->EI = values[SPEC_VR_EI];
+    d->alpha = values[SPEC_VR_ALPHA];
+    d->beta = values[SPEC_VR_BETA];
+    d->sidewall_pressure_exponent = values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT];
+    d->reference_pressure = values[SPEC_VR_REFERENCE_PRESSURE];
+    d->sidewall_max_order = values[SPEC_VR_SIDEWALL_MAX_ORDER];
+    d->EA = values[SPEC_VR_EA];
+    d->k_t1 = values[SPEC_VR_K_T1];
+    d->k_t2 = values[SPEC_VR_K_T2];
+    d->rim_radius_m = values[SPEC_VR_RIM_RADIUS_M];
+    d->wheel_mass_kg = values[SPEC_VR_WHEEL_MASS_KG];
+    d->wheel_inertia_kg_m2 = values[SPEC_VR_WHEEL_INERTIA_KG_M2];
+    d->k_tx = values[SPEC_VR_K_TX];
+    d->friction_coefficient = values[SPEC_VR_FRICTION_COEFFICIENT];
+    d->loss_factor = values[SPEC_VR_LOSS_FACTOR];
+}
+
+/* the speed against the mesh's critical speed (build_host_stepper's check) */
+static int critical_problem(Model* model, const double* values, const InPlaneRingData* data,
+                            Problems* p)
+{
+    const Memory* mem = &model->host.mem;
+    int n = (int)values[SPEC_VR_N_ELEMENTS], order, branch, status;
+    double speed = values[SPEC_VR_SPEED], spin, critical, *work;
+    char why[512], allowed[256];
+    model->critical = NAN;
+    if (!(speed > 0.0)) return 0;
+    work = (double*)mem_alloc(mem, inplane_critical_work_doubles(n, INPLANE_RING_TIED),
+                              sizeof(double));
+    if (work == NULL) {
+        PROBLEM(p, "out of memory finding the critical speed (N = %d)", n);
+        return 1;
+    }
+    status = inplane_critical_speed(data, n, INPLANE_RING_TIED, &spin, &critical, &order,
+                                    &branch, work, why, sizeof why);
+    mem_free(mem, work);
+    if (status != 0) {
+        PROBLEM(p, "%s", why);
+        return 1;
+    }
+    model->critical = critical;
+    if (speed > SPEC_INPLANE_CRITICAL_SPEED_FRACTION * critical) {
+        snprintf(allowed, sizeof allowed,
+                 "at most %g of the mesh's critical speed %.4g m/s (n_elements = %d)",
+                 SPEC_INPLANE_CRITICAL_SPEED_FRACTION, critical, n);
+        add_problem(p, "speed", speed, "m/s", allowed,
+                    values[SPEC_VR_SIDEWALL_MAX_ORDER] == 0.0
+                        ? "with the paper's lumped sidewall (sidewall_max_order = 0) a finer "
+                          "mesh lowers it: use fewer elements, or tie the sidewall "
+                          "(sidewall_max_order = 8)"
+                        : "the sidewall's highest free order sets it: lower sidewall_max_order");
+        return 1;
+    }
+    return 0;
+}
+
+/* -- the step's set-up -------------------------------------------------------------------------- */
+
+static double share(const Model* model, double spin_rad_s)
+{
+    return model->hysteretic ? inplane_hysteresis_share(spin_rad_s, model->radius) : 0.0;
+}
+
+/* _set_speed: the road's speed and the slip's reference s0 at the tread's spin */
+static void set_speed(Model* model, double speed_m_s)
+{
+    int i;
+    double turn = model->spin_now * model->radius;
+    model->speed_now = speed_m_s;
+    for (i = 0; i < model->np; i++) model->m.points.s0[i] = speed_m_s - turn * model->cos_theta[i];
+}
+
+/* _set_tread_spin (the tread's part of the step at this spin: points-sized) */
+static int set_tread_spin(Model* model, double spin_rad_s, double speed_m_s)
+{
+    model->spin_now = spin_rad_s;
+    set_speed(model, speed_m_s);
+    return inplane_build_tread(&model->m.build_in, spin_rad_s, &model->m.build, NULL, 0);
+}
+
+/* _set_ring_spin (the ring's part: an inverse of the coordinates' size) */
+static int set_ring_spin(Model* model, double spin_rad_s)
+{
+    return inplane_build_ring(&model->m.build_in, spin_rad_s, &model->m.build,
+                              model->build_work, model->build_iwork, NULL, 0);
+}
+
+/* _follow_spin for the free wheel (the only one whose spin moves in a stepper) */
+static int follow_spin(Model* model, double* yd)
+{
+    double spin = model->spin_now + yd[model->ny - 1];
+    double scale = fabs(model->spin_now) > 1.0 ? fabs(model->spin_now) : 1.0;
+    int status = 0;
+    if (fabs(spin - model->spin_now) > SPEC_INPLANE_SPIN_REBUILD_FRACTION * scale) {
+        yd[model->ny - 1] = 0.0;
+        status = set_tread_spin(model, spin, model->speed);
+    } else {
+        set_speed(model, model->speed);
+    }
+    if (status == 0 && fabs(spin - model->m.build.ring_spin) > SPEC_INPLANE_RING_REBUILD_FRACTION * scale) {
+        status = set_ring_spin(model, spin);
+        if (status == 0) status = set_tread_spin(model, model->spin_now, model->speed_now);
+    }
+    return status;
+}
+
+/* _take_spins: the step at these spins (a state taken back) */
+static int take_spins(Model* model, double ring_spin, double spin, double speed)
+{
+    int rebuilt = ring_spin != model->m.build.ring_spin, status = 0;
+    if (rebuilt) status = set_ring_spin(model, ring_spin);
+    if (status == 0 && (rebuilt || spin != model->spin_now))
+        status = set_tread_spin(model, spin, speed);
+    set_speed(model, speed);
+    return status;
+}
+
+static void point_step_at(Model* model)
+{
+    InPlaneStep* d = &model->step;
+    InPlaneModel* m = &model->m;
+    InPlaneBuildOutput* b = &m->build;
+    d->ny = model->ny;
+    d->np = model->np;
+    d->free_spin = model->free_spin;
+    d->max_passes = SPEC_INPLANE_MAX_SET_PASSES;
+    d->settle_passes = SPEC_INPLANE_SETTLE_PASSES;
+    d->h = model->h;
+    d->m = m->terms.m;
+    d->c = b->c;
+    d->a0_inv = b->a0_inv;
+    d->yn = b->yn;
+    d->yx = b->yx;
+    d->wnn = b->wnn;
+    d->wnx = b->wnx;
+    d->kg = b->kg;
+    d->kgn = b->kgn;
+    d->kgx = b->kgx;
+    d->gain = b->gain;
+    d->carry = b->carry;
+    d->jn = m->points.jn;
+    d->jxw = m->points.jxw;
+    d->jl = m->points.jl;
+    d->rim_inertia = m->terms.rim_inertia;
+    d->c1 = b->c1;
+    d->k1s = b->k1s;
+    d->k2 = b->k2;
+    d->kh = b->kh;
+    d->kn = m->points.kn;
+    d->cn = m->points.cn;
+    d->kx = m->points.kx;
+    d->cx = m->points.cx;
+    d->pen0 = m->points.pen0;
+    d->sec = m->points.sec;
+    d->s0 = m->points.s0;
+    d->carry_base = b->carry_base;
+    d->carry_weights = b->carry_weights;
+    d->min_entering = SPEC_INPLANE_MIN_ENTERING_FRACTION;
+}
+
+/* the rim's rows of the tire's forces on the coordinates (_rim_stack): rows (3 x n_dof + 3)
+ * times to_abs ((n_dof + 3) x ny) */
+static void rim_rows_on_coordinates(Model* model)
+{
+    const InPlaneTermsOutput* t = &model->m.terms;
+    const double* rows[7] = {t->rim_k0, t->rim_k1, t->rim_k2, t->rim_kh,
+                             t->rim_c0, t->rim_c1, t->rim_m};
+    int nd3 = model->m.n_dof + 3, ny = model->ny, g, i, j, k;
+    for (g = 0; g < 7; g++)
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < ny; j++) {
+                double s = 0.0;
+                for (k = 0; k < nd3; k++)
+                    s += rows[g][(size_t)i * nd3 + k] * t->to_abs[(size_t)k * ny + j];
+                model->rim_rows[((size_t)g * 3 + i) * ny + j] = s;
+            }
+}
+
+static double dot(const double* a, const double* b, int n)
+{
+    double s = 0.0;
+    int i;
+    for (i = 0; i < n; i++) s += a[i] * b[i];
+    return s;
+}
+
+/* rim_force: (Fx, Fz, My) on the rim at the wheel's spin, with the rim's translation's
+ * inertia */
+static void rim_force(const Model* model, const double* y, const double* yd, const double* ydd,
+                      double spin_now, const double* rim, double* f)
+{
+    int ny = model->ny, i;
+    double o = spin_now + (model->free_spin ? yd[ny - 1] : 0.0), s = share(model, o);
+    const double* r = model->rim_rows;
+    const double* mt = model->m.terms.rim_m_translation;
+#define ROW(g, i) (r + ((size_t)(g) * 3 + (i)) * ny)
+    for (i = 0; i < 3; i++) {
+        double g0 = dot(ROW(0, i), y, ny) + dot(ROW(4, i), yd, ny) + dot(ROW(6, i), ydd, ny);
+        double g1 = dot(ROW(1, i), y, ny) + dot(ROW(5, i), yd, ny);
+        double g2 = dot(ROW(2, i), y, ny), g3 = dot(ROW(3, i), y, ny);
+        f[i] = -(g0 + g1 * o + g2 * (o * o) + g3 * s + mt[2 * i] * rim[2] + mt[2 * i + 1] * rim[5]);
+    }
+#undef ROW
+}
+
+/* -- the host's road (core/obstacles.py's HostRoad) ----------------------------------------------
+ * Samples are forgotten (road_lo moves on) as HostRoad forgets them, but the buffer is only
+ * compacted at a step's start, so that a step's checkpoint is the live range and the newest
+ * sample: a step only appends samples or rewrites its newest. */
+
+static double* road_s(const Model* model) { return model->road; }
+static double* road_z(const Model* model) { return model->road + model->road_capacity; }
+static double* road_at(const Model* model) { return model->road + 2 * (size_t)model->road_capacity; }
+
+/* a buffer of capacity samples holding the samples from index `from` on (from = road_lo
+ * compacts; from = 0 keeps every index, as a step's checkpoint needs) */
+static int road_reserve(Model* model, int capacity, int from)
+{
+    const Memory* mem = &model->host.mem;
+    int kept = model->road_hi - from, row;
+    double* grown = (double*)mem_alloc(mem, 3 * (size_t)capacity, sizeof(double));
+    if (grown == NULL) return -1;
+    for (row = 0; row < 3 && model->road != NULL && kept > 0; row++)
+        memcpy(grown + (size_t)row * capacity,
+               model->road + (size_t)row * model->road_capacity + from,
+               (size_t)kept * sizeof(double));
+    mem_free(mem, model->road);
+    model->road = grown;
+    model->road_capacity = capacity;
+    model->road_lo -= from;
+    model->road_hi = kept;
+    return 0;
+}
+
+/* HostRoad.record: the host's height at the front when the tire has travelled distance_m */
+static int road_record(Model* model, double distance_m, double height_m)
+{
+    double s = distance_m + model->front_m, *rs = road_s(model), *rz, *ra;
+    int lo = model->road_lo, hi = model->road_hi;
+    if (hi > lo && s <= rs[hi - 1] + 1e-12 * fmax(1.0, fabs(s))) {
+        rz = road_z(model);
+        ra = road_at(model);
+        rz[hi - 1] = height_m;
+        if (hi - lo > 1)
+            ra[hi - 1] = ra[hi - 2] + 0.5 * (rs[hi - 1] - rs[hi - 2]) * (rz[hi - 1] + rz[hi - 2]);
+        return 0;
+    }
+    {   /* forget what lies behind the reach, keeping the sample just before it */
+        int a = lo, b = hi;
+        double reach = s - model->keep_m;
+        while (a < b) {
+            int mid = a + (b - a) / 2;
+            if (rs[mid] <= reach) a = mid + 1;
+            else b = mid;
+        }
+        model->road_lo = a - 1 > lo ? a - 1 : lo;
+    }
+    if (hi == model->road_capacity && road_reserve(model, 2 * hi + 2, 0) != 0) return -1;
+    rs = road_s(model);
+    rz = road_z(model);
+    ra = road_at(model);
+    rs[hi] = s;
+    rz[hi] = height_m;
+    ra[hi] = hi > model->road_lo ? ra[hi - 1] + 0.5 * (s - rs[hi - 1]) * (height_m + rz[hi - 1])
+                                 : 0.0;
+    model->road_hi = hi + 1;
+    return 0;
+}
+
+/* at a step's start: the forgotten samples go, and room for the step's own */
+static int road_compact(Model* model, int step_samples)
+{
+    int live = model->road_hi - model->road_lo, row;
+    int needed = live + step_samples + 2;
+    if (model->road_hi + step_samples + 2 <= model->road_capacity) return 0;
+    if (needed <= model->road_capacity && model->road_lo > 0) {
+        for (row = 0; row < 3; row++)
+            memmove(model->road + (size_t)row * model->road_capacity,
+                    model->road + (size_t)row * model->road_capacity + model->road_lo,
+                    (size_t)live * sizeof(double));
+        model->road_hi = live;
+        model->road_lo = 0;
+        return 0;
+    }
+    return road_reserve(model, needed > 2 * live + 2 ? needed : 2 * live + 2, model->road_lo);
+}
+
+/* -- building ------------------------------------------------------------------------------------ */
+
+static int allocate(Model* model)
+{
+    const Memory* mem = &model->host.mem;
+    int ny = model->ny, p = model->np, k, failed = 0;
+    InPlaneState* states[3] = {&model->now, &model->next, &model->saved};
+    size_t per_state = 3 * (size_t)ny + 3 * (size_t)p;
+#define TAKE(field, count, type)                                             \
+    do {                                                                     \
+        model->field = (type*)mem_alloc(mem, (size_t)(count), sizeof(type)); \
+        if (model->field == NULL) failed = 1;                                \
+    } while (0)
+    TAKE(cos_theta, p, double);
+    TAKE(x_lo, p, double);
+    TAKE(x_hi, p, double);
+    TAKE(height, p, double);
+    TAKE(rate, p, double);
+    TAKE(rim_rows, 21 * (size_t)ny, double);
+    TAKE(work, inplane_work_doubles(ny, p), double);
+    TAKE(iwork, inplane_work_ints(p), int);
+    TAKE(build_work, inplane_build_work_doubles(ny, p), double);
+    TAKE(build_iwork, inplane_build_work_ints(ny), int);
+    TAKE(state_doubles, 3 * per_state, double);
+    TAKE(state_ints, 3 * 2 * (size_t)p, int);
+#undef TAKE
+    if (failed) return -1;
+    for (k = 0; k < 3; k++) {
+        double* d = model->state_doubles + (size_t)k * per_state;
+        int* n = model->state_ints + (size_t)k * 2 * p;
+        states[k]->y = d;
+        states[k]->yd = d + ny;
+        states[k]->ydd = d + 2 * (size_t)ny;
+        states[k]->e = d + 3 * (size_t)ny;
+        states[k]->slip_sign = states[k]->e + p;
+        states[k]->f_n = states[k]->slip_sign + p;
+        states[k]->contact = n;
+        states[k]->stick = n + p;
+    }
+    return road_reserve(model, ROAD_MIN_CAPACITY, 0);
+}
+
+/* the road windows (core/contact.py's road_windows_m) on contact.c's zone */
+static int windows(Model* model, const InPlaneRingData* data, const double* values)
+{
+    Zone zone;
+    int n = model->m.n_elements, i;
+    int carry = zone_half_count(data->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH]);
+    int per_node = points_per_node(data->R * (2.0 * 3.14159265358979323846 / n),
+                                   values[SPEC_VR_CONTACT_POINT_SPACING]);
+    double height, half;
+    memset(&zone, 0, sizeof zone);
+    if (zone_build(&zone, &model->host.mem, n, data->R, values[SPEC_VR_K_CW], data->beta,
+                   carry, per_node) != 0)
+        return -1;
+    height = zone.radius - model->m.deflection_m;
+    half = 0.5 * zone.dtheta / zone.per_node;
+    model->front_m = -HUGE_VAL;
+    {
+        double rear = HUGE_VAL;
+        for (i = 0; i < model->np; i++) {
+            model->x_lo[i] = -height * tan(zone.point_theta[i] + half);
+            model->x_hi[i] = -height * tan(zone.point_theta[i] - half);
+            if (model->x_hi[i] > model->front_m) model->front_m = model->x_hi[i];
+            if (model->x_lo[i] < rear) rear = model->x_lo[i];
+        }
+        model->keep_m = model->front_m - rear + SPEC_INPLANE_HOST_ROAD_MARGIN_M;
+    }
+    zone_free(&zone, &model->host.mem);
+    return 0;
+}
+
+/* InPlaneStepper.__init__: the static state at the step's spin (frictionless, the tread's
+ * elements relaxed), its contact forces and the acceleration they give */
+static int start_state(Model* model, Problems* p)
+{
+    const Memory* mem = &model->host.mem;
+    int ny = model->ny, nr = model->nr, P = model->np, i, j, status;
+    InPlaneState* s = &model->now;
+    InPlaneStaticData data;
+    double *k = NULL, *jn = NULL, *work = NULL, *lu = NULL, *force = NULL;
+    int *iwork = NULL, *pivot = NULL, failed = 0;
+    char why[512];
+    k = (double*)mem_alloc(mem, (size_t)nr * nr, sizeof(double));
+    jn = (double*)mem_alloc(mem, (size_t)P * nr, sizeof(double));
+    work = (double*)mem_alloc(mem, inplane_static_work_doubles(nr, P), sizeof(double));
+    iwork = (int*)mem_alloc(mem, inplane_static_work_ints(nr, P), sizeof(int));
+    lu = (double*)mem_alloc(mem, (size_t)ny * ny, sizeof(double));
+    force = (double*)mem_alloc(mem, (size_t)ny, sizeof(double));
+    pivot = (int*)mem_alloc(mem, (size_t)ny, sizeof(int));
+    if (!k || !jn || !work || !iwork || !lu || !force || !pivot) {
+        PROBLEM(p, "out of memory finding the static state (%d coordinates)", ny);
+        failed = 1;
+        goto done;
+    }
+    for (i = 0; i < nr; i++)
+        for (j = 0; j < nr; j++) k[(size_t)i * nr + j] = model->m.build.k[(size_t)i * ny + j];
+    for (i = 0; i < P; i++)
+        for (j = 0; j < nr; j++) jn[(size_t)i * nr + j] = model->m.points.jn[(size_t)i * ny + j];
+    data.n_coords = nr;
+    data.n_points = P;
+    data.stiffness = k;
+    data.jn = jn;
+    data.kn = model->m.points.kn;
+    data.sec = model->m.points.sec;
+    data.rim_fz_row = model->m.rim_fz_row;
+    data.radius_m = model->radius;
+    data.max_passes = SPEC_INPLANE_MAX_SET_PASSES;
+    memset(s->y, 0, (size_t)ny * sizeof(double));
+    status = inplane_static_state(&data, model->m.deflection_m, s->y, s->contact, NULL, NULL,
+                                  work, iwork, why, sizeof why);
+    if (status != INPLANE_STATIC_OK) {
+        PROBLEM(p, "the static state at the speed: %s", why);
+        failed = 1;
+        goto done;
+    }
+    /* _contact_and_rates at rest on the flat road: the points pushing, the tread relaxed */
+    for (i = 0; i < P; i++) {
+        double pen = model->m.points.pen0[i] + dot(model->m.points.jn + (size_t)i * ny, s->y, ny);
+        double f = pen > 0.0 ? model->m.points.kn[i] * pen : 0.0;
+        s->f_n[i] = f > 0.0 ? f : 0.0;
+        s->contact[i] = s->f_n[i] > 0.0;
+        s->stick[i] = 1;
+        s->slip_sign[i] = 1.0;
+        s->e[i] = 0.0;
+    }
+    for (j = 0; j < ny; j++) {
+        double f = 0.0;
+        for (i = 0; i < P; i++) f -= model->m.points.jnw[(size_t)i * ny + j] * s->f_n[i];
+        force[j] = f - dot(model->m.build.k + (size_t)j * ny, s->y, ny);
+        s->yd[j] = 0.0;
+    }
+    memcpy(lu, model->m.terms.m, (size_t)ny * ny * sizeof(double));
+    if (lu_factor(lu, ny, pivot) != 0) {
+        PROBLEM(p, "the tire's mass on its %d coordinates is singular", ny);
+        failed = 1;
+        goto done;
+    }
+    lu_solve(lu, ny, pivot, force);
+    memcpy(s->ydd, force, (size_t)ny * sizeof(double));
+done:
+    mem_free(mem, k);
+    mem_free(mem, jn);
+    mem_free(mem, work);
+    mem_free(mem, iwork);
+    mem_free(mem, lu);
+    mem_free(mem, force);
+    mem_free(mem, pivot);
+    return failed;
+}
+
+static int build(Model* model, const double* values, Problems* p)
+{
+    InPlaneModelInput in;
+    InPlaneRingData data;
+    char why[1024], allowed[256];
+    int status, i;
+    ring_data_of(values, &data);
+    if (critical_problem(model, values, &data, p)) return MODEL_ERROR;
+    memset(&in, 0, sizeof in);
+    in.tire = data;
+    in.k_cw = values[SPEC_VR_K_CW];
+    in.n_elements = (int)values[SPEC_VR_N_ELEMENTS];
+    in.n_fields = INPLANE_RING_TIED;
+    in.wheel_free = values[SPEC_VR_WHEEL_FREE] != 0.0;
+    in.f_max_hz = values[SPEC_VR_F_MAX];
+    in.zone_length_m = values[SPEC_VR_CONTACT_ZONE_LENGTH];
+    in.point_spacing_m = values[SPEC_VR_CONTACT_POINT_SPACING];
+    in.load_n = values[SPEC_VR_LOAD];
+    in.speed_m_s = values[SPEC_VR_SPEED];
+    in.spin_rad_s = in.speed_m_s / data.R;
+    in.step_s = values[SPEC_VR_STEP_SIZE];
+    status = inplane_model_build(&in, &model->m, &model->host.mem, why, sizeof why);
+    if (status != INPLANE_MODEL_OK) {
+        if (status == INPLANE_MODEL_NO_MEMORY)
+            PROBLEM(p, "out of memory while building the model (N = %d): %.900s", in.n_elements,
+                    why);
+        else
+            PROBLEM(p, "%s", why);
+        return MODEL_ERROR;
+    }
+    if (!(0.0 < model->m.deflection_m &&
+          model->m.deflection_m < SPEC_INPLANE_MAX_DEFLECTION_FRACTION * data.R)) {
+        snprintf(allowed, sizeof allowed, "a load the tire carries below %g m of deflection",
+                 SPEC_INPLANE_MAX_DEFLECTION_FRACTION * data.R);
+        add_problem(p, "load", in.load_n, "N", allowed, "");
+        return MODEL_ERROR;
+    }
+    model->ny = model->m.ny;
+    model->np = model->m.np;
+    model->nr = model->m.n_basis;
+    model->free_spin = in.wheel_free;
+    model->hysteretic = data.loss_factor != 0.0;
+    model->h = in.step_s;
+    model->radius = data.R;
+    model->speed = in.speed_m_s;
+    if (allocate(model) != 0 || windows(model, &data, values) != 0) {
+        PROBLEM(p, "out of memory while building the model (N = %d)", in.n_elements);
+        return MODEL_ERROR;
+    }
+    for (i = 0; i < model->np; i++) model->cos_theta[i] = cos(model->m.point_theta[i]);
+    rim_rows_on_coordinates(model);
+    point_step_at(model);
+    model->step.mu = data.friction_coefficient;
+    /* InPlaneStepper: the step at the nominal spin (the one call built it there) */
+    model->spin_now = model->m.build.spin_now;
+    set_speed(model, model->speed);
+    if (start_state(model, p)) return MODEL_ERROR;
+    if (model->np > 0 && (model->now.contact[0] || model->now.contact[model->np - 1])) {
+        snprintf(allowed, sizeof allowed, "longer than the footprint at %g N", in.load_n);
+        add_problem(p, "contact_zone_length", values[SPEC_VR_CONTACT_ZONE_LENGTH], "m",
+                    allowed, "the static footprint reaches the end of the contact zone");
+        return MODEL_ERROR;
+    }
+    model->steps = 0;
+    memset(model->end, 0, sizeof model->end);
+    memset(model->rim, 0, sizeof model->rim);
+    model->road_lo = model->road_hi = 0;
+    if (road_record(model, 0.0, 0.0) != 0) {
+        PROBLEM(p, "out of memory while building the model (N = %d)", in.n_elements);
+        return MODEL_ERROR;
+    }
+    return MODEL_OK;
+}
+
+/* the outputs at the last step's end (no feed-through), in the table's order: rim_Fz,
+ * rim_Fx, rim_My, contact_Fz, contact_Fx, wheel_spin, sliding_points; then in_contact */
+static void show_outputs(const Model* model, double* values)
+{
+    const InPlaneState* s = &model->now;
+    double f[3], fz = 0.0, fx = 0.0;
+    int i, sliding = 0;
+    rim_force(model, s->y, s->yd, s->ydd, model->spin_now, model->rim, f);
+    for (i = 0; i < model->np; i++) {
+        fz += s->f_n[i];
+        fx += model->m.points.kx[i] * s->e[i];
+        sliding += s->contact[i] && !s->stick[i];
+    }
+    values[SPEC_VR_RIM_FZ] = f[1];
+    values[SPEC_VR_RIM_FX] = f[0];
+    values[SPEC_VR_RIM_MY] = f[2];
+    values[SPEC_VR_CONTACT_FZ] = fz;
+    values[SPEC_VR_CONTACT_FX] = -fx;
+    values[SPEC_VR_WHEEL_SPIN] = model->spin_now + (model->free_spin ? s->yd[model->ny - 1] : 0.0);
+    values[SPEC_VR_SLIDING_POINTS] = (double)sliding;
+    values[SPEC_VR_IN_CONTACT] = fz > 0.0 ? 1.0 : 0.0;
+}
+
+int model_initialise(Model* model, const double* values, double start_time, double* out_values)
+{
+    Problems problems;
+    char line[MESSAGE_SIZE + 64];
+    clock_t started = clock();
+    int status = MODEL_OK, i, in_contact = 0;
+    problems.count = 0;
+    model_clear(model);
+    data_problems(values, &problems);
+    if (problems.count == 0) status = build(model, values, &problems);
+    if (problems.count) status = MODEL_ERROR;
+    if (status != MODEL_OK) {
+        for (i = 0; i < problems.count; i++) {
+            snprintf(line, sizeof line, SPEC_MSG_PROBLEM_LINE, i + 1, problems.count,
+                     problems.text[i]);
+            say(model, MODEL_ERROR, "logStatusError", line);
+        }
+        model_clear(model);
+        return MODEL_ERROR;
+    }
+    model->built = 1;
+    memcpy(model->built_for, values, sizeof model->built_for);
+    model->start_time = start_time;
+    show_outputs(model, out_values);
+    model->in_contact = out_values[SPEC_VR_IN_CONTACT] != 0.0;
+    for (i = 0; i < model->np; i++) in_contact += model->now.contact[i];
+    snprintf(line, sizeof line,
+             "TireInPlane (native) ready in %.3f s (CPU): N = %d, %d coordinates, %d contact "
+             "points (%d on the road), deflection %.4g mm, critical speed %.4g m/s",
+             (double)(clock() - started) / CLOCKS_PER_SEC, model->m.n_elements, model->ny,
+             model->np, in_contact, model->m.deflection_m * 1e3, model->critical);
+    say(model, MODEL_OK, "logAll", line);
+    return MODEL_OK;
+}
+
+int model_built_for(const Model* model, const double* values)
+{
+    int vr;
+    if (!model->built) return 0;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (SPEC_VARIABLES[vr].causality != SPEC_PARAMETER) continue;
+        if (memcmp(&model->built_for[vr], &values[vr], sizeof(double)) != 0) return 0;
+    }
+    return 1;
+}
+
+/* -- stepping ---------------------------------------------------------------------------------- */
+
+/* steps_in: how many of the tire's steps make the host's (0: not a whole number) */
+static long long steps_in(double step_s, double tire_step_s)
+{
+    double count = isfinite(step_s) ? nearbyint(step_s / tire_step_s) : 0.0;
+    if (!(count >= 1.0) || count > 1e15 ||
+        fabs(count * tire_step_s - step_s) > 1e-9 * fmax(step_s, tire_step_s))
+        return 0;
+    return (long long)count;
+}
+
+const char* model_step_problem(const Model* model, double h, char* why, size_t size)
+{
+    char text[40];
+    if (steps_in(h, model->h) > 0) return NULL;
+    py_repr(h, text, size < sizeof text ? size : sizeof text);
+    snprintf(why, size,
+             "step size h = %s s: must be a whole multiple of the tire's step_size = %g s (set "
+             "step_size to divide the host's step)",
+             text, model->h);
+    return why;
+}
+
+const char* model_step_refusal(const Model* model) { return model->refusal; }
+
+/* hermite: (position, velocity, acceleration) at tau into a step of duration on the cubic
+ * through its end values and rates (the same operations as the core's) */
+static void hermite(double p0, double v0, double p1, double v1, double duration, double tau,
+                    double* out)
+{
+    double u = tau / duration, d = duration;
+    double u2 = pow(u, 2.0), u3 = pow(u, 3.0);
+    double h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2,
+           h11 = u3 - u2;
+    double g00 = 6 * u2 - 6 * u, g10 = 3 * u2 - 4 * u + 1, g01 = -6 * u2 + 6 * u,
+           g11 = 3 * u2 - 2 * u;
+    double a00 = 12 * u - 6, a10 = 6 * u - 4, a01 = -12 * u + 6, a11 = 6 * u - 2;
+    out[0] = h00 * p0 + h10 * d * v0 + h01 * p1 + h11 * d * v1;
+    out[1] = (g00 * p0 + g10 * d * v0 + g01 * p1 + g11 * d * v1) / d;
+    out[2] = (a00 * p0 + a10 * d * v0 + a01 * p1 + a11 * d * v1) / pow(d, 2.0);
+}
+
+static void copy_state(const Model* model, const InPlaneState* from, InPlaneState* to)
+{
+    size_t ny = (size_t)model->ny, p = (size_t)model->np;
+    memcpy(to->y, from->y, ny * sizeof(double));
+    memcpy(to->yd, from->yd, ny * sizeof(double));
+    memcpy(to->ydd, from->ydd, ny * sizeof(double));
+    memcpy(to->e, from->e, p * sizeof(double));
+    memcpy(to->slip_sign, from->slip_sign, p * sizeof(double));
+    memcpy(to->f_n, from->f_n, p * sizeof(double));
+    memcpy(to->contact, from->contact, p * sizeof(int));
+    memcpy(to->stick, from->stick, p * sizeof(int));
+}
+
+static void checkpoint(Model* model)
+{
+    int hi = model->road_hi;
+    copy_state(model, &model->now, &model->saved);
+    model->saved_steps = model->steps;
+    memcpy(model->saved_end, model->end, sizeof model->end);
+    memcpy(model->saved_rim, model->rim, sizeof model->rim);
+    model->saved_spin = model->spin_now;
+    model->saved_speed = model->speed_now;
+    model->saved_ring_spin = model->m.build.ring_spin;
+    model->saved_lo = model->road_lo;
+    model->saved_hi = hi;
+    if (hi > model->road_lo) {
+        model->saved_last[0] = road_s(model)[hi - 1];
+        model->saved_last[1] = road_z(model)[hi - 1];
+        model->saved_last[2] = road_at(model)[hi - 1];
+    }
+}
+
+static int rollback(Model* model)
+{
+    int hi = model->saved_hi, status;
+    status = take_spins(model, model->saved_ring_spin, model->saved_spin, model->saved_speed);
+    copy_state(model, &model->saved, &model->now);
+    model->steps = model->saved_steps;
+    memcpy(model->end, model->saved_end, sizeof model->end);
+    memcpy(model->rim, model->saved_rim, sizeof model->rim);
+    model->road_lo = model->saved_lo;
+    model->road_hi = hi;
+    if (hi > model->road_lo) {
+        road_s(model)[hi - 1] = model->saved_last[0];
+        road_z(model)[hi - 1] = model->saved_last[1];
+        road_at(model)[hi - 1] = model->saved_last[2];
+    }
+    return status;
+}
+
+static void contact_event(Model* model, const double* values)
+{
+    int in_contact = values[SPEC_VR_IN_CONTACT] != 0.0;
+    char line[MESSAGE_SIZE];
+    if (in_contact == model->in_contact) return;
+    /* losing contact is physics (a unilateral contact): information, not a warning */
+    snprintf(line, sizeof line, in_contact ? SPEC_MSG_TOUCH_DOWN : SPEC_MSG_LIFT_OFF,
+             model_time(model));
+    say(model, MODEL_OK, "logEvents", line);
+    model->in_contact = in_contact;
+}
+
+/* InPlaneStepper.advance */
+int model_step(Model* model, double step_s, double* values)
+{
+    long long count = steps_in(step_s, model->h), k;
+    double start[6], end[6], x[3], z[3], front[3], rim_old[6];
+    double torque = values[SPEC_VR_WHEEL_TORQUE];
+    int plate = model->speed == 0.0, P = model->np, i, status = 0;
+    model->refusal[0] = '\0';
+    if (road_compact(model, count < 1000000 ? (int)count : 1000000) != 0) return MODEL_ERROR;
+    checkpoint(model);
+    memcpy(start, model->end, sizeof start);
+    end[0] = values[SPEC_VR_RIM_X];
+    end[1] = values[SPEC_VR_RIM_VX];
+    end[2] = values[SPEC_VR_RIM_Z];
+    end[3] = values[SPEC_VR_RIM_VZ];
+    end[4] = values[SPEC_VR_ROAD_Z];
+    end[5] = values[SPEC_VR_ROAD_VZ];
+    for (k = 1; k <= count; k++) {
+        double time, distance, tau = (double)k * model->h;
+        InPlaneState swap;
+        model->steps++;
+        time = (double)model->steps * model->h;
+        hermite(start[0], start[1], end[0], end[1], step_s, tau, x);
+        hermite(start[2], start[3], end[2], end[3], step_s, tau, z);
+        memcpy(rim_old, model->rim, sizeof rim_old);
+        model->rim[0] = x[0];
+        model->rim[1] = x[1];
+        model->rim[2] = x[2];
+        model->rim[3] = z[0];
+        model->rim[4] = z[1];
+        model->rim[5] = z[2];
+        if (model->free_spin && follow_spin(model, model->now.yd) != 0) {
+            status = 3;
+            break;
+        }
+        distance = model->speed * time + model->rim[0];
+        hermite(start[4], start[5], end[4], end[5], step_s, tau, front);
+        if (plate) {
+            for (i = 0; i < P; i++) {
+                model->height[i] = front[0];
+                model->rate[i] = front[1];
+            }
+        } else {
+            int lo;
+            if (road_record(model, distance, front[0]) != 0) {
+                rollback(model);
+                return MODEL_ERROR;
+            }
+            lo = model->road_lo;
+            host_road_window_reads(road_s(model) + lo, road_z(model) + lo, road_at(model) + lo,
+                                   model->road_hi - lo, model->x_lo, model->x_hi, P, distance,
+                                   model->speed_now + model->rim[1], model->height,
+                                   model->rate);
+        }
+        for (i = 0; i < P; i++) {
+            model->height[i] -= model->rim[3];
+            model->rate[i] -= model->rim[4];
+        }
+        {   /* InPlaneKernel.step: the spin's offsets from the ring's and the tread's */
+            double spin = model->spin_now +
+                          (model->free_spin ? model->now.yd[model->ny - 1] : 0.0);
+            model->step.spin = model->spin_now;
+            model->step.dspin = spin - model->m.build.ring_spin;
+            model->step.dshare = share(model, spin) - model->m.build.ring_share;
+            model->step.carry_shift = model->m.build.carry_shift;
+        }
+        status = inplane_step(&model->step, &model->now, &model->next, model->height,
+                              model->rate, torque, rim_old, model->rim, model->work,
+                              model->iwork);
+        if (status != 0) break;
+        swap = model->now;
+        model->now = model->next;
+        model->next = swap;
+    }
+    if (status != 0) {
+        snprintf(model->refusal, sizeof model->refusal,
+                 status == 3 ? "step at t = %g s: the step could not be rebuilt at the wheel's "
+                               "spin; nothing changed"
+                 : status == 1
+                     ? "step at t = %g s: the contact and stick sets did not settle in %d "
+                       "passes; nothing changed (a shorter step_size settles the sets sooner)"
+                     : "step at t = %g s: the contact and stick sets did not give a solvable "
+                       "point solve; nothing changed (a shorter step_size settles the sets "
+                       "sooner)",
+                 model->h * (double)model->steps, SPEC_INPLANE_MAX_SET_PASSES);
+        rollback(model);
+        return MODEL_DISCARD;
+    }
+    memcpy(model->end, end, sizeof end);
+    show_outputs(model, values);
+    contact_event(model, values);
+    return MODEL_OK;
+}
+
+int model_refresh(Model* model, double* values)
+{
+    /* no feed-through: the outputs are the last step's whatever the inputs now are */
+    (void)model;
+    (void)values;
+    return MODEL_OK;
+}
+
+double model_time(const Model* model)
+{
+    return model->start_time + (double)model->steps * model->h;
+}
+
+const TireContract* model_contract(const Model* model)
+{
+    (void)model;
+    return NULL;
+}
+
+double model_road_horizon(const Model* model)
+{
+    (void)model;
+    return 0.0;
+}
+
+double model_min_step(const Model* model)
+{
+    (void)model;
+    return 0.0;
+}
+
+/* the in-plane step has no work rule of the radial kernel's: every step is the tire's own
+ * step_size, so a host's step costs its count of them */
+int model_step_work(const Model* model, double h, int* n_sub, double* substep, int* work,
+                    double* longest)
+{
+    long long count = steps_in(h, model->h);
+    *n_sub = count < 2147483647 ? (int)count : 2147483647;
+    *substep = model->h;
+    *work = 1;
+    *longest = SPEC_MAX_STEP_S;
+    return 0;
+}
+
+/* -- the model's part of an FMU state --------------------------------------------------------
+ * int32: a flag the layer's framing keeps (1), in contact (the last in_contact an event was
+ * logged for); then core/inplane_contact.py's InPlaneStepper.state_bytes: its head, doubles
+ * (the step's end inputs, the rim, the spins, y, yd, ydd, e, f_n, the road's samples) and int8
+ * flags (contact, stick, slip sign). */
+
+static size_t stepper_size(const Model* model, int samples)
+{
+    return STEPPER_HEAD +
+           8 * ((size_t)STEPPER_SCALARS + 3 * (size_t)model->ny + 2 * (size_t)model->np +
+                3 * (size_t)samples) +
+           3 * (size_t)model->np;
+}
+
+size_t model_state_size(const Model* model)
+{
+    return FLAGS * 4 + stepper_size(model, model->road_hi - model->road_lo);
+}
+
+static void put(unsigned char** out, const void* value, size_t size)
+{
+    memcpy(*out, value, size);
+    *out += size;
+}
+
+static void put_doubles(unsigned char** out, const double* values, int n)
+{
+    put(out, values, (size_t)n * sizeof(double));
+}
+
+void model_state_write(const Model* model, unsigned char* out)
+{
+    int32_t flag = 1, contact = model->in_contact;
+    uint32_t ny = (uint32_t)model->ny, np = (uint32_t)model->np;
+    uint32_t samples = (uint32_t)(model->road_hi - model->road_lo);
+    int64_t steps = (int64_t)model->steps;
+    double spins[3];
+    const InPlaneState* s = &model->now;
+    int i;
+    put(&out, &flag, 4);
+    put(&out, &contact, 4);
+    put(&out, STEPPER_MAGIC, 8);
+    put(&out, &ny, 4);
+    put(&out, &np, 4);
+    put(&out, &samples, 4);
+    put(&out, &steps, 8);
+    put_doubles(&out, model->end, 6);
+    put_doubles(&out, model->rim, 6);
+    spins[0] = model->spin_now;
+    spins[1] = model->speed_now;
+    spins[2] = model->m.build.ring_spin;
+    put_doubles(&out, spins, 3);
+    put_doubles(&out, s->y, model->ny);
+    put_doubles(&out, s->yd, model->ny);
+    put_doubles(&out, s->ydd, model->ny);
+    put_doubles(&out, s->e, model->np);
+    put_doubles(&out, s->f_n, model->np);
+    for (i = model->road_lo; i < model->road_hi; i++) {
+        double sample[3];
+        sample[0] = road_s(model)[i];
+        sample[1] = road_z(model)[i];
+        sample[2] = road_at(model)[i];
+        put_doubles(&out, sample, 3);
+    }
+    for (i = 0; i < model->np; i++) *out++ = (unsigned char)(s->contact[i] ? 1 : 0);
+    for (i = 0; i < model->np; i++) *out++ = (unsigned char)(s->stick[i] ? 1 : 0);
+    for (i = 0; i < model->np; i++) {
+        signed char sign = (signed char)(s->slip_sign[i] > 0 ? 1 : (s->slip_sign[i] < 0 ? -1 : 0));
+        memcpy(out++, &sign, 1);
+    }
+}
+
+static double get_double(const unsigned char* at, size_t index)
+{
+    double v;
+    memcpy(&v, at + 8 * index, 8);
+    return v;
+}
+
+int model_state_check(const Model* model, const unsigned char* in, size_t size,
+                      const double* values, double time, double start_time, char* why,
+                      size_t why_size)
+{
+    const unsigned char *part = in + FLAGS * 4, *doubles, *flags;
+    int32_t flag;
+    uint32_t ny, np, samples;
+    int64_t steps;
+    size_t n_doubles, i;
+    double nominal = fmax(model->speed / model->radius, 1.0);
+    why[0] = '\0';
+    if (size < FLAGS * 4 + STEPPER_HEAD) {
+        snprintf(why, why_size, SPEC_MSG_STATE_MODEL_SHORT, (unsigned long)size);
+        return MODEL_ERROR;
+    }
+    for (i = 0; i < FLAGS; i++) {
+        memcpy(&flag, in + 4 * i, 4);
+        if (flag != 0 && flag != 1) {
+            snprintf(why, why_size, SPEC_MSG_STATE_MODEL_FLAG, (int)i, (int)flag);
+            return MODEL_ERROR;
+        }
+    }
+    if (memcmp(part, STEPPER_MAGIC, 8) != 0) {
+        snprintf(why, why_size, "its stepper part is not an in-plane tire's");
+        return MODEL_ERROR;
+    }
+    memcpy(&ny, part + 8, 4);
+    memcpy(&np, part + 12, 4);
+    memcpy(&samples, part + 16, 4);
+    memcpy(&steps, part + 20, 8);
+    if (ny != (uint32_t)model->ny || np != (uint32_t)model->np) {
+        snprintf(why, why_size, "its stepper part has %lu coordinates and %lu points, this tire "
+                 "%d and %d", (unsigned long)ny, (unsigned long)np, model->ny, model->np);
+        return MODEL_ERROR;
+    }
+    if (samples == 0 || steps < 0 || samples > (size - FLAGS * 4) / 24) {
+        snprintf(why, why_size, "its stepper part's road or step count does not fit this tire");
+        return MODEL_ERROR;
+    }
+    if (size - FLAGS * 4 != stepper_size(model, (int)samples)) {
+        snprintf(why, why_size, "its stepper part has the wrong size");
+        return MODEL_ERROR;
+    }
+    doubles = part + STEPPER_HEAD;
+    n_doubles = STEPPER_SCALARS + 3 * (size_t)ny + 2 * (size_t)np + 3 * (size_t)samples;
+    for (i = 0; i < n_doubles; i++) {
+        if (!isfinite(get_double(doubles, i))) {
+            snprintf(why, why_size, "its stepper part holds values that are not finite");
+            return MODEL_ERROR;
+        }
+    }
+    flags = doubles + 8 * n_doubles;
+    for (i = 0; i < 3 * (size_t)np; i++) {
+        signed char v;
+        memcpy(&v, flags + i, 1);
+        if (i < 2 * (size_t)np ? (v != 0 && v != 1) : (v < -1 || v > 1)) {
+            snprintf(why, why_size, "its stepper part's contact flags are not flags");
+            return MODEL_ERROR;
+        }
+    }
+    {
+        double spin = get_double(doubles, 12), speed = get_double(doubles, 13),
+               ring_spin = get_double(doubles, 14);
+        char a[40], b[40], c[40], d[40];
+        if (speed != model->speed) {
+            py_repr(speed, a, sizeof a);
+            py_repr(model->speed, b, sizeof b);
+            snprintf(why, why_size, "its road speed %s m/s is not this tire's %s", a, b);
+            return MODEL_ERROR;
+        }
+        if (!(fabs(spin) <= SPEC_INPLANE_STATE_SPIN_FACTOR * nominal) ||
+            !(fabs(ring_spin) <= SPEC_INPLANE_STATE_SPIN_FACTOR * nominal)) {
+            py_repr(fabs(spin) > fabs(ring_spin) ? spin : ring_spin, a, sizeof a);
+            snprintf(why, why_size, "its wheel spin %s rad/s is beyond what this tire can hold",
+                     a);
+            return MODEL_ERROR;
+        }
+        {   /* the road's samples must read as a profile: distances increasing */
+            size_t at = STEPPER_SCALARS + 3 * (size_t)ny + 2 * (size_t)np;
+            for (i = 1; i < samples; i++) {
+                if (!(get_double(doubles, at + 3 * i) > get_double(doubles, at + 3 * (i - 1)))) {
+                    snprintf(why, why_size, "its road's samples are not in order along the road");
+                    return MODEL_ERROR;
+                }
+            }
+        }
+        {   /* the clock: the steps taken from the start to the layer's time */
+            double stepped = start_time + (double)steps * model->h;
+            if (!(fabs(stepped - time) <= fmax(SPEC_TIME_ABS_TOLERANCE_S,
+                                              SPEC_TIME_REL_TOLERANCE * fabs(time)) + 1e-9)) {
+                py_repr(time, a, sizeof a);
+                py_repr(start_time, b, sizeof b);
+                py_repr(stepped, c, sizeof c);
+                py_repr(start_time, d, sizeof d);
+                snprintf(why, why_size, SPEC_MSG_STATE_MODEL_CLOCK, a, b, c, d);
+                return MODEL_ERROR;
+            }
+        }
+    }
+    (void)values;
+    return MODEL_OK;
+}
+
+void model_state_apply(Model* model, const unsigned char* in)
+{
+    const unsigned char* part = in + FLAGS * 4;
+    const unsigned char *doubles = part + STEPPER_HEAD, *flags;
+    uint32_t samples;
+    int64_t steps;
+    int ny = model->ny, P = model->np, i;
+    size_t at = 0;
+    InPlaneState* s = &model->now;
+    int32_t contact;
+    memcpy(&contact, in + 4, 4);
+    memcpy(&samples, part + 16, 4);
+    memcpy(&steps, part + 20, 8);
+    for (i = 0; i < 6; i++) model->end[i] = get_double(doubles, at++);
+    for (i = 0; i < 6; i++) model->rim[i] = get_double(doubles, at++);
+    {
+        double spin = get_double(doubles, at), speed = get_double(doubles, at + 1),
+               ring_spin = get_double(doubles, at + 2);
+        at += 3;
+        if (take_spins(model, ring_spin, spin, speed) != 0)
+            say(model, MODEL_ERROR, "logStatusError",
+                "fmi2SetFMUstate: the step could not be rebuilt at the state's spin");
+    }
+    for (i = 0; i < ny; i++) s->y[i] = get_double(doubles, at++);
+    for (i = 0; i < ny; i++) s->yd[i] = get_double(doubles, at++);
+    for (i = 0; i < ny; i++) s->ydd[i] = get_double(doubles, at++);
+    for (i = 0; i < P; i++) s->e[i] = get_double(doubles, at++);
+    for (i = 0; i < P; i++) s->f_n[i] = get_double(doubles, at++);
+    model->road_lo = model->road_hi = 0;
+    if ((int)samples + 2 > model->road_capacity &&
+        road_reserve(model, 2 * (int)samples + 2, 0) != 0) {
+        say(model, MODEL_ERROR, "logStatusError",
+            "fmi2SetFMUstate: out of memory restoring the road history");
+        samples = 0;
+    }
+    for (i = 0; i < (int)samples; i++) {
+        road_s(model)[i] = get_double(doubles, at++);
+        road_z(model)[i] = get_double(doubles, at++);
+        road_at(model)[i] = get_double(doubles, at++);
+    }
+    model->road_hi = (int)samples;
+    flags = doubles + 8 * at;
+    for (i = 0; i < P; i++) s->contact[i] = flags[i] == 1;
+    for (i = 0; i < P; i++) s->stick[i] = flags[P + i] == 1;
+    for (i = 0; i < P; i++) {
+        signed char sign;
+        memcpy(&sign, flags + 2 * P + i, 1);
+        s->slip_sign[i] = (double)sign;
+    }
+    model->steps = (long long)steps;
+    model->in_contact = contact;
+}

@@ -1,0 +1,76 @@
+/* model_problems.c: the parameter problems of a model of the layer (model_problems.h). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "model_problems.h"
+#include "numerics.h"
+#include "spec.h"
+
+char* next_problem(Problems* p)
+{
+    if (p->count >= MAX_PROBLEMS) return NULL;
+    return p->text[p->count++];
+}
+
+/* the value reference of a variable by name, -1 for none */
+int variable_index(const char* name)
+{
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (strcmp(SPEC_VARIABLES[vr].name, name) == 0) return vr;
+    }
+    return -1;
+}
+
+/* one problem as the core renders it (parameters.render): name = value: must be allowed
+ * (reason) */
+void add_problem(Problems* p, const char* name, double value, const char* unit,
+                 const char* allowed, const char* reason)
+{
+    char text[64], line[PROBLEM_SIZE / 2]; /* and the reason at most the other half */
+    value_text(value, unit, text, sizeof text);
+    snprintf(line, sizeof line, SPEC_MSG_PROBLEM, name, text, allowed);
+    if (reason != NULL && reason[0] != '\0') {
+        PROBLEM(p, SPEC_MSG_REASON, line, reason);
+    } else {
+        PROBLEM(p, "%s", line);
+    }
+}
+
+/* parameters.tire_problems: every tire field out of its range (SPEC_TIRE_FIELDS, in the
+ * core's order) and, with none, the sidewall's pressure law; returns how many */
+int tire_field_problems(const double* values, Problems* p)
+{
+    char text[64];
+    int field, count = 0;
+    for (field = 0; field < SPEC_N_TIRE_FIELDS; field++) {
+        const SpecField* f = &SPEC_TIRE_FIELDS[field];
+        double value = values[variable_index(f->name)];
+        int below;
+        if (!isfinite(value)) {
+            py_repr(value, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_NOT_FINITE, f->name, text, f->range_text, f->description);
+            count++;
+            continue;
+        }
+        below = f->low_inclusive ? value < f->low : value <= f->low;
+        if (below || value > f->high) {
+            value_text(value, f->unit, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_RANGE, f->name, text, f->range_text, f->description);
+            count++;
+        } else if (f->integer && value != floor(value)) {
+            value_text(value, f->unit, text, sizeof text);
+            PROBLEM(p, SPEC_MSG_FIELD_INTEGER, f->name, text, f->range_text, f->description);
+            count++;
+        }
+    }
+    if (count == 0 && values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT] > 0.0 &&
+        values[SPEC_VR_INFLATION_PRESSURE] < SPEC_MIN_LAW_PRESSURE_PA) {
+        value_text(values[SPEC_VR_INFLATION_PRESSURE], "Pa", text, sizeof text);
+        PROBLEM(p, SPEC_MSG_PRESSURE_LAW, text, SPEC_MIN_LAW_PRESSURE_PA,
+                values[SPEC_VR_SIDEWALL_PRESSURE_EXPONENT]);
+        count++;
+    }
+    return count;
+}
