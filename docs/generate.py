@@ -172,7 +172,7 @@ def inplane_fmu_cost_table() -> str:
              "|---" * (len(names) + 1 + len(ratios)) + "|"]
     for regime, row in costs.items():
         lines.append(f"| {regime} | " + " | ".join(f"{row[n]:.1f}" for n in names)
-                     + "".join(f" | {row[a] / row[b]:.0f}" for _, a, b in ratios) + " |")
+                     + "".join(f" | {row[a] / row[b]:.2g}" for _, a, b in ratios) + " |")
     labels = list(next(iter(inits.values())))
     lines += ["", "| initialisation, warm process, s | " + " | ".join(labels) + " |",
               "|---" * (len(labels) + 1) + "|"]
