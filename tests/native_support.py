@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import stat
 import subprocess
 import sys
@@ -15,6 +16,7 @@ from importlib import metadata
 from pathlib import Path
 
 import numpy as np
+import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
@@ -30,6 +32,11 @@ OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
 INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
 H = 1e-4
 NATIVE_HOST = Path(__file__).parent / "native_host"
+WINDOWS_TOOLS = ("x86_64-w64-mingw32-gcc", "wine")
+needs_windows_tools = pytest.mark.skipif(
+    not all(shutil.which(tool) for tool in WINDOWS_TOOLS),
+    reason="needs x86_64-w64-mingw32-gcc and wine (.ci/run installs them: apt-get install "
+           "gcc-mingw-w64-x86-64 wine64)")
 
 
 @dataclass
@@ -182,3 +189,30 @@ def in_host(fmu, host: str, load: float, speed: float, tmp_path, inplane: bool =
     result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     return np.array(json.loads(out.read_text()))
+
+
+def compile_host(folder: Path, windows: bool) -> Path:
+    """native_host/host.c for Linux or Windows, against the FMU unpacked in ``folder`` (its
+    sources/: the FMI headers and spec.h, which says where its outputs are)."""
+    out = folder / ("host.exe" if windows else "host")
+    compiler = "x86_64-w64-mingw32-gcc" if windows else "gcc"
+    command = [compiler, "-O2", "-Wall", "-I", str(folder / "sources"), "-o", str(out),
+               str(NATIVE_HOST / "host.c")] + ([] if windows else ["-ldl"])
+    subprocess.run(command, check=True, capture_output=True)
+    return out
+
+
+def run_host(host: Path, binary: Path, guid: str, commands: Path) -> list[str]:
+    command = [str(host), str(binary), guid, str(commands)]
+    env = dict(os.environ)
+    if host.suffix == ".exe":
+        command = ["wine", *command]
+        env["WINEDEBUG"] = "-all"
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return result.stdout.splitlines()
+
+
+def host_outputs(lines: list[str]) -> np.ndarray:
+    return np.array([[float(x) for x in line.split()[1:]] for line in lines
+                     if line.startswith("out ")])

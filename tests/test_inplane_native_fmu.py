@@ -4,6 +4,7 @@ cleat, a brake, the rim's motion, a held wheel and the shaker at rest; the same 
 refusals; a refused step that changes nothing; FMU states bit for bit; other hosts."""
 
 import re
+import shutil
 import subprocess
 import zipfile
 
@@ -16,7 +17,13 @@ pytest.importorskip("pythonfmu")
 from fmpy import read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
 from inplane_support import OUTPUTS, Instance  # noqa: E402
-from native_support import in_host  # noqa: E402
+from native_support import (  # noqa: E402
+    compile_host,
+    host_outputs,
+    in_host,
+    needs_windows_tools,
+    run_host,
+)
 
 from tire_fmu.core.inplane import InPlaneTire, TangentialParameters  # noqa: E402
 from tire_fmu.core.inplane_host import CRITICAL_SPEED_FRACTION  # noqa: E402
@@ -36,8 +43,10 @@ TOLERANCE = 1e-9  # of the load (forces), of load * R (the moment), of V / R (th
 def native_path(tmp_path_factory):
     from tire_fmu.native.builder import build_native_inplane_fmu
 
+    # win64 too where it can be run (under wine): a few seconds more
+    windows = all(shutil.which(tool) for tool in ("x86_64-w64-mingw32-gcc", "wine"))
     return build_native_inplane_fmu(tmp_path_factory.mktemp("inplane_native"),
-                                    platforms=("linux64",))
+                                    platforms=("linux64", "win64") if windows else ("linux64",))
 
 
 @pytest.fixture(scope="module")
@@ -301,3 +310,38 @@ def test_in_a_fresh_process_the_python_fmu_gives_the_native_fmus_outputs(native_
     native = in_host(native_path, "fmpy", 30000.0, 10.0, tmp_path, inplane=True)
     python = in_host(python_path, "fmpy", 30000.0, 10.0, tmp_path, inplane=True)
     assert scaled_difference(native, python, 10.0).max() < TOLERANCE
+
+
+@needs_windows_tools
+def test_win64_under_wine_gives_the_linux64_and_fmpys_outputs(native_path, tmp_path):
+    """A plain C host (native_host/host.c) runs the win64 binary under wine and the linux64
+    one over a brake and a cleat: the outputs of both, and fmpy's, agree; the statuses and
+    the log lines are the same (but the build's CPU time)."""
+    zipfile.ZipFile(native_path).extractall(tmp_path)
+    guid = read_model_description(str(native_path)).guid
+    vr = {v.name: i for i, v in enumerate(inplane_fmu_variables())}
+    h, steps = 1e-4, 600
+    lines = [f"real {vr['speed']} 10.0", "init"]
+    for k in range(1, steps + 1):
+        given = braking(k * h) | over_a_cleat(k * h)
+        lines += [f"real {vr[name]} {value!r}" for name, value in given.items()]
+        lines.append(f"step {(k - 1) * h!r} {h!r}")
+    commands = tmp_path / "commands.txt"
+    commands.write_text("\n".join(lines) + "\n")
+    binaries = tmp_path / "binaries"
+    linux = run_host(compile_host(tmp_path, windows=False),
+                     binaries / "linux64" / "TireInPlaneNative.so", guid, commands)
+    windows = run_host(compile_host(tmp_path, windows=True),
+                       binaries / "win64" / "TireInPlaneNative.dll", guid, commands)
+    fmpy_run, _ = outputs_of(native_path, {"speed": 10.0},
+                             lambda t: braking(t) | over_a_cleat(t), h, steps)
+    assert scaled_difference(host_outputs(linux), fmpy_run[1:], 10.0).max() < TOLERANCE
+    assert scaled_difference(host_outputs(windows), host_outputs(linux), 10.0).max() < TOLERANCE
+    assert np.ptp(fmpy_run[:, 1]) > 1e3
+
+    def said(run):
+        return [line.strip() for line in run if not line.startswith("out ")
+                and "ready in" not in line]
+
+    assert said(linux) == said(windows)
+    assert said(linux).count("status step 0") == steps
