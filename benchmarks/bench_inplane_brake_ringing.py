@@ -36,6 +36,7 @@ from tire_fmu.core.inplane_contact import (  # noqa: E402
     InPlaneSimulator,
     deflection_for_load,
     loaded_modes,
+    steady_rolling,
 )
 from tire_fmu.core.inplane_rolling_modes import (  # noqa: E402
     fit_ringing,
@@ -48,6 +49,9 @@ STEP_AT_S, TORQUE_N_M, SPACING_M, SPEED_M_S = 0.1, -3000.0, 0.01, 10.0
 #: The ringing fitted from this long after the step (the step's first instants excite the
 #: ring's high modes) to the end of the run.
 FIT_FROM_S, RUN_S = 0.005, 0.5
+#: The slip the run settles at is its mean over this last part of it (the ringing has decayed
+#: by e^-10 before).
+SETTLED_S = 0.1
 #: Modes of the linear step response seeding the fit.
 FIT_MODES = 4
 #: The small speed at which rolling_modes must give loaded_modes' rest value.
@@ -65,12 +69,22 @@ def rotational(modes) -> tuple[float, float]:
 
 
 def brake_run(model, n, spacing, step, speed, deflection):
+    """The run (the step's C where it can be had: numpy's to 1e-9, tests/test_inplane_host.py)
+    and its Fx after the step."""
     sim = InPlaneSimulator(model, n, speed, deflection, point_spacing_m=spacing, wheel="free",
-                           step_s=step)
+                           step_s=step, backend="auto")
     start = time.perf_counter()
     run = sim.run(RUN_S, torque_n_m=lambda t: TORQUE_N_M if t >= STEP_AT_S else 0.0)
     after = run.time_s > STEP_AT_S + FIT_FROM_S
-    return sim, run.time_s[after] - STEP_AT_S, run.rim_fx_n[after], time.perf_counter() - start
+    return (sim, run.time_s[after] - STEP_AT_S, run.rim_fx_n[after],
+            time.perf_counter() - start, run)
+
+
+def settled_slip(sim, run) -> tuple[float, float]:
+    """(the run's slip over its last SETTLED_S, steady_rolling's) under the brake torque."""
+    settled = run.time_s > RUN_S - SETTLED_S
+    slip = run.spin_rad_s[settled].mean() * sim.model.tire.R / sim.speed_m_s - 1.0
+    return float(slip), float(steady_rolling(sim, TORQUE_N_M).slip_ratio)
 
 
 def single_fit(sim, t, fx) -> tuple[float, float, float]:
@@ -109,8 +123,11 @@ def at_speed(model, n, spacing, step, deflection, run_too=True) -> dict:
           + ", ".join(f"{f:.2f} Hz/{d:.1f} 1/s ({a / 1e3:.2f} kN)" for f, d, a in seeds))
     if not run_too:
         return out
-    sim, t, fx, took = brake_run(model, n, spacing, step, SPEED_M_S, deflection)
+    sim, t, fx, took, run = brake_run(model, n, spacing, step, SPEED_M_S, deflection)
     peak_hz, single_hz, single_decay = single_fit(sim, t, fx)
+    slip, steady_slip = settled_slip(sim, run)
+    print(f"    settled slip {slip * 100:.3f} % against steady_rolling's {steady_slip * 100:.3f} % "
+          f"({(slip / steady_slip - 1) * 100:+.2f} %)")
     print(f"    run ({took:.0f} s): Fx rings at {peak_hz:.2f} Hz (periodogram), "
           f"{single_hz:.2f} Hz decaying at {single_decay:.1f} 1/s (single damped cosine)")
     fitted, rms = fit_ringing(t, fx, seeds)
@@ -122,7 +139,8 @@ def at_speed(model, n, spacing, step, deflection, run_too=True) -> dict:
     print(f"    rotational: run {fitted[0][0]:.2f} Hz against rolling_modes' {f_rot:.2f} Hz "
           f"({(fitted[0][0] / f_rot - 1) * 100:+.1f} %), decay {fitted[0][1]:.1f} against "
           f"{d_rot:.1f} 1/s; the linear response against the run: rms {apart:.0f} N")
-    out |= {"periodogram_hz": peak_hz, "single_fit_hz": single_hz,
+    out |= {"settled_slip": slip, "steady_slip": steady_slip,
+            "periodogram_hz": peak_hz, "single_fit_hz": single_hz,
             "single_fit_decay_1_s": single_decay,
             "run_fit": [{"frequency_hz": f, "decay_1_s": d} for f, d in fitted],
             "run_fit_rms_n": rms, "run_fx_std_n": float(fx.std()),
@@ -150,7 +168,7 @@ def main() -> None:
                                           point_spacing_m=SPACING_M, wheel="free"))
     print(f"loaded rotational mode at rest (loaded_modes): {f_rest:.2f} Hz; rolling_modes at "
           f"{SLOW_M_S:g} m/s: {rotational(slow)[0]:.2f} Hz")
-    sim, t, fx, _ = brake_run(model, 100, SPACING_M, 1e-4, 0.0, deflection)
+    sim, t, fx, *_ = brake_run(model, 100, SPACING_M, 1e-4, 0.0, deflection)
     peak_hz, single_hz, single_decay = single_fit(sim, t, fx)
     print(f" 0.0 m/s: Fx rings at {peak_hz:.2f} Hz (periodogram), {single_hz:.2f} Hz decaying "
           f"at {single_decay:.1f} 1/s (damped fit)")
