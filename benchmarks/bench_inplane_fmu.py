@@ -9,15 +9,17 @@
            the torque,
        (c) TireModalNative.fmu, the radial native FMU,
        (d) a minimal pythonfmu slave (benchmarks/bench_fmu.py's), the floor of a Python FMU,
-       (e) a trivial C FMU (benchmarks/trivial_fmu), the floor of a C FMU.
-   Rounds alternate, medians. The in-plane tire has no native FMU yet: (a)/(d) is the
-   figure to watch. ``--numpy`` also runs the in-plane FMU with its numpy step (the FMU
-   without its compiled library).
-2. Initialisation (instantiate -> exitInitializationMode, warm process) of TireInPlane at
-   N = 100 and 400, at rest and rolling at 5 m/s (below N = 400's critical speed), beside
-   TireModal's.
+       (e) a trivial C FMU (benchmarks/trivial_fmu), the floor of a C FMU,
+       (f) TireInPlaneNative.fmu, the in-plane tire in C (no Python): its cost against (e)
+           is the tire's own, against (a) what the Python FMU layer costs.
+   Rounds alternate, medians. ``--numpy`` also runs the in-plane FMU with its numpy step
+   (the FMU without its compiled library).
+2. Initialisation (instantiate -> exitInitializationMode, warm process) of TireInPlane and
+   TireInPlaneNative at N = 100 and 400 (``--init-elements`` chooses), at rest and rolling at
+   5 m/s (below N = 400's critical speed), beside TireModal's.
 
-    python benchmarks/bench_inplane_fmu.py [--rounds 5] [--steps 200] [--record JSON]
+    python benchmarks/bench_inplane_fmu.py [--rounds 5] [--steps 200] [--init-elements 100]
+        [--record JSON]
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from bench_fmu import Opened, build_minimal, build_trivial, init_time  # noqa: E
 
 from tire_fmu.core.obstacles import cleat  # noqa: E402
 from tire_fmu.fmu.builder import build_fmu, build_inplane_fmu  # noqa: E402
-from tire_fmu.native import build_native_fmu  # noqa: E402
+from tire_fmu.native import build_native_fmu, build_native_inplane_fmu  # noqa: E402
 
 H = 1e-4
 RADIAL_INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
@@ -75,7 +77,10 @@ NAMES = {"inplane": "(a) TireInPlane (Python FMU, C step)",
          "inplane_numpy": "(a') TireInPlane, numpy step (its C library taken out)",
          "python": "(b) TireModal (radial Python FMU)",
          "native": "(c) TireModalNative (radial native FMU)",
-         "minimal": "(d) minimal pythonfmu slave", "trivial": "(e) trivial C FMU"}
+         "minimal": "(d) minimal pythonfmu slave", "trivial": "(e) trivial C FMU",
+         "inplane_native": "(f) TireInPlaneNative (in-plane native FMU)"}
+#: The FMUs whose initialisation is timed.
+INIT_KINDS = ("inplane", "inplane_native", "python")
 
 
 class Case:
@@ -122,6 +127,8 @@ def main(argv=None) -> None:
     parser.add_argument("--steps", type=int, default=200, help="steps per round (200)")
     parser.add_argument("--init-repeats", type=int, default=1,
                         help="warm initialisations per case (1)")
+    parser.add_argument("--init-elements", type=int, nargs="+", default=list(INIT_ELEMENTS),
+                        metavar="N", help="meshes whose initialisation is timed (100 400)")
     parser.add_argument("--numpy", action="store_true",
                         help="also run the in-plane FMU with its numpy step")
     parser.add_argument("--record", metavar="JSON", help="also write the results there")
@@ -136,7 +143,9 @@ def main(argv=None) -> None:
                  "native": build_native_fmu(folder / "TireModalNative.fmu",
                                             platforms=("linux64",)),
                  "minimal": build_minimal(folder / "minimal"),
-                 "trivial": build_trivial(folder / "trivial")}
+                 "trivial": build_trivial(folder / "trivial"),
+                 "inplane_native": build_native_inplane_fmu(
+                     folder / "TireInPlaneNative.fmu", platforms=("linux64",))}
         names = dict(NAMES)
         if args.numpy:
             paths["inplane_numpy"] = without_kernel(paths["inplane"], folder / "numpy.fmu")
@@ -155,33 +164,35 @@ def main(argv=None) -> None:
         for case in cases.values():
             case.close()
         costs = {key: 1e6 * statistics.median(v) for key, v in times.items()}
-        for kind in ("inplane", "python"):
-            init_time(fmus[kind], {}, 1)  # the modules imported
+        for kind in INIT_KINDS:
+            init_time(fmus[kind], {}, 1)  # the modules imported, the library loaded
         inits = {kind: {f"N = {n}, {speed:g} m/s": init_time(
             fmus[kind], {"n_elements": n, "speed": speed}, args.init_repeats)
-            for n in INIT_ELEMENTS for speed in (0.0, 5.0)} for kind in ("inplane", "python")}
+            for n in args.init_elements for speed in (0.0, 5.0)} for kind in INIT_KINDS}
 
     print(f"1. Cost per communication step through fmpy, h = {H:g} s, N = 100 (median of "
           f"{args.rounds} alternating rounds of {args.steps} steps), µs")
     print(f"   {'regime':<26}" + "".join(f" {key.split()[0]:>9}" for key in names.values())
-          + f" {'(a)/(b)':>8} {'(a)/(d)':>8} {'(b)/(d)':>8}")
+          + f" {'(a)/(b)':>8} {'(a)/(d)':>8} {'(b)/(d)':>8} {'(a)/(f)':>8} {'(f)/(e)':>8}")
     rows = {}
     for regime in REGIMES:
         c = {kind: costs[regime, kind] for kind in names}
         rows[regime] = {names[kind]: c[kind] for kind in names}
         print(f"   {regime:<26}" + "".join(f" {c[kind]:9.1f}" for kind in names)
               + f" {c['inplane'] / c['python']:8.1f} {c['inplane'] / c['minimal']:8.1f} "
-              f"{c['python'] / c['minimal']:8.2f}")
+              f"{c['python'] / c['minimal']:8.2f} {c['inplane'] / c['inplane_native']:8.1f} "
+              f"{c['inplane_native'] / c['trivial']:8.1f}")
     for name in names.values():
         print(f"   {name}")
-    worst = max(r[names["inplane"]] for r in rows.values())
-    print(f"   the in-plane tire at its slowest: {worst * 1e-6 / H:.1f} s of wall time per "
-          f"simulated second at h = {H:g} s")
+    for kind in ("inplane", "inplane_native"):
+        worst = max(r[names[kind]] for r in rows.values())
+        print(f"   {names[kind].split(' (')[0]} at its slowest: {worst * 1e-6 / H:.2f} s of "
+              f"wall time per simulated second at h = {H:g} s")
     print(f"\n2. Initialisation, instantiate -> exitInitializationMode, warm process "
           f"(median of {args.init_repeats}), s")
     labels = list(inits["inplane"])
     print(f"   {'FMU':<44}" + "".join(f" {label:>16}" for label in labels))
-    for kind in ("inplane", "python"):
+    for kind in INIT_KINDS:
         print(f"   {names[kind]:<44}" + "".join(f" {inits[kind][label]:16.2f}"
                                                   for label in labels))
     print(f"\nPython {sys.version.split()[0]}; each FMU's defaults otherwise.")

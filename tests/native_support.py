@@ -3,11 +3,20 @@ excitations of the acceptance runs, and the comparison rule."""
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import shutil
+import stat
+import subprocess
+import sys
 from ctypes import byref
 from dataclasses import dataclass, field
+from importlib import metadata
+from pathlib import Path
 
 import numpy as np
+import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (
@@ -22,6 +31,12 @@ OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
            "tread_deflection")
 INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
 H = 1e-4
+NATIVE_HOST = Path(__file__).parent / "native_host"
+WINDOWS_TOOLS = ("x86_64-w64-mingw32-gcc", "wine")
+needs_windows_tools = pytest.mark.skipif(
+    not all(shutil.which(tool) for tool in WINDOWS_TOOLS),
+    reason="needs x86_64-w64-mingw32-gcc and wine (.ci/run installs them: apt-get install "
+           "gcc-mingw-w64-x86-64 wine64)")
 
 
 @dataclass
@@ -147,3 +162,57 @@ def relative_errors(reference: np.ndarray, other: np.ndarray) -> np.ndarray:
     scales = np.array([force_scale, force_scale, force_scale,
                        *np.abs(reference[:, 3:]).max(axis=0)])
     return np.abs(reference - other).max(axis=0) / scales
+
+
+def _tbb_library_folder() -> str:
+    for file in metadata.files("tbb") or ():
+        if file.name.startswith("libtbb.so"):
+            return str(Path(file.locate()).parent)
+    raise AssertionError("the tbb wheel (test extra) has no libtbb.so")
+
+
+def in_host(fmu, host: str, load: float, speed: float, tmp_path, inplane: bool = False
+            ) -> np.ndarray:
+    """400 steps of native_host/other_hosts.py's run of ``fmu`` in ``host`` (fmpy, libcosimpy,
+    ecospy), in a subprocess; ``inplane``: an in-plane FMU (its outputs, its wheel braked)."""
+    out = tmp_path / f"{host}.json"
+    env = dict(os.environ)
+    if host == "ecospy":
+        env["LD_LIBRARY_PATH"] = os.pathsep.join(
+            [_tbb_library_folder(), env.get("LD_LIBRARY_PATH", "")])
+        from importlib.util import find_spec  # importing ecospy here would need libtbb loaded
+
+        for proxy in Path(find_spec("ecospy").origin).parent.glob("binaries/proxyfmu"):
+            proxy.chmod(proxy.stat().st_mode | stat.S_IXUSR)  # the wheel ships it without
+    command = [sys.executable, str(NATIVE_HOST / "other_hosts.py"), str(fmu), host,
+               repr(load), repr(speed), "400", str(out)] + (["inplane"] if inplane else [])
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    return np.array(json.loads(out.read_text()))
+
+
+def compile_host(folder: Path, windows: bool) -> Path:
+    """native_host/host.c for Linux or Windows, against the FMU unpacked in ``folder`` (its
+    sources/: the FMI headers and spec.h, which says where its outputs are)."""
+    out = folder / ("host.exe" if windows else "host")
+    compiler = "x86_64-w64-mingw32-gcc" if windows else "gcc"
+    command = [compiler, "-O2", "-Wall", "-I", str(folder / "sources"), "-o", str(out),
+               str(NATIVE_HOST / "host.c")] + ([] if windows else ["-ldl"])
+    subprocess.run(command, check=True, capture_output=True)
+    return out
+
+
+def run_host(host: Path, binary: Path, guid: str, commands: Path) -> list[str]:
+    command = [str(host), str(binary), guid, str(commands)]
+    env = dict(os.environ)
+    if host.suffix == ".exe":
+        command = ["wine", *command]
+        env["WINEDEBUG"] = "-all"
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return result.stdout.splitlines()
+
+
+def host_outputs(lines: list[str]) -> np.ndarray:
+    return np.array([[float(x) for x in line.split()[1:]] for line in lines
+                     if line.startswith("out ")])

@@ -7,26 +7,13 @@ import pytest
 pytest.importorskip("fmpy")
 pytest.importorskip("pythonfmu")
 
-import fmpy  # noqa: E402
-from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi1 import FMICallException  # noqa: E402
-from fmpy.fmi2 import (  # noqa: E402
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
+from inplane_support import Instance  # noqa: E402
 
 from tire_fmu.core.inplane_host import HostSettings, build_host_stepper  # noqa: E402
 from tire_fmu.core.parameters import TireParameters  # noqa: E402
-from vehicle_demo.cosim import printed  # noqa: E402
 
 pytestmark = pytest.mark.fmu
-
-INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
-OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
-           "sliding_points")
 
 
 @pytest.fixture(scope="module")
@@ -34,51 +21,6 @@ def fmu_path(tmp_path_factory):
     from tire_fmu.fmu.builder import build_inplane_fmu
 
     return build_inplane_fmu(tmp_path_factory.mktemp("inplane_fmu"))
-
-
-class Instance:
-    """One TireInPlane instance in fmpy, with its log."""
-
-    def __init__(self, path, **parameters):
-        md = read_model_description(path)
-        self.vr = {v.name: v.valueReference for v in md.modelVariables}
-        self.types = {v.name: v.type for v in md.modelVariables}
-        self.log = []
-        self.callbacks = fmi2CallbackFunctions()
-        self.callbacks.logger = fmi2CallbackLoggerTYPE(
-            lambda env, name, status, category, message: self.log.append(
-                (status, printed(message))))
-        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
-        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(fmpy.free)
-        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path),
-                             modelIdentifier=md.coSimulation.modelIdentifier,
-                             instanceName="inplane")
-        self.fmu.instantiate(loggingOn=True, callbacks=self.callbacks)
-        self.fmu.setupExperiment(startTime=0.0)
-        self.fmu.enterInitializationMode()
-        for name, value in parameters.items():
-            kind = self.types[name]
-            setter = {"Real": self.fmu.setReal, "Integer": self.fmu.setInteger,
-                      "Boolean": self.fmu.setBoolean}[kind]
-            setter([self.vr[name]], [value])
-        self.t = 0.0
-
-    def start(self):
-        self.fmu.exitInitializationMode()
-        return self
-
-    def step(self, h, **inputs):
-        self.fmu.setReal([self.vr[n] for n in INPUTS], [inputs.get(n, 0.0) for n in INPUTS])
-        self.fmu.doStep(self.t, h)
-        self.t += h
-        return self.outputs()
-
-    def outputs(self):
-        return np.array(self.fmu.getReal([self.vr[n] for n in OUTPUTS]))
-
-    def close(self):
-        self.fmu.terminate()
-        self.fmu.freeInstance()
 
 
 def _drive(k, h):

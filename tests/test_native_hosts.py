@@ -4,31 +4,27 @@ again with fmpy's build, libcosimpy and ecospy against fmpy."""
 
 from __future__ import annotations
 
-import json
-import os
 import shutil
-import stat
-import subprocess
-import sys
 import zipfile
-from importlib import metadata
 from pathlib import Path
 
-import numpy as np
 import pytest
-from native_support import OUTPUTS, Opened, relative_errors, road_drop, run
+from native_support import (
+    OUTPUTS,
+    Opened,
+    compile_host,
+    host_outputs,
+    in_host,
+    needs_windows_tools,
+    relative_errors,
+    road_drop,
+    run,
+    run_host,
+)
 
 from tire_fmu.fmu.interface import fmu_variables
 
 pytestmark = pytest.mark.fmu
-
-HERE = Path(__file__).parent / "native_host"
-WINDOWS_TOOLS = ("x86_64-w64-mingw32-gcc", "wine")
-needs_windows_tools = pytest.mark.skipif(
-    not all(shutil.which(tool) for tool in WINDOWS_TOOLS),
-    reason="needs x86_64-w64-mingw32-gcc and wine (.ci/run installs them: apt-get install "
-           "gcc-mingw-w64-x86-64 wine64)")
-
 
 @pytest.fixture(scope="module")
 def unpacked(native_fmu_path, tmp_path_factory):
@@ -49,53 +45,28 @@ def _command_file(path: Path, parameters: dict, steps: int = 1200) -> Path:
     return path
 
 
-def _compile_host(folder: Path, windows: bool) -> Path:
-    out = folder / ("host.exe" if windows else "host")
-    compiler = "x86_64-w64-mingw32-gcc" if windows else "gcc"
-    command = [compiler, "-O2", "-Wall", "-I", str(folder / "sources"), "-o", str(out),
-               str(HERE / "host.c")] + ([] if windows else ["-ldl"])
-    subprocess.run(command, check=True, capture_output=True)
-    return out
-
-
-def _run_host(host: Path, binary: Path, guid: str, commands: Path) -> list[str]:
-    command = [str(host), str(binary), guid, str(commands)]
-    env = dict(os.environ)
-    if host.suffix == ".exe":
-        command = ["wine", *command]
-        env["WINEDEBUG"] = "-all"
-    result = subprocess.run(command, capture_output=True, text=True, timeout=300, env=env)
-    assert result.returncode == 0, result.stdout + result.stderr
-    return result.stdout.splitlines()
-
-
-def _outputs(lines: list[str]) -> np.ndarray:
-    return np.array([[float(x) for x in line.split()[1:]] for line in lines
-                     if line.startswith("out ")])
-
-
 @needs_windows_tools
 def test_win64_under_wine_gives_the_linux64_outputs(unpacked, tmp_path):
     """The same C host, compiled for Windows (LoadLibrary/GetProcAddress) and for Linux, runs
     the same commands: outputs to 1e-12, the same statuses and the same log lines (the
     messages are printf'd by mingw's C library on one side and glibc on the other)."""
     folder, guid = unpacked
-    linux = _compile_host(folder, windows=False)
-    windows = _compile_host(folder, windows=True)
+    linux = compile_host(folder, windows=False)
+    windows = compile_host(folder, windows=True)
     for parameters in ({"load": 27700.0, "speed": 10.0},
                        {"load": 45000.0, "speed": 20.0, "n_elements": 120}):
         commands = _command_file(tmp_path / "run.txt", parameters)
-        a = _run_host(linux, folder / "binaries/linux64/TireModalNative.so", guid, commands)
-        b = _run_host(windows, folder / "binaries/win64/TireModalNative.dll", guid, commands)
-        assert relative_errors(_outputs(a), _outputs(b)).max() < 1e-12
+        a = run_host(linux, folder / "binaries/linux64/TireModalNative.so", guid, commands)
+        b = run_host(windows, folder / "binaries/win64/TireModalNative.dll", guid, commands)
+        assert relative_errors(host_outputs(a), host_outputs(b)).max() < 1e-12
         assert [x for x in a if not x.startswith(("out ", "log "))] == [
             x for x in b if not x.startswith(("out ", "log "))]
         ready = "ready in"  # its CPU time differs
         assert [x for x in a if x.startswith("log ") and ready not in x] == [
             x for x in b if x.startswith("log ") and ready not in x]
     bad = _command_file(tmp_path / "bad.txt", {"R": -1.0, "beta": 0.5, "load": 1e9}, steps=0)
-    a = _run_host(linux, folder / "binaries/linux64/TireModalNative.so", guid, bad)
-    b = _run_host(windows, folder / "binaries/win64/TireModalNative.dll", guid, bad)
+    a = run_host(linux, folder / "binaries/linux64/TireModalNative.so", guid, bad)
+    b = run_host(windows, folder / "binaries/win64/TireModalNative.dll", guid, bad)
     assert a == b and sum("parameter problem" in line for line in a) == 2
 
 
@@ -103,12 +74,12 @@ def test_a_strict_c_host_runs_through_a_lift_off(unpacked, tmp_path):
     """Every doStep through a 5 cm road drop that lifts the tread off returns fmi2OK (a host
     that stops on fmi2Warning, as the C fmusim does, runs through)."""
     folder, guid = unpacked
-    host = _compile_host(folder, windows=False)
-    lines = _run_host(host, folder / "binaries/linux64/TireModalNative.so", guid,
+    host = compile_host(folder, windows=False)
+    lines = run_host(host, folder / "binaries/linux64/TireModalNative.so", guid,
                       _command_file(tmp_path / "run.txt", {"speed": 10.0}))
     statuses = [line for line in lines if line.startswith("status step")]
     assert len(statuses) == 1200 and set(statuses) == {"status step 0"}
-    assert (_outputs(lines)[:, 2] == 0.0).any()
+    assert (host_outputs(lines)[:, 2] == 0.0).any()
     assert not [line for line in lines if line.startswith("log ") and line.split()[2] != "0"]
 
 
@@ -133,35 +104,11 @@ def test_sources_build_elsewhere_with_fmpy(native_fmu_path, tmp_path):
     assert relative_errors(shipped, again).max() < 1e-12
 
 
-def _tbb_library_folder() -> str:
-    for file in metadata.files("tbb") or ():
-        if file.name.startswith("libtbb.so"):
-            return str(Path(file.locate()).parent)
-    raise AssertionError("the tbb wheel (test extra) has no libtbb.so")
-
-
-def _in_host(fmu, host: str, load: float, speed: float, tmp_path) -> np.ndarray:
-    out = tmp_path / f"{host}.json"
-    env = dict(os.environ)
-    if host == "ecospy":
-        env["LD_LIBRARY_PATH"] = os.pathsep.join(
-            [_tbb_library_folder(), env.get("LD_LIBRARY_PATH", "")])
-        from importlib.util import find_spec  # importing ecospy here would need libtbb loaded
-
-        for proxy in Path(find_spec("ecospy").origin).parent.glob("binaries/proxyfmu"):
-            proxy.chmod(proxy.stat().st_mode | stat.S_IXUSR)  # the wheel ships it without
-    result = subprocess.run([sys.executable, str(HERE / "other_hosts.py"), str(fmu), host,
-                             repr(load), repr(speed), "400", str(out)], capture_output=True,
-                            text=True, timeout=300, env=env)
-    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
-    return np.array(json.loads(out.read_text()))
-
-
 @pytest.mark.parametrize("host", ["libcosimpy", "ecospy"])
 @pytest.mark.parametrize("load, speed", [(27700.0, 0.0), (40000.0, 15.0)])
 def test_other_hosts_give_fmpys_outputs(native_fmu_path, host, load, speed, tmp_path):
-    reference = _in_host(native_fmu_path, "fmpy", load, speed, tmp_path)
-    other = _in_host(native_fmu_path, host, load, speed, tmp_path)
+    reference = in_host(native_fmu_path, "fmpy", load, speed, tmp_path)
+    other = in_host(native_fmu_path, host, load, speed, tmp_path)
     assert reference.shape == other.shape == (400, len(OUTPUTS))
     if speed == 0.0:
         assert (reference[:, 2] == 0.0).any()  # through a lift-off

@@ -8,6 +8,8 @@
  *   real VR VALUE | integer VR VALUE | boolean VR 0|1   set a variable (any phase)
  *   init                                                 setup, enter and exit initialisation
  *   step T H                                             doStep, then print the outputs
+ *                                                        (the block spec.h of the FMU's
+ *                                                        sources names: radial or in-plane)
  *   get VR...                                            print fmi2GetReal of the references
  */
 #include <stdio.h>
@@ -26,6 +28,7 @@
 #endif
 
 #include "fmi2Functions.h"
+#include "spec.h" /* the FMU's own (sources/ on the include path): its outputs' block */
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
                    fmi2String category, fmi2String message, ...)
@@ -48,7 +51,9 @@ int main(int argc, char** argv)
     FILE* commands;
     fmi2Component c;
     fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-    fmi2ValueReference outputs[5] = {4, 5, 6, 7, 8};
+    fmi2ValueReference outputs[SPEC_BLOCK_N_OUTPUTS];
+    int k;
+    for (k = 0; k < SPEC_BLOCK_N_OUTPUTS; k++) outputs[k] = SPEC_BLOCK_OUTPUTS_FIRST + k;
     if (argc != 4) {
         printf("usage: host BINARY GUID COMMANDS\n");
         return 2;
@@ -99,11 +104,11 @@ int main(int argc, char** argv)
                 status |= fmi2EnterInitializationMode(c) << 4;
                 status |= fmi2ExitInitializationMode(c) << 8;
             } else if (strcmp(word, "step") == 0 && sscanf(line, "%*s %lf %lf", &x, &y) == 2) {
-                double values[5];
+                double values[SPEC_BLOCK_N_OUTPUTS];
                 status = fmi2DoStep(c, x, y, fmi2True);
-                fmi2GetReal(c, outputs, 5, values);
+                fmi2GetReal(c, outputs, SPEC_BLOCK_N_OUTPUTS, values);
                 printf("out");
-                for (i = 0; i < 5; i++) printf(" %.17g", values[i]);
+                for (i = 0; i < SPEC_BLOCK_N_OUTPUTS; i++) printf(" %.17g", values[i]);
                 printf("\n");
             } else {
                 continue;

@@ -1,21 +1,39 @@
 """Run a native FMU in another host and write its outputs as JSON (run in a subprocess: libcosim
 aborts its process on an FMU error, and ecospy needs libtbb on LD_LIBRARY_PATH at start).
 
-    python other_hosts.py FMU HOST LOAD SPEED STEPS OUT.json     (HOST: fmpy, libcosimpy, ecospy)
+    python other_hosts.py FMU HOST LOAD SPEED STEPS OUT.json [inplane]
+        (HOST: fmpy, libcosimpy, ecospy)
 
-Every host runs the same loop: set road_z, step h = 1e-4 s, read the outputs.
+Every host runs the same loop: set road_z, step h = 1e-4 s, read the outputs. ``inplane``: the
+in-plane FMU's outputs, and its wheel braked too (wheel_torque set with road_z).
 """
 
 import json
 import sys
 
-NAMES = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"]
+RADIAL = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"]
+INPLANE = ["rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
+           "sliding_points"]
+NAMES = RADIAL
 H = 1e-4
 
 
 def road(k: int) -> float:
     """A 5 cm drop of the road for 15 ms: the tread leaves the road and lands."""
     return -0.05 if 100 <= k < 250 else 0.0
+
+
+def torque(k: int) -> float:
+    """In-plane only: a brake torque from 5 ms on."""
+    return -2500.0 if k >= 50 else 0.0
+
+
+def inputs(k: int) -> dict[str, float]:
+    """The inputs each host sets before step k."""
+    values = {"road_z": road(k)}
+    if NAMES is INPLANE:
+        values["wheel_torque"] = torque(k)
+    return values
 
 
 def with_libcosimpy(fmu, load, speed, steps):
@@ -37,7 +55,8 @@ def with_libcosimpy(fmu, load, speed, steps):
     execution.add_observer(observer)
     rows = []
     for k in range(steps):
-        override.slave_real_values(index, [vr["road_z"]], [road(k)])
+        given = inputs(k)
+        override.slave_real_values(index, [vr[n] for n in given], list(given.values()))
         execution.step()
         rows.append(observer.last_real_values(index, [vr[n] for n in NAMES]))
     return rows
@@ -53,7 +72,8 @@ def with_ecospy(fmu, load, speed, steps):
     simulation.init(parameter_set="initial")
     rows = []
     for k in range(steps):
-        simulation.set_real("tire::road_z", road(k))
+        for name, value in inputs(k).items():
+            simulation.set_real("tire::" + name, value)
         simulation.step()
         rows.append([simulation.get_real("tire::" + n) for n in NAMES])
     simulation.terminate()
@@ -75,7 +95,8 @@ def with_fmpy(fmu, load, speed, steps):
     slave.exitInitializationMode()
     rows = []
     for k in range(steps):
-        slave.setReal([vr["road_z"]], [road(k)])
+        given = inputs(k)
+        slave.setReal([vr[n] for n in given], list(given.values()))
         slave.doStep(k * H, H)
         rows.append(slave.getReal([vr[n] for n in NAMES]))
     slave.terminate()
@@ -84,7 +105,9 @@ def with_fmpy(fmu, load, speed, steps):
 
 
 if __name__ == "__main__":
-    fmu, host, load, speed, steps, out = sys.argv[1:]
+    fmu, host, load, speed, steps, out = sys.argv[1:7]
+    if sys.argv[7:] == ["inplane"]:
+        NAMES = INPLANE
     run = {"fmpy": with_fmpy, "libcosimpy": with_libcosimpy, "ecospy": with_ecospy}[host]
     rows = run(fmu, float(load), float(speed), int(steps))
     with open(out, "w") as stream:

@@ -1,5 +1,5 @@
 """FMU command: build-fmu (TireModal.fmu, or with --inplane TireInPlane.fmu, with the core
-inside, validated by fmpy)."""
+inside, or with --inplane --native TireInPlaneNative.fmu, in C; validated by fmpy)."""
 
 from __future__ import annotations
 
@@ -43,6 +43,13 @@ def register(subparsers) -> None:
     p.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
                    help="with --inplane: override a tangential parameter of the tire file "
                    "(repeatable), as tire-fmu inplane-modes takes them")
+    p.add_argument("--native", action="store_true",
+                   help="with --inplane: build TireInPlaneNative.fmu, the same variables and "
+                   "numbers in C (compiled here; its sources inside), which needs no Python "
+                   "on the host (the radial native FMU: tire-fmu export --format fmu)")
+    p.add_argument("--platform", action="append", choices=("linux64", "win64"), default=None,
+                   help="with --native: binaries to include (repeatable; default: linux64 and "
+                   "win64 when x86_64-w64-mingw32-gcc is installed)")
     add_output_options(p, plot=False)
     p.set_defaults(handler=run_build_fmu)
 
@@ -59,7 +66,18 @@ def run_build_fmu(args: argparse.Namespace) -> Output:
     if args.tangential and not args.inplane:
         raise CliError("--tangential: only with --inplane (the radial FMU has no tangential "
                        "data)")
+    if args.native and not args.inplane:
+        raise CliError("--native: only with --inplane (the radial native FMU is built by "
+                       "tire-fmu export OUT.fmu --format fmu)")
+    if args.platform and not args.native:
+        raise CliError("--platform: only with --native (the Python FMUs' binaries are "
+                       "pythonfmu's)")
     identifier = INPLANE_MODEL_IDENTIFIER if args.inplane else MODEL_IDENTIFIER
+    if args.native:
+        from ..native.builder import INPLANE_MODEL_IDENTIFIER as identifier
+        from .reduce import _check_native_tools
+
+        _check_native_tools()
     out = output_file("OUT", args.out, ".fmu", f"{identifier}.fmu")
     if args.inplane:
         from ..core.inplane import InPlaneTire
@@ -73,6 +91,8 @@ def run_build_fmu(args: argparse.Namespace) -> Output:
         tire = checked_tire(args)
         tire_data = tire.as_dict()
     make_folder("OUT", out)
+    if args.native:
+        return _build_native_inplane(args, out, model, tire_data)
     try:
         with writing("OUT", out):
             path = (build_inplane_fmu(out, tire=model) if args.inplane
@@ -86,6 +106,34 @@ def run_build_fmu(args: argparse.Namespace) -> Output:
     output = Output(text=f"{path} ({data['size_bytes'] / 1e3:.0f} kB; {check})", data=data)
     output.written.append(path)
     return output
+
+
+def _build_native_inplane(args: argparse.Namespace, out: Path, model, tire_data: dict
+                          ) -> Output:
+    import zipfile
+
+    from ..native.builder import NativeBuildError, build_native_inplane_fmu
+
+    platforms = tuple(args.platform) if args.platform else None
+    try:
+        with writing("OUT", out):
+            path = build_native_inplane_fmu(out, platforms=platforms, tire=model)
+    except NativeBuildError as error:
+        raise CliError(f"OUT = {str(out)!r}: {_first_line(error)}") from error
+    binaries = sorted(n.split("/")[1] for n in zipfile.ZipFile(path).namelist()
+                      if n.startswith("binaries/") and n.count("/") == 2)
+    data = {"path": path, "size_bytes": path.stat().st_size, "validated_with_fmpy": True,
+            "binaries": binaries, "tire": tire_data}
+    output = Output(text=f"{path} ({data['size_bytes'] / 1e3:.0f} kB; native, binaries: "
+                    f"{', '.join(binaries) or 'none, sources only'}; fmpy validate: no "
+                    "problems)", data=data)
+    output.written.append(path)
+    return output
+
+
+def _first_line(error: Exception) -> str:
+    # a compiler's output follows the first line: an error stays one line
+    return str(error).splitlines()[0] if str(error) else type(error).__name__
 
 
 def _fmpy_installed() -> bool:

@@ -6,15 +6,19 @@ the critical speed, the free ring order by order, the static footprint, the road
 it steps with the unilateral contact exactly as :class:`tire_fmu.core.contact_dynamics.
 ContactSimulator` does. :mod:`.builder` writes the generated headers, the model description and
 the linux64 and win64 binaries into one ``.fmu``. See docs/native.md; ``tire-fmu export
---format fmu OUT.fmu`` is the command-line way in.
+--format fmu OUT.fmu`` is the command-line way in. The in-plane tire's native FMU
+(TireInPlaneNative, TireInPlane.fmu's variables) is built by the same path:
+``build_native_inplane_fmu``, or ``tire-fmu build-fmu --inplane --native``.
 """
 
 from importlib import import_module
 
 __all__ = [
     "DEFAULT_MODEL_IDENTIFIER",
+    "INPLANE_MODEL_IDENTIFIER",
     "NativeBuildError",
     "build_native_fmu",
+    "build_native_inplane_fmu",
     "default_platforms",
     "parameter_start_values",
 ]

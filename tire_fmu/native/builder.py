@@ -1,5 +1,11 @@
-"""Build the native FMU: the C of ``tire_fmu/native/c`` (package data), the generated headers,
+"""Build the native FMUs: the C of ``tire_fmu/native/c`` (package data), the generated headers,
 the model description, linux64 and win64 binaries, all in one ``.fmu``.
+
+Two kinds share this path and the generic FMI layer (``fmi2_layer.c``); a :class:`NativeKind`
+says what differs: the model's C files, its variable table and its description.
+``TireModalNative`` (:data:`RADIAL`) is the radial ring of TireModal.fmu;
+``TireInPlaneNative`` (:data:`INPLANE`) the in-plane ring of TireInPlane.fmu, with exactly its
+variables.
 
 The C builds the model itself at ``fmi2ExitInitializationMode`` from its parameters, so an
 export only chooses the parameters' start values (an operating point, a tire); every parameter
@@ -22,6 +28,7 @@ import sys
 import tempfile
 import uuid
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -30,17 +37,16 @@ from xml.etree import ElementTree
 import tire_fmu
 
 from ..fmu.interface import CAPABILITIES as SHARED_CAPABILITIES
-from ..fmu.interface import FmuVariable, fmu_variables, unit_definitions
+from ..fmu.interface import (
+    FmuVariable,
+    fmu_variables,
+    inplane_fmu_variables,
+    unit_definitions,
+)
 from ..fmu.spec import LOG_CATEGORIES, c_header
 from ..publish import published_file
 
-DEFAULT_MODEL_IDENTIFIER = "TireModalNative"
-#: The C files of the FMU, in compile order, and the headers they include.
-C_SOURCES = ("fmi2_layer.c", "tire_model.c", "model_problems.c", "ring.c", "contact.c",
-             "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c")
-C_HEADERS = ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h",
-             "contract_pack.h", "kernel.h", "fmi2Functions.h", "fmi2FunctionTypes.h",
-             "fmi2TypesPlatform.h")
+FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
 GENERATED = ("spec.h", "export.h")
 C_STANDARD = "C99"
 WARNING_FLAGS = ("-Wall", "-Wextra")
@@ -62,6 +68,62 @@ CAPABILITIES = {
 
 class NativeBuildError(RuntimeError):
     """The native FMU could not be built, or what was built does not validate."""
+
+
+@dataclass(frozen=True)
+class NativeKind:
+    """What one native FMU is: its C (the generic layer and a model behind model.h), its
+    variable table (start values by parameter name -> the table) and its description."""
+
+    name: str
+    model_identifier: str  # the default one
+    c_sources: tuple[str, ...]  # in compile order
+    c_headers: tuple[str, ...]  # the headers they include, but the generated ones
+    variables: Callable[[dict | None], tuple[FmuVariable, ...]]
+    description: str
+
+
+RADIAL = NativeKind(
+    "radial", "TireModalNative",
+    ("fmi2_layer.c", "tire_model.c", "model_problems.c", "ring.c", "contact.c",
+     "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c"),
+    ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "contract_pack.h",
+     "kernel.h", *FMI_HEADERS),
+    lambda start_values: fmu_variables(parameter_values=start_values),
+    "Open in-plane ring tire (0-300 Hz), native C: builds its free-ring modal model and "
+    "static footprint for the parameters at initialisation, then steps with the unilateral "
+    "contact; inputs are deviations from static equilibrium, forces are totals. Needs no "
+    "Python.")
+
+INPLANE = NativeKind(
+    "inplane", "TireInPlaneNative",
+    ("fmi2_layer.c", "inplane_tire_model.c", "model_problems.c", "inplane_model.c",
+     "inplane_step.c", "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c",
+     "inplane_build.c", "inplane_static.c", "inplane_points.c", "inplane_terms.c", "contact.c",
+     "numerics.c", "memory.c"),
+    ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "inplane_model.h",
+     "inplane_step.h", "inplane_build.h", "inplane_critical.h", "inplane_points.h",
+     "inplane_ring.h", "inplane_ritz.h", "inplane_static.h", "inplane_terms.h", *FMI_HEADERS),
+    inplane_fmu_variables,
+    "Open in-plane ring tire with tangential tread motion, the wheel's rotation and Coulomb "
+    "friction in the footprint (0-300 Hz), native C: Fx, Fz and the axle moment My from the "
+    "rim's motion, the wheel torque and the road; builds its reduced step for the parameters "
+    "at initialisation, with TireInPlane.fmu's variables and numbers. Needs no Python.")
+
+KINDS = {kind.name: kind for kind in (RADIAL, INPLANE)}
+DEFAULT_MODEL_IDENTIFIER = RADIAL.model_identifier
+INPLANE_MODEL_IDENTIFIER = INPLANE.model_identifier
+#: The radial FMU's C files and headers (its compile order).
+C_SOURCES = RADIAL.c_sources
+C_HEADERS = RADIAL.c_headers
+
+
+def native_kind(kind: str | NativeKind) -> NativeKind:
+    if isinstance(kind, NativeKind):
+        return kind
+    if kind not in KINDS:
+        raise NativeBuildError(f"kind = {kind!r}: known {sorted(KINDS)}")
+    return KINDS[kind]
 
 
 @dataclass(frozen=True)
@@ -98,9 +160,13 @@ def c_folder():
 
 
 def parameter_start_values(tire=None, load_n=None, speed_m_s=None, **settings) -> dict:
-    """Start values by FMU parameter name: a tire (TireParameters), the load and speed, and any
-    other parameter by its FMU name (n_elements, f_max, ...)."""
-    values = dict(tire.as_dict()) if tire is not None else {}
+    """Start values by FMU parameter name: a tire (TireParameters, or for the in-plane FMU an
+    InPlaneTire: its radial and tangential data), the load and speed, and any other parameter
+    by its FMU name (n_elements, f_max, ...)."""
+    values = {}
+    if tire is not None:
+        values = (dict(tire.as_dict()) if not hasattr(tire, "tangential")
+                  else {**tire.tire.as_dict(), **tire.tangential.as_dict()})
     if load_n is not None:
         values["load"] = float(load_n)
     if speed_m_s is not None:
@@ -109,8 +175,8 @@ def parameter_start_values(tire=None, load_n=None, speed_m_s=None, **settings) -
     return values
 
 
-def _table(start_values: dict | None) -> tuple[FmuVariable, ...]:
-    table = fmu_variables(parameter_values=start_values)
+def _table(start_values: dict | None, kind: NativeKind = RADIAL) -> tuple[FmuVariable, ...]:
+    table = kind.variables(start_values)
     known = {v.name: v for v in table if v.causality == "parameter"}
     unknown = sorted(set(start_values or {}) - set(known))
     if unknown:
@@ -150,13 +216,14 @@ def export_header(table: tuple[FmuVariable, ...], guid: str, model_identifier: s
     ])
 
 
-def write_sources(folder: Path, table, guid: str, model_identifier: str) -> list[Path]:
-    """The C, the FMI headers, spec.h (from tire_fmu.fmu.spec) and export.h into ``folder``:
-    a folder that compiles on its own."""
+def write_sources(folder: Path, table, guid: str, model_identifier: str,
+                  kind: NativeKind = RADIAL) -> list[Path]:
+    """The kind's C, the FMI headers, spec.h (from tire_fmu.fmu.spec) and export.h into
+    ``folder``: a folder that compiles on its own."""
     folder.mkdir(parents=True, exist_ok=True)
     source = c_folder()
     written = []
-    for name in C_SOURCES + C_HEADERS:
+    for name in kind.c_sources + kind.c_headers:
         path = folder / name
         path.write_bytes((source / name).read_bytes())
         written.append(path)
@@ -167,13 +234,13 @@ def write_sources(folder: Path, table, guid: str, model_identifier: str) -> list
     return written
 
 
-def build_description(model_identifier: str) -> bytes:
+def build_description(model_identifier: str, kind: NativeKind = RADIAL) -> bytes:
     """sources/buildDescription.xml (FMI 3.0 / 2.0.4 layout, read by fmpy's build)."""
     root = ElementTree.Element("fmiBuildDescription", fmiVersion="3.0")
     config = ElementTree.SubElement(root, "BuildConfiguration",
                                     modelIdentifier=model_identifier)
     files = ElementTree.SubElement(config, "SourceFileSet", language=C_STANDARD)
-    for name in C_SOURCES:
+    for name in kind.c_sources:
         ElementTree.SubElement(files, "SourceFile", name=name)
     ElementTree.SubElement(config, "Library", name="m", description="libm (not on Windows)")
     ElementTree.indent(root, space="  ")
@@ -181,7 +248,7 @@ def build_description(model_identifier: str) -> bytes:
 
 
 def compile_binary(sources: Path, toolchain: Toolchain, model_identifier: str, target: Path,
-                   extra_flags: tuple[str, ...] = ()) -> Path:
+                   extra_flags: tuple[str, ...] = (), kind: NativeKind = RADIAL) -> Path:
     """``sources/*.c`` into ``target/<model_identifier><suffix>`` (include path: that folder
     only, which proves it stands alone)."""
     if not toolchain.available():
@@ -192,7 +259,7 @@ def compile_binary(sources: Path, toolchain: Toolchain, model_identifier: str, t
     library = target / f"{model_identifier}{toolchain.suffix}"
     command = [toolchain.compiler, f"-std={C_STANDARD.lower()}", *toolchain.flags,
                *WARNING_FLAGS, *extra_flags, "-I", str(sources), "-o", str(library),
-               *(str(sources / name) for name in C_SOURCES), *toolchain.libraries]
+               *(str(sources / name) for name in kind.c_sources), *toolchain.libraries]
     result = subprocess.run(command, capture_output=True, text=True)
     if result.returncode != 0 or result.stderr.strip():
         raise NativeBuildError(f"compiling for {toolchain.platform} failed or warned "
@@ -219,16 +286,14 @@ def _xml_value(value) -> str:
     return repr(float(value))
 
 
-def model_description(table, guid: str, model_identifier: str) -> bytes:
+def model_description(table, guid: str, model_identifier: str,
+                      kind: NativeKind = RADIAL) -> bytes:
     """``modelDescription.xml`` from the same variable table as spec.h and export.h."""
     root = ElementTree.Element("fmiModelDescription", {
         "fmiVersion": "2.0",
         "modelName": model_identifier,
         "guid": guid,
-        "description": "Open in-plane ring tire (0-300 Hz), native C: builds its free-ring "
-                       "modal model and static footprint for the parameters at initialisation, "
-                       "then steps with the unilateral contact; inputs are deviations from "
-                       "static equilibrium, forces are totals. Needs no Python.",
+        "description": kind.description,
         "author": "tire_fmu contributors",
         "version": tire_fmu.__version__,
         "license": "MIT",
@@ -241,7 +306,7 @@ def model_description(table, guid: str, model_identifier: str) -> bytes:
         **{name: _xml_value(value) for name, value in CAPABILITIES.items()},
     })
     sources = ElementTree.SubElement(co_simulation, "SourceFiles")
-    for name in C_SOURCES:
+    for name in kind.c_sources:
         ElementTree.SubElement(sources, "File", name=name)
     root.append(unit_definitions(v.unit for v in table if v.unit))
     categories = ElementTree.SubElement(root, "LogCategories")
@@ -278,22 +343,24 @@ def model_description(table, guid: str, model_identifier: str) -> bytes:
     return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def export_guid(table, model_identifier: str) -> str:
+def export_guid(table, model_identifier: str, kind: NativeKind = RADIAL) -> str:
     """A GUID from the content: the model description without its GUID and every source."""
-    digest = hashlib.sha256(model_description(table, "", model_identifier))
+    digest = hashlib.sha256(model_description(table, "", model_identifier, kind))
     digest.update(c_header(table).encode())
     source = c_folder()
-    for name in C_SOURCES + C_HEADERS:
+    for name in kind.c_sources + kind.c_headers:
         digest.update((source / name).read_bytes())
     return "{" + str(uuid.uuid5(_GUID_NAMESPACE, digest.hexdigest())) + "}"
 
 
 def build_native_fmu(out: str | Path, start_values: dict | None = None,
                      platforms: tuple[str, ...] | None = None,
-                     model_identifier: str = DEFAULT_MODEL_IDENTIFIER,
-                     validate: bool = True) -> Path:
-    """Write the native FMU to ``out`` (a ``.fmu`` path, or a folder for
-    ``<model_identifier>.fmu``) and return its path.
+                     model_identifier: str | None = None,
+                     validate: bool = True, kind: str | NativeKind = "radial") -> Path:
+    """Write the native FMU of ``kind`` ("radial": TireModalNative, "inplane":
+    TireInPlaneNative; see :data:`KINDS`) to ``out`` (a ``.fmu`` path, or a folder, created
+    if missing, for ``<model_identifier>.fmu``; the identifier defaults to the kind's) and
+    return its path.
 
     ``start_values`` (FMU parameter name -> value, see :func:`parameter_start_values`) become
     the parameters' start values: an operating point frozen as defaults, still settable before
@@ -301,28 +368,31 @@ def build_native_fmu(out: str | Path, start_values: dict | None = None,
     ``()`` writes a sources-only FMU). ``validate`` runs fmpy's validation and raises
     :class:`NativeBuildError` listing any problem.
     """
-    table = _table(start_values)
+    kind = native_kind(kind)
+    model_identifier = model_identifier or kind.model_identifier
+    table = _table(start_values, kind)
     platforms = default_platforms() if platforms is None else tuple(platforms)
     chains = toolchains()
     unknown = [p for p in platforms if p not in chains]
     if unknown:
         raise NativeBuildError(f"platforms {unknown}: known {sorted(chains)}")
     out = Path(out)
-    if out.is_dir():
+    if out.is_dir() or out.suffix.lower() != ".fmu":  # a folder, as build_inplane_fmu takes
+        out.mkdir(parents=True, exist_ok=True)
         out = out / f"{model_identifier}.fmu"
     if not out.parent.is_dir():
         raise NativeBuildError(f"{out}: folder {out.parent} does not exist")
-    guid = export_guid(table, model_identifier)
+    guid = export_guid(table, model_identifier, kind)
     with tempfile.TemporaryDirectory(prefix="tire_fmu_native_") as staging:
         staging = Path(staging)
-        write_sources(staging / "sources", table, guid, model_identifier)
+        write_sources(staging / "sources", table, guid, model_identifier, kind)
         (staging / "sources" / "buildDescription.xml").write_bytes(
-            build_description(model_identifier))
+            build_description(model_identifier, kind))
         for name in platforms:
             compile_binary(staging / "sources", chains[name], model_identifier,
-                           staging / "binaries" / name)
+                           staging / "binaries" / name, kind=kind)
         (staging / "modelDescription.xml").write_bytes(
-            model_description(table, guid, model_identifier))
+            model_description(table, guid, model_identifier, kind))
         # published only once packed and validated: a failed or interrupted build leaves
         # ``out`` as it was, and concurrent builds of one path never share a file
         with published_file(out) as partial:
@@ -332,6 +402,20 @@ def build_native_fmu(out: str | Path, start_values: dict | None = None,
                 if problems:
                     raise NativeBuildError(f"{out} does not validate: " + "; ".join(problems))
     return out
+
+
+def build_native_inplane_fmu(out: str | Path, start_values: dict | None = None,
+                             platforms: tuple[str, ...] | None = None,
+                             model_identifier: str = INPLANE_MODEL_IDENTIFIER,
+                             validate: bool = True, tire=None) -> Path:
+    """:func:`build_native_fmu` of the in-plane kind: TireInPlaneNative.fmu, TireInPlane.fmu's
+    variables in C. ``tire`` (an :class:`~tire_fmu.core.inplane.InPlaneTire`) gives the tire
+    data's start values, radial and tangential, as ``build_inplane_fmu(tire=)`` does;
+    ``start_values`` any parameter's by name (they win over ``tire``'s)."""
+    starts = {**parameter_start_values(tire), **(start_values or {})}
+    return build_native_fmu(out, starts or None, platforms=platforms,
+                            model_identifier=model_identifier, validate=validate,
+                            kind=INPLANE)
 
 
 def pack(folder: Path, fmu: Path) -> None:
