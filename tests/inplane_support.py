@@ -17,7 +17,7 @@ from fmpy.logging import addLoggerProxy
 
 from vehicle_demo.cosim import printed
 
-INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
+INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque", "wheel_rate")
 OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
            "sliding_points")
 

@@ -96,12 +96,19 @@ def shaker(t):
     return dict(road_z=1e-3 * np.sin(w * t), road_vz=1e-3 * w * np.cos(w * t))
 
 
+def driven_to_a_lock(t):
+    """The host's wheel braked to a lock in 40 ms over a 5 mm road wave (wheel_driven)."""
+    return dict(wheel_rate=-10.0 / RADIUS * min(t / 0.04, 1.0),
+                road_z=5e-3 * np.sin(50.0 * t), road_vz=0.25 * np.cos(50.0 * t))
+
+
 RUNS = {  # parameters, inputs at the end of each step, communication step, steps
     "cleat": ({"speed": 10.0}, over_a_cleat, 2e-4, 400),
     "brake": ({"speed": 10.0}, braking, 5e-4, 200),
     "rim motion": ({"speed": 10.0}, rim_moving, 1e-3, 100),
     "held wheel": ({"speed": 10.0, "wheel_free": False}, held_wheel, 5e-4, 160),
     "at rest": ({"speed": 0.0}, shaker, 1e-3, 100),
+    "driven": ({"speed": 10.0, "wheel_driven": True}, driven_to_a_lock, 5e-4, 120),
 }
 
 
@@ -138,6 +145,9 @@ def test_the_native_fmu_gives_the_python_fmus_outputs(native_path, python_path, 
         assert python[-1, 1] < -1e3 and python[-1, 5] < python[0, 5]
     if name == "held wheel":
         assert np.all(native[:, 5] == native[0, 5])
+    if name == "driven":  # the host's spin, and a locked wheel's drag
+        assert native[-1, 5] == pytest.approx(0.0, abs=1e-9)
+        assert python[-1, 1] < -0.5 * 0.8 * LOAD
 
 
 # -- refusals --------------------------------------------------------------------------------

@@ -78,6 +78,9 @@ class HostSettings:
     point_spacing_m: float = DEFAULT_HOST_POINT_SPACING_M
     step_s: float = DEFAULT_HOST_STEP_S
     wheel_free: bool = True
+    #: the host gives the wheel's spin (InPlaneStepper.advance's wheel_rate_rad_s):
+    #: wheel_free is then not read
+    wheel_driven: bool = False
 
 
 @dataclass(frozen=True)
@@ -198,7 +201,8 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
                                       f"a load the tire carries below {most:g} m of "
                                       "deflection")])
     sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
-                           wheel="free" if settings.wheel_free else "held",
+                           wheel="driven" if settings.wheel_driven
+                           else "free" if settings.wheel_free else "held",
                            f_max_hz=settings.f_max_hz, backend=backend, library=library,
                            **options)
     stepper = InPlaneStepper(sim, host_road=True)

@@ -71,7 +71,7 @@ class TireInPlane(TireModal):
             n_elements=int(named["n_elements"]), f_max_hz=named["f_max"],
             zone_length_m=named["contact_zone_length"],
             point_spacing_m=named["contact_point_spacing"], step_s=named["step_size"],
-            wheel_free=bool(named["wheel_free"]))
+            wheel_free=bool(named["wheel_free"]), wheel_driven=bool(named["wheel_driven"]))
         library, why = self._kernel_library()
         self._kernel_note = why or "stepping with the compiled in-plane step"
         return build_host_stepper(settings, "compiled" if library else "numpy", library), None, []
@@ -133,10 +133,10 @@ class TireInPlane(TireModal):
                     f"tire's step_size = {stepper.sim.step_s:g} s (set step_size to divide "
                     "the host's step)"))
             self._checked_h = step_size
-        z, vz, road_z, road_vz, x, vx, torque = self._values[self._INPUTS]
+        z, vz, road_z, road_vz, x, vx, torque, rate = self._values[self._INPUTS]
         before = stepper.checkpoint()
         try:
-            out = stepper.advance(step_size, x, vx, z, vz, torque, road_z, road_vz)
+            out = stepper.advance(step_size, x, vx, z, vz, torque, road_z, road_vz, rate)
         except ContactSetError as error:
             stepper.rollback(before)
             return self._refuse_step(current_time, step_size, f"{error}; nothing changed "

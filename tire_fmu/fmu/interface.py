@@ -268,7 +268,12 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         FmuVariable("wheel_torque", "Real", "input", 0.0, "N.m",
                     "drive (+) or brake (-) torque on the wheel about the axle, in the sense "
                     "of its rolling; with wheel_free = false the wheel's spin is held and "
-                    "this is ignored"),
+                    "this is ignored, as with wheel_driven"),
+        FmuVariable("wheel_rate", "Real", "input", 0.0, "rad/s",
+                    "with wheel_driven: the wheel's spin beyond speed / R (rad/s, in the sense "
+                    "of rolling), given by a host that models the wheel's body itself: the "
+                    "wheel spins at speed / R + wheel_rate, linearly over the step (a locked "
+                    "wheel: wheel_rate = -speed / R); not read otherwise"),
         radial["rim_Fz"],
         FmuVariable("rim_Fx", "Real", "output", 0.0, "N",
                     "fore-aft force of the tire on the rim (x forward), total: braking "
@@ -319,6 +324,10 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         FmuVariable("wheel_free", "Boolean", "parameter", True, "",
                     "the wheel turns under wheel_torque and the tread's drag (its inertia "
                     "wheel_inertia_kg_m2); false holds its spin at speed / R", "--wheel-held"),
+        FmuVariable("wheel_driven", "Boolean", "parameter", False, "",
+                    "the host gives the wheel's spin (wheel_rate) and reads the tire's moment "
+                    "on the rim (rim_My), as when it models the wheel's body itself; "
+                    "wheel_free and wheel_torque are then not read", "--wheel-driven"),
     ]
     table += _tire_data_variables(TireParameters(),
                                   {"sidewall_shear": "; 0 for the in-plane ring (tie the "
@@ -337,6 +346,6 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
 
 
 #: The in-plane FMU's hot-path blocks: inputs, outputs, in_contact.
-INPLANE_INPUTS = slice(0, 7)
-INPLANE_OUTPUTS = slice(7, 14)
-INPLANE_IN_CONTACT = 14
+INPLANE_INPUTS = slice(0, 8)
+INPLANE_OUTPUTS = slice(8, 15)
+INPLANE_IN_CONTACT = 15

@@ -709,7 +709,8 @@ def _model_part_problem(simulator: ContactSimulator, model: bytes, values: list,
 
 
 #: What an input may be, by its unit (beyond it a product inside a step could overflow).
-INPUT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TORQUE_N_M}
+INPUT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TORQUE_N_M,
+                "rad/s": MAX_VELOCITY_M_S}
 
 
 def _input_problem(v: FmuVariable, value) -> str | None:

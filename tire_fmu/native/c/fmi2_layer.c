@@ -446,13 +446,15 @@ static const char* type_name(SpecType type)
     return type == SPEC_REAL ? "Real" : type == SPEC_INTEGER ? "Integer" : "Boolean";
 }
 
-/* The largest magnitude an input may have: a position (m), a rate (m/s) or a torque (N.m).
- * NaN fails the comparison with it, so one test refuses both. */
+/* The largest magnitude an input may have: a position (m), a rate (m/s, rad/s) or a torque
+ * (N.m), as the Python FMU's INPUT_LIMITS. NaN fails the comparison with it, so one test
+ * refuses both. */
 static double input_limit(const SpecVariable* v)
 {
+    size_t n = strlen(v->unit);
     if (v->unit[0] == 'N') return SPEC_MAX_TORQUE_N_M;
-    return v->unit[0] == 'm' && v->unit[1] == '/' ? SPEC_MAX_VELOCITY_M_S
-                                                   : SPEC_MAX_DISPLACEMENT_M;
+    return n >= 2 && v->unit[n - 2] == '/' && v->unit[n - 1] == 's' ? SPEC_MAX_VELOCITY_M_S
+                                                                     : SPEC_MAX_DISPLACEMENT_M;
 }
 
 /* why input v cannot take x (SPEC_MSG_INPUT_RANGE), or NULL */

@@ -44,7 +44,7 @@ struct Model {
     double built_for[SPEC_N_VARIABLES];
     InPlaneModel m;   /* every matrix, built by inplane_model_build */
     InPlaneStep step; /* what inplane_step reads: pointers into m */
-    int ny, np, nr, free_spin, hysteretic;
+    int ny, np, nr, free_spin, driven, hysteretic;
     double h, radius, speed, critical;
     double* cos_theta;    /* np: the points' cos theta (for the slip's reference s0) */
     double *x_lo, *x_hi;  /* np: the road each point's arc covers (m, at the deflection) */
@@ -352,6 +352,8 @@ static void point_step_at(Model* model)
     d->carry_base = b->carry_base;
     d->carry_weights = b->carry_weights;
     d->min_entering = SPEC_INPLANE_MIN_ENTERING_FRACTION;
+    d->driven = model->driven;
+    d->a0_psi = b->a0_psi;
 }
 
 /* the rim's rows of the tire's forces on the coordinates (_rim_stack): rows (3 x n_dof + 3)
@@ -613,14 +615,20 @@ static int start_state(Model* model, Problems* p)
         force[j] = f - dot(model->m.build.k + (size_t)j * ny, s->y, ny);
         s->yd[j] = 0.0;
     }
-    memcpy(lu, model->m.terms.m, (size_t)ny * ny * sizeof(double));
-    if (lu_factor(lu, ny, pivot) != 0) {
-        PROBLEM(p, "the tire's mass on its %d coordinates is singular", ny);
-        failed = 1;
-        goto done;
+    {   /* a driven wheel starts at its steady spin: its turn's acceleration 0, the ring's
+         * rows solved for the rest */
+        int n = model->driven ? ny - 1 : ny;
+        for (i = 0; i < n; i++)
+            for (j = 0; j < n; j++) lu[(size_t)i * n + j] = model->m.terms.m[(size_t)i * ny + j];
+        if (lu_factor(lu, n, pivot) != 0) {
+            PROBLEM(p, "the tire's mass on its %d coordinates is singular", n);
+            failed = 1;
+            goto done;
+        }
+        lu_solve(lu, n, pivot, force);
+        memcpy(s->ydd, force, (size_t)n * sizeof(double));
+        if (model->driven) s->ydd[ny - 1] = 0.0;
     }
-    lu_solve(lu, ny, pivot, force);
-    memcpy(s->ydd, force, (size_t)ny * sizeof(double));
 done:
     mem_free(mem, k);
     mem_free(mem, jn);
@@ -645,7 +653,8 @@ static int build(Model* model, const double* values, Problems* p)
     in.k_cw = values[SPEC_VR_K_CW];
     in.n_elements = (int)values[SPEC_VR_N_ELEMENTS];
     in.n_fields = INPLANE_RING_TIED;
-    in.wheel_free = values[SPEC_VR_WHEEL_FREE] != 0.0;
+    in.driven = values[SPEC_VR_WHEEL_DRIVEN] != 0.0;
+    in.wheel_free = values[SPEC_VR_WHEEL_FREE] != 0.0 || in.driven;
     in.f_max_hz = values[SPEC_VR_F_MAX];
     in.zone_length_m = values[SPEC_VR_CONTACT_ZONE_LENGTH];
     in.point_spacing_m = values[SPEC_VR_CONTACT_POINT_SPACING];
@@ -673,6 +682,7 @@ static int build(Model* model, const double* values, Problems* p)
     model->np = model->m.np;
     model->nr = model->m.n_basis;
     model->free_spin = in.wheel_free;
+    model->driven = in.driven;
     model->hysteretic = data.loss_factor != 0.0;
     model->h = in.step_s;
     model->radius = data.R;
@@ -887,6 +897,9 @@ int model_step(Model* model, double step_s, double* values)
     double start[6], end[6], x[3], z[3], front[3], rim_old[6];
     double torque = values[SPEC_VR_WHEEL_TORQUE];
     int plate = model->speed == 0.0, P = model->np, i, status = 0;
+    /* a driven wheel's spin at the step's start and end (InPlaneStepper.advance) */
+    double spin_start = model->spin_now + (model->free_spin ? model->now.yd[model->ny - 1] : 0.0);
+    double spin_end = model->speed / model->radius + values[SPEC_VR_WHEEL_RATE];
     model->refusal[0] = '\0';
     if (road_compact(model, count < 1000000 ? (int)count : 1000000) != 0) return MODEL_ERROR;
     checkpoint(model);
@@ -914,6 +927,12 @@ int model_step(Model* model, double step_s, double* values)
         if (model->free_spin && follow_spin(model, model->now.yd) != 0) {
             status = 3;
             break;
+        }
+        if (model->driven) { /* the turn at the step's end, trapezoidal from the rates */
+            double spin = spin_start + (spin_end - spin_start) * ((double)k / (double)count);
+            double rate = spin - model->spin_now;
+            model->step.psi_new = model->now.y[model->ny - 1] +
+                                  0.5 * model->h * (model->now.yd[model->ny - 1] + rate);
         }
         distance = model->speed * time + model->rim[0];
         hermite(start[4], start[5], end[4], end[5], step_s, tau, front);
