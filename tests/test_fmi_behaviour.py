@@ -1095,9 +1095,10 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               "MIN_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
               "MAX_POINT_SPACING_M": "test_every_parameter_limit_of_the_spec_...",
               "MAX_CONTACT_POINTS": "test_a_spacing_that_makes_too_many_contact_points_...",
-              # in test_inplane_fmu_limits.py, against both in-plane FMUs
-              "MAX_TORQUE_N_M": "test_a_torque_beyond_its_limit_is_refused_alike",
-              "INPLANE_CRITICAL_SPEED_FRACTION": "test_a_speed_near_the_critical_speed_..."}
+              # in test_inplane_native_fmu.py, against both in-plane FMUs
+              "MAX_TORQUE_N_M": "test_an_input_beyond_its_limit_is_refused_alike",
+              "INPLANE_CRITICAL_SPEED_FRACTION":
+                  "test_a_speed_above_the_critical_fraction_is_refused"}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",

@@ -30,6 +30,11 @@ from tire_fmu.core.inplane_host import CRITICAL_SPEED_FRACTION  # noqa: E402
 from tire_fmu.core.inplane_modes import critical_speed  # noqa: E402
 from tire_fmu.core.obstacles import cleat  # noqa: E402
 from tire_fmu.core.parameters import TireParameters  # noqa: E402
+from tire_fmu.core.step_limits import (  # noqa: E402
+    MAX_DISPLACEMENT_M,
+    MAX_TORQUE_N_M,
+    MAX_VELOCITY_M_S,
+)
 from tire_fmu.fmu.interface import inplane_fmu_variables  # noqa: E402
 
 pytestmark = pytest.mark.fmu
@@ -202,6 +207,29 @@ def test_a_speed_above_the_critical_fraction_is_refused(native_path, python_path
     status, native, fmu = _refused(native_path, speed=0.99 * CRITICAL_SPEED_FRACTION * critical)
     assert status == 0 and not native
     fmu.close()
+
+
+@pytest.mark.parametrize("name, limit", [("wheel_torque", MAX_TORQUE_N_M),
+                                         ("wheel_rate", MAX_VELOCITY_M_S),
+                                         ("rim_vx", MAX_VELOCITY_M_S),
+                                         ("rim_x", MAX_DISPLACEMENT_M)])
+def test_an_input_beyond_its_limit_is_refused_alike(native_path, python_path, name, limit):
+    """At its limit an input is taken; just beyond it (or not finite) both FMUs refuse it
+    with fmi2Error and the same words, and step on as before."""
+    messages = []
+    for path in (native_path, python_path):
+        fmu = instance(path, speed=10.0).start()
+        fmu.fmu.setReal([fmu.vr[name]], [limit])  # taken
+        for bad in (1.000001 * limit, -1.000001 * limit, float("nan")):
+            with pytest.raises(FMICallException) as error:
+                fmu.fmu.setReal([fmu.vr[name]], [bad])
+            assert error.value.status == 3
+        messages.append(fmu.log[-2][1])
+        fmu.fmu.setReal([fmu.vr[name]], [0.0])
+        assert np.isfinite(fmu.step(1e-3)).all()
+        fmu.close()
+    assert messages[0] == messages[1]
+    assert name in messages[0] and f"{limit:g}" in messages[0]
 
 
 def test_a_step_not_a_whole_multiple_of_step_size_is_refused_and_changes_nothing(
