@@ -348,6 +348,30 @@ def _brake_ringing_gaps(key: str, fitted: str) -> list[float]:
     return [case["run_fit"][0][fitted] / case[key] - 1 for case in cases if "run_fit" in case]
 
 
+@generator("inplane-friction")
+def inplane_friction_table() -> str:
+    data = record("bench_inplane_friction")
+    res = data["results"]
+    lines = ["| k_tx | footprint half length | slip stiffness dFx/dκ | brush model 2 k_tx a² | "
+             + " / ".join(f"{t / 1e3:g}" for t in res["brakes_n_m"]) + " kN m brake: slip | "
+             "sliding points |", "|---|---|---|---|---|---|"]
+    for r in res["rows"]:
+        lines.append(f"| {r['k_tx_factor']:g} × default ({r['k_tx_n_m2']:.3g} N/m²) | "
+                     f"{r['half_footprint_m'] * 1e3:.1f} mm | {r['slip_stiffness_n'] / 1e3:.0f} kN "
+                     f"| {r['brush_slip_stiffness_n'] / 1e3:.0f} kN | "
+                     + " / ".join(f"{100 * x:.2f} %" for x in r["brake_slip"]) + " | "
+                     + " / ".join(str(n) for n in r["brake_sliding_points"])
+                     + f" of {r['points_in_contact']} |")
+    lines += ["", f"`steady_rolling` at {res['speed_m_s']:g} m/s, {res['load_n'] / 1e3:.1f} kN, "
+              f"N = {res['n_elements']}, {res['spacing_m'] * 1e3:g} mm points, μ = "
+              f"{res['friction_coefficient']:g}; the slip stiffness from free rolling and a "
+              f"{res['small_torque_n_m']:g} N m brake (where only the rearmost point, at the "
+              "footprint's vanishing pressure, slides, as a brush's does under any slip). "
+              "Results of the "
+              f"computation, from `{data['command']}` on {data['recorded']}."]
+    return "\n".join(lines)
+
+
 @generator("inplane-reference")
 def inplane_reference_table() -> str:
     data = record("bench_inplane_reference")

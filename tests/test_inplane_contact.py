@@ -493,3 +493,36 @@ def test_a_host_stepping_the_tire_gets_the_runs_forces():
             assert np.max(np.abs(hosted - told)) < bound * np.ptp(told), (motion, name)
     with pytest.raises(ParameterError, match="step_s = 0.00015 s"):
         host.advance(1.5e-4)
+
+
+def test_the_slip_stiffness_is_the_brush_models(deflection):
+    """The tread elements are a brush model's bristles: at small slip they stick but at the
+    footprint's rear, where the pressure vanishes, and the longitudinal slip stiffness dFx/dκ
+    is the brush's 2 k_tx a² (a the footprint's half length, whatever the pressure along it)
+    within 2 %; stiffened fourfold, the ring's own compliance takes a share of the slip and
+    keeps it below 2 k_tx a²."""
+    from dataclasses import replace
+
+    from tire_fmu.core.inplane_contact import steady_rolling
+
+    def stiffness_and_brush(factor):
+        model = replace(MODEL, tangential=replace(MODEL.tangential,
+                                                  k_tx=factor * MODEL.tangential.k_tx))
+        sim = InPlaneSimulator(model, 100, 10.0, deflection, point_spacing_m=0.005)
+        free, small = steady_rolling(sim, 0.0), steady_rolling(sim, -300.0)
+        assert small.sliding_points <= 1  # the rearmost, as a brush's under any slip
+        # the footprint's edges: where the static penetration crosses zero between points
+        pen = sim._pen0 + sim._jn @ sim.static_state()
+        x = (MODEL.tire.R - deflection) * np.tan(sim._zone.point_theta)
+        on = np.flatnonzero(pen > 0)
+        ends = [x[i] + pen[i] / (pen[i] - pen[j]) * (x[j] - x[i])
+                for i, j in ((on[0], on[0] - 1), (on[-1], on[-1] + 1))]
+        half = 0.5 * abs(ends[1] - ends[0])
+        stiffness = (small.rim_fx_n - free.rim_fx_n) / (small.slip_ratio - free.slip_ratio)
+        return stiffness, 2.0 * model.tangential.k_tx * half**2
+
+    stiffness, brush = stiffness_and_brush(1.0)
+    assert stiffness == pytest.approx(brush, rel=0.02)
+    stiffer, brush4 = stiffness_and_brush(4.0)
+    assert brush4 == pytest.approx(4 * brush, rel=1e-9)  # the footprint is the same
+    assert 3.5 * stiffness < stiffer < brush4
