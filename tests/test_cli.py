@@ -66,6 +66,7 @@ FAST_COMMANDS = [
     ["cleat", "--elements-list", "20", "--length", "0.01"],
     ["inplane-modes", "--elements", "40", "--max-frequency", "80"],
     ["inplane-modes", "--elements", "40", "--speed", "10", "--nmax", "3"],
+    ["inplane-speed-sweep", "--elements", "40", "--speeds", "3", "--nmax", "3"],
 ]
 
 

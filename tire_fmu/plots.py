@@ -499,6 +499,77 @@ def plot_cleat_convergence(result, path: Path) -> Path:
     return _save(fig, plt, path)
 
 
+def plot_inplane_speed_sweep(sweep, path: Path, max_frequency_hz: float = 200.0,
+                             critical_speed_m_s: float | None = None) -> Path:
+    """The in-plane ring's ground-frame frequencies against speed, order by order: waves
+    against the rotation solid, with it dashed (a pair splits as the tire rolls); the
+    inextensible ring's split 2nΩ(n²-1)/(n²+1) about each order's lowest pair at rest dotted;
+    the mesh's critical speed as a vertical line."""
+    plt = _pyplot()
+    colour = _order_colours(plt, sweep.orders)
+    fig, ax = plt.subplots(figsize=(9.5, 6.2))
+    v = sweep.speeds_m_s
+    for j, n in enumerate(sweep.orders):
+        for branch in range(sweep.against_hz.shape[2]):
+            label = f"n = {n}" if branch == 0 else None
+            ax.plot(v, sweep.against_hz[:, j, branch], "-", color=colour(n), lw=1.3,
+                    label=label)
+            ax.plot(v, sweep.with_hz[:, j, branch], "--", color=colour(n), lw=1.0)
+        if n >= 2:
+            rest = 0.5 * (sweep.against_hz[0, j, 0] + sweep.with_hz[0, j, 0])
+            half = n * (n * n - 1) / (n * n + 1) * (v / sweep.radius_m) / (2 * np.pi)
+            for sign in (1, -1):
+                ax.plot(v, rest + sign * half, ":", color=colour(n), lw=0.8)
+    if critical_speed_m_s is not None and critical_speed_m_s <= v.max():
+        ax.axvline(critical_speed_m_s, color="k", lw=0.8, ls="-.")
+        ax.text(critical_speed_m_s, 0.97 * max_frequency_hz, " critical speed", fontsize=8,
+                va="top")
+    ax.set_ylim(0.0, max_frequency_hz)
+    ax.set_xlim(v.min(), v.max())
+    ax.set_xlabel("speed [m/s]")
+    ax.set_ylabel("ground-frame frequency [Hz]")
+    ax.set_title(f"In-plane ring, rim held, N = {sweep.n_elements}: solid against the "
+                 "rotation, dashed with it; dotted: the inextensible ring's split", fontsize=10)
+    ax.legend(fontsize=8, ncol=sweep.orders.size, loc="upper center",
+              bbox_to_anchor=(0.5, -0.09))
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def plot_inplane_dispersion(sweep, path: Path, max_frequency_hz: float = 200.0) -> Path:
+    """The in-plane ring's dispersion at the sweep's last speed: ground-frame frequency against
+    the signed order n (n > 0 travels against the rotation, n < 0 with it; §8.6), every
+    branch; the same at the sweep's first speed (rest) in grey, for the asymmetry."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 5.8))
+    n = sweep.orders
+
+    def signed(i):  # (signed orders, branches): against the rotation at +n, with it at -n
+        return (np.concatenate([-n[::-1], n]),
+                np.concatenate([sweep.with_hz[i, ::-1], sweep.against_hz[i]]))
+
+    for i, style in ((0, dict(color="0.7", lw=1.0)), (-1, dict(lw=1.4))):
+        orders, values = signed(i)
+        for branch in range(values.shape[1]):
+            colour = style.get("color", f"C{branch}")
+            label = ("at rest" if i == 0 and branch == 0 else
+                     f"branch {branch + 1}" if i != 0 else None)
+            ax.plot(orders, values[:, branch], ".-", color=colour, lw=style["lw"], ms=4,
+                    label=label)
+    ax.axvline(0.0, color="0.6", lw=0.6)
+    ax.xaxis.get_major_locator().set_params(integer=True)
+    ax.set_ylim(0.0, max_frequency_hz)
+    ax.set_xlabel("signed order n  (n > 0: wave against the rotation, n < 0: with it)")
+    ax.set_ylabel("ground-frame frequency [Hz]")
+    ax.set_title(f"In-plane ring, rim held, N = {sweep.n_elements}: dispersion at "
+                 f"{sweep.speeds_m_s[-1]:.4g} m/s, at rest in grey", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper center", ncol=4)
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
 def plot_inplane_modes(result, path: Path, max_modes: int = 12, scale: float = 0.15) -> Path:
     """Deformed shapes of the in-plane ring: the tread line displaced radially and
     tangentially (x forward, z up, contact centre at the bottom), with ticks on material

@@ -11,6 +11,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "modes": ("ring", "natural frequencies, damping and labelled mode shapes"),
     "inplane-modes": ("inplane", "modes of the full in-plane ring: radial, tangential and "
                       "rotational, rim held or free"),
+    "inplane-speed-sweep": ("inplane", "ground-frame frequencies of the in-plane ring per "
+                            "order vs speed: the rolling split, with the tangential motion"),
     "inplane-cleat": ("inplane", "the in-plane tire over a cleat, axle held: Fx, Fz and My "
                       "against time, their spectra"),
     "analytic": ("ring", "closed-form frequencies of the undeformed ring (eq. 12)"),

@@ -1,5 +1,6 @@
-"""The in-plane ring's command: ``tire-fmu inplane-modes`` (radial, tangential and rotational
-modes of the tire with its rim held or free; ground-frame frequencies per order at speed)."""
+"""The in-plane ring's commands: ``tire-fmu inplane-modes`` (radial, tangential and rotational
+modes of the tire with its rim held or free; ground-frame frequencies per order at speed),
+``inplane-speed-sweep`` (those frequencies against the speed) and ``inplane-cleat``."""
 
 from __future__ import annotations
 
@@ -31,6 +32,7 @@ DEFAULT_TIRE_FILE = "GL073A_inplane"
 
 def register(subparsers) -> None:
     register_modes(subparsers)
+    register_speed_sweep(subparsers)
     register_cleat(subparsers)
 
 
@@ -58,7 +60,9 @@ def register_modes(subparsers) -> None:
         "sidewall), undeformed, with the rim held or (--rim-free) free to translate and turn "
         "with the wheel's mass and inertia. Each mode is labelled with its dominant order and "
         "kind (radial, tangential, rotational: the tangential order 0). With --speed, the "
-        "ground-frame frequencies of each order (rim held) instead. The tire data default to "
+        "ground-frame frequencies of each order (rim held) instead, and --plot draws them "
+        "against the signed order (the dispersion, with the ring at rest in grey). The tire "
+        "data default to "
         f"{DEFAULT_TIRE_FILE} (GL073A, its lumped radial sidewall, with tangential data); a "
         "tire file's [tangential] table gives the tangential data, --tangential overrides "
         "them.",
@@ -89,6 +93,72 @@ def register_modes(subparsers) -> None:
     add_tire_options(p)
     add_output_options(p)
     p.set_defaults(handler=run_inplane_modes)
+
+
+def register_speed_sweep(subparsers) -> None:
+    p = subparsers.add_parser(
+        "inplane-speed-sweep",
+        help=command_help("inplane-speed-sweep"),
+        description="Ground-frame frequencies of the undeformed in-plane ring (rim held) order "
+        "by order against the speed: each order's pair splits into a wave against the rotation "
+        "and one with it, by about 2nΩ(n²-1)/(n²+1) (the inextensible ring's), and order 1 "
+        "hardly at all. The radial ring's speed-sweep (Fig. 19) with the tangential motion; "
+        f"the tire data default to {DEFAULT_TIRE_FILE}.",
+    )
+    add_ring_options(p, "")
+    p.add_argument("--max-speed", metavar="M_PER_S", type=float,
+                   help="highest speed in m/s (default: 0.9 of the mesh's critical speed, at "
+                   "most 60)")
+    p.add_argument("--speeds", metavar="COUNT", type=int, default=25,
+                   help="number of speeds from 0 (default 25)")
+    p.add_argument("--nmax", metavar="N", type=int, default=6,
+                   help="highest order (default 6)")
+    p.add_argument("--max-frequency", metavar="HZ", type=float, default=200.0,
+                   help="highest frequency listed and plotted in Hz (default 200)")
+    add_tire_options(p)
+    add_output_options(p)
+    p.set_defaults(handler=run_inplane_speed_sweep)
+
+
+def run_inplane_speed_sweep(args: argparse.Namespace) -> Output:
+    import numpy as np
+
+    from ..core.inplane import InPlaneTire
+    from ..core.inplane_modes import critical_speed as inplane_critical_speed
+    from ..core.inplane_modes import speed_sweep
+
+    raise_problems([elements_problem(args.elements),
+                    positive_problem("--max-frequency", args.max_frequency, "Hz"),
+                    None if args.max_speed is None else
+                    range_problem("--max-speed", args.max_speed, 0.1, 150.0, "m/s"),
+                    range_problem("--speeds", args.speeds, 2, 400, integer=True),
+                    range_problem("--nmax", args.nmax, 0, args.elements // 2, integer=True)])
+    if args.tire_file is None:
+        args.tire_file = DEFAULT_TIRE_FILE
+    model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
+    critical = inplane_critical_speed(model, args.elements)
+    top = args.max_speed if args.max_speed is not None else min(0.9 * critical.speed_m_s, 60.0)
+    sweep = speed_sweep(model, args.elements, np.linspace(0.0, top, args.speeds),
+                        range(args.nmax + 1))
+    rows = []
+    for j, n in enumerate(sweep.orders):
+        rest = sweep.against_hz[0, j, 0]
+        split = sweep.split_hz(int(n))[-1]
+        inextensible = 2 * n * (n * n - 1) / (n * n + 1) * top / model.tire.R / (2 * np.pi)
+        rows.append([int(n), rest, sweep.against_hz[-1, j, 0], sweep.with_hz[-1, j, 0], split,
+                     inextensible])
+    head = (f"the lowest pair of each order from rest to {top:.4g} m/s ({args.speeds} speeds), "
+            f"rim held, N = {args.elements}")
+    foot = (f"critical (standing-wave) speed of this mesh, undamped: {critical.speed_m_s:.4g} "
+            f"m/s (order {critical.order}, {critical.branch})")
+    text = table(rows, ["n", "at rest [Hz]", "against rotation [Hz]", "with rotation [Hz]",
+                        "split [Hz]", "2nΩ(n²-1)/(n²+1) [Hz]"])
+    output = Output(text=head + "\n" + text + "\n" + foot,
+                    data=sweep.to_dict() | {"critical_speed": critical.to_dict()})
+    write_plot(args, output, plot_with("plot_inplane_speed_sweep", sweep,
+                                       max_frequency_hz=args.max_frequency,
+                                       critical_speed_m_s=critical.speed_m_s))
+    return output
 
 
 def register_cleat(subparsers) -> None:
@@ -215,7 +285,7 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
 
     from ..core.inplane import InPlaneRing, InPlaneTire
     from ..core.inplane_modes import critical_speed as inplane_critical_speed
-    from ..core.inplane_modes import order_frequencies_hz, tire_modes
+    from ..core.inplane_modes import speed_sweep, tire_modes
 
     raise_problems([elements_problem(args.elements),
                     positive_problem("--max-frequency", args.max_frequency, "Hz"),
@@ -225,23 +295,21 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file),
                         sidewall_tangential=args.sidewall_tangential)
-    spin = args.speed / model.tire.R
     if args.load is not None and not args.load == 0.0:  # 0 N: the undeformed tire
         return _loaded(args, model)
     if args.speed > 0:
         if args.rim_free:
             raise CliError("--speed with --rim-free: the per-order frequencies are the ring's "
                            "with the rim held (the free rim couples orders 0 and 1)")
-        ring = InPlaneRing(model, args.elements, spin_rad_s=spin)
+        # at rest too: the dispersion plot shows the asymmetry against it
+        sweep = speed_sweep(model, args.elements, [0.0, args.speed], range(args.nmax + 1))
         rows, data = [], []
-        for n in range(args.nmax + 1):
-            f = order_frequencies_hz(ring, n)
-            f = f[np.abs(f) <= args.max_frequency]
-            forward = np.sort(-f[f < 0])  # e^{i(nθ + ωt)} with ω < 0: travels with θ
-            backward = np.sort(f[f > 0])
-            rows.append([n, ", ".join(f"{x:.2f}" for x in backward),
+        for j, n in enumerate(sweep.orders):
+            backward, forward = (f[np.isfinite(f) & (f <= args.max_frequency)]
+                                 for f in (sweep.against_hz[-1, j], sweep.with_hz[-1, j]))
+            rows.append([int(n), ", ".join(f"{x:.2f}" for x in backward),
                          ", ".join(f"{x:.2f}" for x in forward)])
-            data.append({"order": n, "against_rotation_hz": backward.tolist(),
+            data.append({"order": int(n), "against_rotation_hz": backward.tolist(),
                          "with_rotation_hz": forward.tolist()})
         critical = inplane_critical_speed(model, args.elements)
         head = (f"ground-frame frequencies per order at {args.speed:g} m/s, rim held, "
@@ -249,10 +317,13 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
         foot = (f"critical (standing-wave) speed of this mesh, undamped: "
                 f"{critical.speed_m_s:.4g} m/s (order {critical.order}, {critical.branch})"
                 + (": this speed is above it" if args.speed >= critical.speed_m_s else ""))
-        return Output(text=head + "\n" + table(rows, ["n", "waves against θ [Hz]",
-                                                       "waves with θ [Hz]"]) + "\n" + foot,
-                      data={"speed_m_s": args.speed, "orders": data,
-                            "critical_speed": critical.to_dict()})
+        output = Output(text=head + "\n" + table(rows, ["n", "waves against θ [Hz]",
+                                                         "waves with θ [Hz]"]) + "\n" + foot,
+                        data={"speed_m_s": args.speed, "orders": data,
+                              "critical_speed": critical.to_dict()})
+        write_plot(args, output, plot_with("plot_inplane_dispersion", sweep,
+                                           max_frequency_hz=args.max_frequency))
+        return output
     ring = InPlaneRing(model, args.elements, rim_free=args.rim_free)
     result = tire_modes(ring, f_max_hz=args.max_frequency)
     rows = [[i + 1, m.frequency_hz, m.order, m.kind, m.phase, m.tangential_share]

@@ -205,3 +205,57 @@ def critical_speed(model, n_elements: int):
     spin, order, kind = best
     radius = model.tire.R
     return CriticalSpeed(spin * radius, spin, order, kind, int(n_elements))
+
+
+@dataclass(frozen=True, eq=False)
+class InPlaneSpeedSweep:
+    """Ground-frame frequencies of the undeformed in-plane ring, rim held, order by order
+    against the speed (the radial ring's speed sweep, Fig. 19, with the tangential motion).
+
+    ``against_hz`` and ``with_hz`` are (speeds, orders, fields): the waves travelling against
+    the rotation (e^{i(nθ + ωt)}, ω > 0) and with it, each ascending, NaN where an order has
+    fewer (a wave that turned over at a critical speed); at rest the two are equal."""
+
+    speeds_m_s: np.ndarray
+    orders: np.ndarray
+    against_hz: np.ndarray
+    with_hz: np.ndarray
+    n_elements: int
+    radius_m: float
+
+    def split_hz(self, order: int, branch: int = 0) -> np.ndarray:
+        """(speeds,): the ground-frame split of an order's branch (0: its lowest pair), the
+        two frequencies' difference."""
+        (j,) = np.flatnonzero(self.orders == order)
+        return np.abs(self.against_hz[:, j, branch] - self.with_hz[:, j, branch])
+
+    def to_dict(self) -> dict:
+        def listed(a):
+            return [[[None if np.isnan(x) else float(x) for x in row] for row in block]
+                    for block in a]
+
+        return {"speeds_m_s": self.speeds_m_s.tolist(), "orders": self.orders.tolist(),
+                "n_elements": self.n_elements, "against_rotation_hz": listed(self.against_hz),
+                "with_rotation_hz": listed(self.with_hz)}
+
+
+def speed_sweep(model, n_elements: int, speeds_m_s, orders) -> InPlaneSpeedSweep:
+    """:class:`InPlaneSpeedSweep` of ``model`` (an InPlaneTire) on N = ``n_elements``: the
+    undamped ring's roots per order (:func:`order_frequencies_hz`) at each speed."""
+    speeds = np.asarray(speeds_m_s, dtype=float)
+    orders = np.asarray(orders, dtype=int)
+    against = with_ = None
+    for i, speed in enumerate(speeds):
+        ring = InPlaneRing(model, n_elements, spin_rad_s=speed / model.tire.R)
+        for j, n in enumerate(orders):
+            f = order_frequencies_hz(ring, int(n))
+            if against is None:
+                against = np.full((speeds.size, orders.size, f.size), np.nan)
+                with_ = np.full_like(against, np.nan)
+            up, down = np.sort(f[f > 0]), np.sort(-f[f < 0])
+            against[i, j, :up.size], with_[i, j, :down.size] = up, down
+    # the branches no order has at any speed (a root per field each way, below a critical
+    # speed) are left out
+    kept = ~np.all(np.isnan(against) & np.isnan(with_), axis=(0, 1))
+    return InPlaneSpeedSweep(speeds, orders, against[:, :, kept], with_[:, :, kept],
+                             int(n_elements), model.tire.R)
