@@ -20,9 +20,7 @@
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from record import load_average, write_record  # noqa: E402
+from record import median_seconds as timed  # noqa: E402
 
 from tire_fmu.core import OperatingPoint, TireParameters, build_model  # noqa: E402
 from tire_fmu.core.contact_dynamics import (  # noqa: E402
@@ -131,13 +130,6 @@ def road_step():
             "decay_per_4ms": float(envelope[1] / envelope[0])}
 
 
-def timed(function, repeats):
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def costs(repeats):

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import time
 import warnings
@@ -58,6 +57,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import numpy as np  # noqa: E402
 from record import load_average, write_record  # noqa: E402
+from record import median_seconds as median_time  # noqa: E402
 
 from tire_fmu.core import (  # noqa: E402
     OperatingPoint,
@@ -91,13 +91,6 @@ PAPER_SPEED = 20 * np.pi * 0.65
 BALANCED = ReductionSettings(method="balanced")
 
 
-def median_time(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def timed_once(function):

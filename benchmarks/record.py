@@ -13,6 +13,7 @@ import json
 import os
 import platform
 import shlex
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -53,6 +54,16 @@ def write_record(path: str | Path, results: dict, load_at_start: float | None) -
     path.write_text(json.dumps(record, indent=1, sort_keys=False) + "\n")
     print(f"recorded {path}", file=sys.stderr)
     return path
+
+
+def median_seconds(function, repeats: int) -> float:
+    """The median wall time of ``repeats`` calls of ``function()`` (s)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times)
 
 
 def timed(function, *args):

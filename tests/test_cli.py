@@ -668,7 +668,8 @@ def test_build_fmu_into_a_folder_that_does_not_exist_yet(capsys, tmp_path):
 
 LOAD_DEFAULTS = {"modes": 0.0, "frf": DEFAULT_LOAD_N, "reduce": DEFAULT_LOAD_N,
                  "export": DEFAULT_LOAD_N, "cleat": DEFAULT_LOAD_N,
-                 "inplane-cleat": DEFAULT_LOAD_N}
+                 "inplane-cleat": DEFAULT_LOAD_N, "inplane-frf": DEFAULT_LOAD_N,
+                 "inplane-reduce": DEFAULT_LOAD_N}
 
 
 def _load_help(command: str) -> str:
@@ -706,7 +707,11 @@ def test_the_default_load_a_help_states_is_the_one_used(capsys, monkeypatch, tmp
         extra = {"modes": ["--elements", "20", "--max-frequency", "60"],
                  "frf": ["--elements", "20", "--points", "3"], "reduce": ["--elements", "20"],
                  "cleat": ["--elements-list", "20", "--length", "0.01"],
-                 "inplane-cleat": ["--point-spacing", "0.01", "--f-max", "150", "--speed", "20"]}
+                 "inplane-cleat": ["--point-spacing", "0.01", "--f-max", "150", "--speed", "20"],
+                 "inplane-frf": ["--point-spacing", "0.01", "--ring-f-max", "150", "--points",
+                                 "3"],
+                 "inplane-reduce": ["--point-spacing", "0.01", "--ring-f-max", "150",
+                                    "--n-states", "10"]}
         data = run_json(capsys, command, *extra[command])
         used = data.get("operating_point", data)["load_n"]
     assert used == pytest.approx(stated, rel=1e-12)

@@ -195,8 +195,10 @@ def test_bad_inputs_are_named(deflection):
     sim = InPlaneSimulator(MODEL, 100, 10.0, deflection, point_spacing_m=SPACING)
     with pytest.raises(ParameterError, match="f_max_hz"):
         rolling_modes(sim, 0.0, f_max_hz=-1.0)
-    with pytest.raises(ValueError, match="speed_m_s > 0"):
-        rolling_modes(InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=SPACING))
+    # at rest the tire has its static footprint (the loaded modes), under no torque
+    with pytest.raises(ParameterError, match="torque_n_m"):
+        rolling_modes(InPlaneSimulator(MODEL, 100, 0.0, deflection, point_spacing_m=SPACING),
+                      -100.0)
 
 
 def test_command_reports_the_rolling_modes(capsys, deflection):

@@ -86,11 +86,51 @@ def _metadata_checksum(meta: dict) -> str:
 
 
 def save_npz(reduced: ReducedModel, path) -> Path:
-    path = Path(path)
     arrays = {name: np.asarray(getattr(reduced, name)) for name in ARRAYS[:5]}
     arrays["road_window_early_s"] = np.asarray(reduced.road_windows.early_s)
     arrays["road_window_late_s"] = np.asarray(reduced.road_windows.late_s)
-    meta = json.loads(json.dumps(metadata(reduced), allow_nan=True))  # as it will read back
+    return _write_checked(Path(path), metadata(reduced), arrays)
+
+
+def _read_checked(path: Path, arrays: tuple[str, ...], fmt: str) -> tuple[dict, dict]:
+    """(metadata, arrays) of a model .npz of format ``fmt`` whose checksums hold."""
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            contents = {name: archive[name] for name in archive.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise ModelFileError(f"{path}: not a readable .npz model file ({error})") from error
+    missing = [name for name in ("metadata",) + arrays if name not in contents]
+    if missing:
+        raise ModelFileError(f"{path}: incomplete model file, missing {missing}")
+    try:
+        meta = json.loads(str(contents["metadata"]))
+    except json.JSONDecodeError as error:
+        raise ModelFileError(f"{path}: metadata is not valid JSON ({error})") from error
+    if not isinstance(meta, dict):
+        raise ModelFileError(f"{path}: metadata is {type(meta).__name__}, not a JSON object")
+    if meta.get("format") != fmt:
+        family = fmt.rsplit("/", 1)[0] + "/"
+        raise ModelFileError(f"{path}: format {meta.get('format')!r}, expected {fmt!r}"
+                             + ("; export it again" if str(meta.get("format", "")).startswith(
+                                 family) else ""))
+    checksums = meta.pop("checksums", None)
+    if not isinstance(checksums, dict):
+        raise ModelFileError(f"{path}: the metadata has no checksums")
+    changed = [f"array {name!r}" for name in arrays
+               if checksums.get(name) != _checksum(contents[name])]
+    if checksums.get("metadata") != _metadata_checksum(meta):
+        changed.append("the metadata")
+    if changed:
+        verb = "does not match its checksum" if len(changed) == 1 else \
+            "do not match their checksums"
+        raise ModelFileError(f"{path}: {' and '.join(changed)} {verb}; the file was changed "
+                             "after export")
+    return meta, contents
+
+
+def _write_checked(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path:
+    """A model .npz: the arrays and the metadata with every part's checksum."""
+    meta = json.loads(json.dumps(meta, allow_nan=True))  # as it will read back
     checksums = {name: _checksum(array) for name, array in arrays.items()}
     checksums["metadata"] = _metadata_checksum(meta)
     text = json.dumps({**meta, "checksums": checksums}, allow_nan=True, sort_keys=True)
@@ -102,36 +142,7 @@ def save_npz(reduced: ReducedModel, path) -> Path:
 def load_npz(path) -> ReducedModel:
     """The reduced model saved by :func:`save_npz`; ModelFileError names everything wrong."""
     path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as archive:
-            contents = {name: archive[name] for name in archive.files}
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
-        raise ModelFileError(f"{path}: not a readable .npz model file ({error})") from error
-    missing = [name for name in ("metadata",) + ARRAYS if name not in contents]
-    if missing:
-        raise ModelFileError(f"{path}: incomplete model file, missing {missing}")
-    try:
-        meta = json.loads(str(contents["metadata"]))
-    except json.JSONDecodeError as error:
-        raise ModelFileError(f"{path}: metadata is not valid JSON ({error})") from error
-    if not isinstance(meta, dict):
-        raise ModelFileError(f"{path}: metadata is {type(meta).__name__}, not a JSON object")
-    if meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path}: format {meta.get('format')!r}, expected {FORMAT!r}"
-                             + ("; export it again" if str(meta.get("format", "")).startswith(
-                                 "tire_fmu.reduced-model/") else ""))
-    checksums = meta.pop("checksums", None)
-    if not isinstance(checksums, dict):
-        raise ModelFileError(f"{path}: the metadata has no checksums")
-    changed = [f"array {name!r}" for name in ARRAYS
-               if checksums.get(name) != _checksum(contents[name])]
-    if checksums.get("metadata") != _metadata_checksum(meta):
-        changed.append("the metadata")
-    if changed:
-        verb = "does not match its checksum" if len(changed) == 1 else \
-            "do not match their checksums"
-        raise ModelFileError(f"{path}: {' and '.join(changed)} {verb}; the file was changed "
-                             "after export")
+    meta, contents = _read_checked(path, ARRAYS, FORMAT)
     problems = _contents_problems(meta, contents)
     if problems:
         raise ModelFileError(f"{path}: not a consistent model file: " + "; ".join(problems))
@@ -285,3 +296,100 @@ def to_control(reduced: ReducedModel):
         outputs=list(OUTPUT_NAMES),
         name="tire_fmu_reduced",
     )
+
+
+# ----- the in-plane tire's linear model (core.inplane_io) -----
+
+INPLANE_FORMAT = "tire_fmu.inplane-linear/1"
+INPLANE_ARRAYS = ("a", "b", "c", "d0", "d1", "d2", "road_delays_s")
+
+
+def inplane_metadata(model) -> dict:
+    from .core.inplane_io import INPUT_UNITS, OUTPUT_UNITS
+
+    return {
+        "format": INPLANE_FORMAT,
+        "description": "The in-plane ring tire linearised at an operating point (tire_fmu): "
+        "z' = a z + b u, y = c z + d0 u + d1 u' + d2 u''; u = [torque (a free wheel's), "
+        "rim_x, rim_z, road_0, road_1, ...]: the road under each contact point, the mean of "
+        "the road at the contact zone's front over [t - road_delays_s[j, 1], t - "
+        "road_delays_s[j, 0]]; deviations from the operating point, SI units; outputs are "
+        "deviations from operating_point.static_outputs",
+        "inputs": list(model.input_names),
+        "input_units": [INPUT_UNITS["road" if name.startswith("road_") else name]
+                        for name in model.input_names],
+        "outputs": list(model.output_names),
+        "output_units": [OUTPUT_UNITS[name] for name in model.output_names],
+        "operating_point": model.operating_point,
+        "report": model.report,
+    }
+
+
+def save_inplane_npz(model, path) -> Path:
+    """An :class:`~tire_fmu.core.inplane_io.InPlaneStateSpace` as plain arrays and JSON
+    metadata with checksums (:func:`load_inplane_npz` gives it back bit for bit)."""
+    arrays = {name: np.asarray(getattr(model, name), dtype=float) for name in INPLANE_ARRAYS}
+    return _write_checked(Path(path), inplane_metadata(model), arrays)
+
+
+def load_inplane_npz(path):
+    """The model saved by :func:`save_inplane_npz`; ModelFileError names everything wrong."""
+    from .core.inplane_io import InPlaneStateSpace
+
+    path = Path(path)
+    meta, contents = _read_checked(path, INPLANE_ARRAYS, INPLANE_FORMAT)
+    problems = _inplane_problems(meta, contents)
+    if problems:
+        raise ModelFileError(f"{path}: not a consistent model file: " + "; ".join(problems))
+    return InPlaneStateSpace(*(contents[name] for name in INPLANE_ARRAYS[:6]),
+                             input_names=tuple(meta["inputs"]),
+                             output_names=tuple(meta["outputs"]),
+                             road_delays_s=contents["road_delays_s"],
+                             operating_point=meta["operating_point"], report=meta["report"])
+
+
+def _inplane_problems(meta: dict, contents: dict) -> list[str]:
+    """Every array of the wrong kind, shape or not finite, and names that do not fit them."""
+    problems = []
+    for key, kind in (("inputs", list), ("outputs", list), ("operating_point", dict),
+                      ("report", dict)):
+        if not isinstance(meta.get(key), kind):
+            problems.append(f"metadata {key!r} is {type(meta.get(key)).__name__}, must be "
+                            f"{kind.__name__}")
+    if problems:
+        return problems
+    n_in, n_out = len(meta["inputs"]), len(meta["outputs"])
+    n = contents["a"].shape[0] if contents["a"].ndim == 2 else -1
+    roads = sum(str(name).startswith("road_") for name in meta["inputs"])
+    shapes = {"a": (n, n), "b": (n, n_in), "c": (n_out, n), "d0": (n_out, n_in),
+              "d1": (n_out, n_in), "d2": (n_out, n_in), "road_delays_s": (roads, 2)}
+    for name, shape in shapes.items():
+        array = contents[name]
+        if array.dtype.kind != "f" or array.shape != shape:
+            problems.append(f"array {name!r} is {array.dtype} of shape {array.shape}, must be "
+                            f"real of shape {shape}")
+        elif not np.all(np.isfinite(array)):
+            problems.append(f"array {name!r} holds values that are not finite")
+    return problems
+
+
+def save_inplane_mat(model, path) -> Path:
+    """Real (A, B, C, D) for MATLAB's ss(A, B, C, D) with inputs [u; u'; u''] (B = [b, 0,
+    0], D = [d0, d1, d2]), the names, the road's delays and the metadata as JSON."""
+    import scipy.io
+
+    path = Path(path)
+    zeros = np.zeros_like(model.b)
+    scipy.io.savemat(
+        path,
+        {"A": model.a, "B": np.hstack([model.b, zeros, zeros]), "C": model.c,
+         "D": np.hstack([model.d0, model.d1, model.d2]),
+         "input_names": np.array([f"{name}{suffix}" for suffix in ("", "_rate", "_accel")
+                                  for name in model.input_names], dtype=object),
+         "output_names": np.array(list(model.output_names), dtype=object),
+         "static_outputs": np.array([model.operating_point["static_outputs"][name]
+                                     for name in model.output_names]),
+         "road_delays_s": model.road_delays_s,
+         "metadata_json": json.dumps(inplane_metadata(model), allow_nan=True)},
+        do_compression=True, oned_as="column")
+    return path

@@ -15,6 +15,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
                             "order vs speed: the rolling split, with the tangential motion"),
     "inplane-cleat": ("inplane", "the in-plane tire over a cleat, axle held: Fx, Fz and My "
                       "against time, their spectra"),
+    "inplane-frf": ("inplane_linear", "frequency response of the in-plane tire linearised at "
+                    "its operating point: torque, rim or road to Fx, Fz, My (Bode plot)"),
+    "inplane-reduce": ("inplane_linear", "balanced reduction of the linearised in-plane tire, "
+                       "its error report; write it as .npz or .mat"),
     "analytic": ("ring", "closed-form frequencies of the undeformed ring (eq. 12)"),
     "patch": ("ring", "static footprint for a load (or a deflection): length, pressure, "
               "stiffness"),

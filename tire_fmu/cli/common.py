@@ -334,6 +334,31 @@ def range_problem(option: str, value: Any, low: float, high: float, unit: str = 
     return None
 
 
+def frequency_grid(args: argparse.Namespace) -> np.ndarray:
+    """The log-spaced frequencies (Hz) of --min-frequency, --max-frequency and --points, every
+    problem with them at once."""
+    low, high = args.min_frequency, args.max_frequency
+    raise_problems([
+        range_problem("--min-frequency", low, 1e-3, 1e5, "Hz"),
+        range_problem("--max-frequency", high, 1e-3, 1e5, "Hz"),
+        range_problem("--points", args.points, 2, 100_000, integer=True),
+        None if high > low else
+        f"--max-frequency = {high:g} Hz: must be above --min-frequency = {low:g} Hz",
+    ])
+    return np.geomspace(low, high, args.points)
+
+
+def response_table(responses, marks_hz=(1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 300.0)) -> str:
+    """|H| of each FrequencyResponse at the frequencies nearest the marks in their band."""
+    freqs = responses[0].frequencies_hz
+    rows = []
+    for f in marks_hz:
+        if freqs[0] <= f <= freqs[-1]:
+            i = int(np.argmin(np.abs(freqs - f)))
+            rows.append([freqs[i]] + [r.magnitude[i] for r in responses])
+    return table(rows, ["f [Hz]"] + [f"|H| {r.label} [{r.unit}]" for r in responses])
+
+
 def positive_problem(option: str, value: Any, unit: str) -> str | None:
     if value is None or not np.isfinite(value) or not value > 0:
         return f"{option} = {value!r} {unit}: must be a finite number > 0 {unit}"

@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import numpy as np
-
 from ..core.frequency_response import full_frequency_response, reduced_frequency_response
 from ..core.io_model import OUTPUTS as OUTPUT_NAMES
 from ..core.parameters import DEFAULT_LOAD_N, ParameterError
@@ -22,6 +20,7 @@ from .common import (
     add_output_options,
     add_speed_options,
     add_tire_options,
+    frequency_grid,
     make_folder,
     model_from_args,
     operating_point_values,
@@ -29,7 +28,7 @@ from .common import (
     parse_tire_overrides,
     plot_with,
     raise_problems,
-    range_problem,
+    response_table,
     table,
     write_plot,
     writing,
@@ -187,17 +186,10 @@ def register(subparsers) -> None:
 
 
 def run_frf(args: argparse.Namespace) -> Output:
-    low, high = args.min_frequency, args.max_frequency
-    raise_problems([
-        range_problem("--min-frequency", low, 1e-3, 1e5, "Hz"),
-        range_problem("--max-frequency", high, 1e-3, 1e5, "Hz"),
-        range_problem("--points", args.points, 2, 100_000, integer=True),
-        None if high > low else
-        f"--max-frequency = {high:g} Hz: must be above --min-frequency = {low:g} Hz",
-    ])
+    freqs = frequency_grid(args)
+    low, high = freqs[0], freqs[-1]
     settings = settings_from_args(args)
     model = model_from_args(args, undeformed_default=False)
-    freqs = np.geomspace(low, high, args.points)
     output_name = args.output
     responses = [full_frequency_response(model, args.input, output_name, freqs)]
     reduced = None
@@ -205,12 +197,7 @@ def run_frf(args: argparse.Namespace) -> Output:
         reduced = reduce(model, settings)
         responses.append(reduced_frequency_response(reduced, args.input, output_name, freqs))
     data = {**model.summary(), "responses": [r.to_dict() for r in responses]}
-    rows = []
-    for f in (1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 300.0):
-        if low <= f <= high:
-            i = int(np.argmin(np.abs(freqs - f)))
-            rows.append([freqs[i]] + [r.magnitude[i] for r in responses])
-    text = table(rows, ["f [Hz]"] + [f"|H| {r.label} [{r.unit}]" for r in responses])
+    text = response_table(responses)
     if reduced is not None:
         error = float(responses[1].relative_error_to(responses[0]).max())
         data["max_relative_error"] = error

@@ -73,7 +73,7 @@ def real_observability_gramian(eigenvalues: np.ndarray, c: np.ndarray) -> np.nda
     return real_gramian(eigenvalues.conj(), c.conj().T)
 
 
-def _psd_factor(gramian: np.ndarray) -> np.ndarray:
+def psd_factor(gramian: np.ndarray) -> np.ndarray:
     """A factor L with L Lᵀ = G for a symmetric positive semi-definite G (eigh: robust where
     Cholesky fails on numerically singular Gramians)."""
     values, vectors = sla.eigh(0.5 * (gramian + gramian.T))
@@ -140,7 +140,7 @@ class BalancedRealization:
                                                              c * weight[:, None]))
         else:
             p, q = dense_gramians(a_r.toarray(), b_r, c_r * weight[:, None])
-            lp, lq = _psd_factor(p), _psd_factor(q)
+            lp, lq = psd_factor(p), psd_factor(q)
         u, sigma, vt = sla.svd(lq.T @ lp, full_matrices=False)
         # States with σ ~ 0 are uncontrollable or unobservable: drop them before balancing,
         # they do not touch the transfer function.
@@ -162,13 +162,21 @@ class BalancedRealization:
         residualised (DC exact) with static correction, plainly truncated without."""
         k = max(1, min(int(n_states), self.order))
         a, b, c, d = self.a, self.b, self.c, self.d
-        if self.static_correction and k < self.order:
-            solve = sla.lu_factor(a[k:, k:])
-            a12, c2 = a[:k, k:], c[:, k:]
-            a21_s, b2_s = sla.lu_solve(solve, a[k:, :k]), sla.lu_solve(solve, b[k:])
-            a_k, b_k = a[:k, :k] - a12 @ a21_s, b[:k] - a12 @ b2_s
-            c_k, d_k = c[:, :k] - c2 @ a21_s, d - c2 @ b2_s
+        if self.static_correction:
+            a_k, b_k, c_k, d_k = residualise(a, b, c, d, k)
         else:
             a_k, b_k, c_k, d_k = a[:k, :k], b[:k], c[:, :k], d
         form = diagonalise(a_k, b_k, c_k)
         return form.eigenvalues, form.b, form.c, d_k
+
+
+def residualise(a, b, c, d, k: int):
+    """(A, B, C, D) keeping the first ``k`` states of a balanced (A, B, C, D) and
+    residualising the rest (singular perturbation: their rates set to zero, so the static gain
+    is kept exactly)."""
+    if k >= a.shape[0]:
+        return a, b, c, d
+    solve = sla.lu_factor(a[k:, k:])
+    a12, c2 = a[:k, k:], c[:, k:]
+    a21_s, b2_s = sla.lu_solve(solve, a[k:, :k]), sla.lu_solve(solve, b[k:])
+    return a[:k, :k] - a12 @ a21_s, b[:k] - a12 @ b2_s, c[:, :k] - c2 @ a21_s, d - c2 @ b2_s

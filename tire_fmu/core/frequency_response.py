@@ -21,10 +21,14 @@ class FrequencyResponse:
     input: str
     output: str
     label: str
+    input_unit: str = "m"
+    output_unit: str | None = None  # None: the radial model's output's (OUTPUT_UNITS)
 
     @property
     def unit(self) -> str:
-        return f"{OUTPUT_UNITS[self.output]}/m"
+        out = OUTPUT_UNITS[self.output] if self.output_unit is None else self.output_unit
+        return f"{out}/{self.input_unit}" if " " not in self.input_unit else \
+            f"{out}/({self.input_unit})"
 
     @property
     def magnitude(self) -> np.ndarray:

@@ -50,6 +50,7 @@ import numpy as np
 
 from .inplane_contact import (
     InPlaneSimulator,
+    SteadyRolling,
     entering_fraction_slopes,
     entering_fractions,
     steady_rolling,
@@ -77,12 +78,26 @@ class RollingModes:
     torque_n_m: float
 
 
+#: The linearisation's inputs before the road's: the torque on the wheel (N m, + driving; a
+#: free wheel's), the rim's fore-aft and vertical displacement from where it is held (m, x
+#: forward, z up); then the road's height under each contact point (m: the window mean the
+#: point reads, as :meth:`.inplane_contact.InPlaneSimulator.road` gives it).
+RIM_INPUTS = ("torque", "rim_x", "rim_z")
+
+
 @dataclass(frozen=True, eq=False)
 class RollingSystem:
-    """The linearisation ẋ = A x + b about the steady rolling, x = [y_ring, ẏ, e_stick]."""
+    """The linearisation ẋ = A x + b + Σ_k B_k u⁽ᵏ⁾ about the steady rolling (at rest: the
+    static footprint), x = [y_ring, ẏ, e_stick] (at rest [y_ring, ẏ] and a free wheel's
+    angle ψ: the elements are springs on the material's displacement), u = [torque, rim_x,
+    rim_z, road under each
+    point] (:data:`RIM_INPUTS`) as deviations, and its derivatives up to the second (the
+    rim's acceleration loads the ring through its inertia, a road's or the rim's rate the
+    points' dampers, and a sliding point's element follows the rate of its normal force)."""
 
     a: np.ndarray
     b: np.ndarray
+    inputs: np.ndarray  # (3, n_x, n_u): B_0, B_1, B_2 on u, u̇, ü
     steady_x: np.ndarray  # steady_rolling's state in these coordinates
     n_ring: int  # rim-relative ring coordinates
     n_rate: int  # rates (ring and, with the wheel free, ψ̇)
@@ -96,8 +111,10 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     """The simulator's laws with steady_rolling's sets frozen, as a first-order system.
     ``sets`` (contact, stick, sliding sign; boolean, boolean and ±1 per point) freezes others
     instead, e.g. a run's: their system's equilibrium is then not steady_rolling's state,
-    which ``steady_x`` still holds."""
-    steady = steady_rolling(sim, torque_n_m)
+    which ``steady_x`` still holds. At rest (``sim.speed_m_s`` = 0, no torque) the system is
+    the static footprint's with every element sticking, :func:`.inplane_contact.loaded_modes`'
+    springs (the elements' deflections the material's fore-aft displacement)."""
+    steady = _operating_point(sim, torque_n_m)
     contact, stick, sign = steady_sets(sim, steady) if sets is None else (
         np.asarray(sets[0], dtype=bool), np.asarray(sets[1], dtype=bool) | ~np.asarray(
             sets[0], dtype=bool), np.asarray(sets[2], dtype=float))
@@ -110,46 +127,87 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     pen_steady = sim._pen0 + sim._jn[:, :nr] @ steady.state[:nr]
     delta = entering_fractions(pen_steady, contact)
     delta_slopes = entering_fraction_slopes(pen_steady, contact)
-    rows_st = np.flatnonzero(contact & stick)
+    # at rest nothing renews the elements: each is a spring on the material's fore-aft
+    # displacement from the static state (loaded_modes), with the wheel's angle ψ a state
+    # in place of theirs (as states, e_j - J_x,j y would each be conserved: zero eigenvalues)
+    at_rest = omega == 0.0
+    rows_st = np.flatnonzero(contact & stick) if not at_rest else np.zeros(0, dtype=int)
     ns = rows_st.size
     index = -np.ones(th.size, dtype=int)
     index[rows_st] = np.arange(ns)
-    n_x = nr + ny + ns
-    ys, vs, es = slice(0, nr), slice(nr, nr + ny), slice(nr + ny, n_x)
-    # every point quantity as affine in x: q = Q x + q0
+    n_psi = 1 if at_rest and sim._free_spin else 0
+    n_x = nr + ny + ns + n_psi
+    ys, vs, es = slice(0, nr), slice(nr, nr + ny), slice(nr + ny, nr + ny + ns)
+    # every point quantity as affine in x and the inputs: q = Q x + U [u, u̇, ü] + q0, the
+    # input part U (points, 3 n_u) by derivative blocks (module constant RIM_INPUTS)
+    n_u = len(RIM_INPUTS) + th.size
+    torque_in, x_in, z_in = (RIM_INPUTS.index(name) for name in RIM_INPUTS)
+    road_in = len(RIM_INPUTS) + np.arange(th.size)
+    points = np.arange(th.size)
     jn = np.zeros((th.size, n_x))
     jn[:, ys] = sim._jn[:, :nr]
     pen_q, pen_0 = jn, sim._pen0
+    pen_u = np.zeros((th.size, 3 * n_u))  # the road along each ray, h - z
+    pen_u[points, road_in], pen_u[:, z_in] = sim._sec, -sim._sec
     rate_q = np.zeros((th.size, n_x))
     rate_q[:, vs] = sim._jn
+    rate_u = np.roll(pen_u, n_u, axis=1)  # the same on the rates
     fn_q = np.where(contact[:, None], sim._kn[:, None] * pen_q + sim._cn[:, None] * rate_q, 0)
+    fn_u = np.where(contact[:, None], sim._kn[:, None] * pen_u + sim._cn[:, None] * rate_u, 0)
     fn_0 = np.where(contact, sim._kn * pen_0, 0.0)
     s_q = np.zeros((th.size, n_x))  # the material's fore-aft speed against the road
     s_q[:, vs] = sim._jxw
     s_q[:, ys] += omega * sim._jl[:, :nr]
+    s_u = np.zeros((th.size, 3 * n_u))  # the rim's forward speed adds to the road's
+    s_u[:, n_u + x_in] = 1.0
     s_0 = sim._s0
     e_q = np.zeros((th.size, n_x))  # every point's e: a state, slaved, or zero
+    e_u = np.zeros((th.size, 3 * n_u))
     e_0 = np.zeros(th.size)
     e_q[rows_st, nr + ny + np.arange(ns)] = 1.0
+    if at_rest:
+        e_q[:, ys] = sim._jxw[:, :nr]
+        if n_psi:
+            e_q[:, -1] = sim._jxw[:, nr]
+        e_0 = -sim._jxw[:, :nr] @ steady.state[:nr]
+        e_q[~contact], e_0[~contact] = 0.0, 0.0
     slide = contact & ~stick
     slave = (sign * sim._mu / sim._kx)[:, None]
     e_q[slide] = slave[slide] * fn_q[slide]
+    e_u[slide] = slave[slide] * fn_u[slide]
     e_0[slide] = slave[slide, 0] * fn_0[slide]
     # the element's pull on the belt, backwards
     t_q = np.where(stick[:, None], sim._kx[:, None] * e_q + sim._cx[:, None] * s_q,
                    (sign * sim._mu)[:, None] * fn_q)
+    t_u = np.where(stick[:, None], sim._kx[:, None] * e_u + sim._cx[:, None] * s_u,
+                   (sign * sim._mu)[:, None] * fn_u)
     t_0 = np.where(stick, sim._kx * e_0 + sim._cx * s_0, sign * sim._mu * fn_0)
-    t_q[~contact], t_0[~contact] = 0.0, 0.0
+    t_q[~contact], t_u[~contact], t_0[~contact] = 0.0, 0.0, 0.0
     # M ÿ = f_ext - C ẏ - K y - J_nᵀ f_n - J_xᵀ t
     force_q = -sim._jnw.T @ fn_q - sim._jxw.T @ t_q
     force_q[:, ys] -= sim._k[:, :nr]
     force_q[:, vs] -= sim._c
+    force_u = -sim._jnw.T @ fn_u - sim._jxw.T @ t_u
+    if sim._free_spin:
+        force_u[-1, torque_in] += 1.0
+    # the rim's translation loads the rim-relative ring through its inertia alone
+    force_u[:, 2 * n_u + x_in] -= sim._rim_inertia[:, 0]
+    force_u[:, 2 * n_u + z_in] -= sim._rim_inertia[:, 1]
     force_0 = sim._f_ext(0.0, torque_n_m) - sim._jnw.T @ fn_0 - sim._jxw.T @ t_0
     a = np.zeros((n_x, n_x))
     b = np.zeros(n_x)
+    b_u = np.zeros((n_x, 3 * n_u))
     a[ys, vs] = np.eye(ny)[:nr]
+    if n_psi:
+        a[-1, nr + ny - 1] = 1.0  # ψ̇
     a[vs] = m_inv @ force_q
     b[vs] = m_inv @ force_0
+    b_u[vs] = m_inv @ force_u
+
+    def rate_of(u_part):  # d/dt of an input part: u -> u̇ -> ü (nothing reaches past ü)
+        if np.any(u_part[2 * n_u:]):
+            raise AssertionError("rolling_system: an input's third derivative")
+        return np.roll(u_part, n_u)
     # the box scheme, row by row in the order of transport: E ė_st = rhs, with ė of a
     # sliding neighbour its slaved value's rate (through ẋ = A x + b, already known rows)
     for j in rows_st:
@@ -158,26 +216,46 @@ def rolling_system(sim: InPlaneSimulator, torque_n_m: float = 0.0,
         if entering:  # e = 0 δ_j spacings ahead, ė_j + Ω e_j / (δ_j Δθ) = s_j (module doc)
             q = -omega / (delta[j] * spacing) * e_q[j] + s_q[j]
             q0 = s_0[j]
+            q_u = s_u[j]
             if j > 0 and delta_slopes[j].any():  # -Ω e/(δ Δθ) about the edge's motion
                 held = omega * steady.element_deflection_m[j] / (delta[j] ** 2 * spacing)
                 g_ahead, g_here = held * delta_slopes[j]
                 q = q + g_ahead * pen_q[j - 1] + g_here * pen_q[j]
+                q_u = q_u + g_ahead * pen_u[j - 1] + g_here * pen_u[j]
                 q0 = q0 + (g_ahead * (pen_0[j - 1] - pen_steady[j - 1])
                            + g_here * (pen_0[j] - pen_steady[j]))
-            a[row], b[row] = q, q0
+            a[row], b[row], b_u[row] = q, q0, q_u
             continue
         q = (-2.0 * omega / spacing * (e_q[j] - e_q[j - 1]) + s_q[j] + s_q[j - 1])
+        q_u = -2.0 * omega / spacing * (e_u[j] - e_u[j - 1]) + s_u[j] + s_u[j - 1]
         q0 = -2.0 * omega / spacing * (e_0[j] - e_0[j - 1]) + s_0[j] + s_0[j - 1]
         # minus ė_{j-1}: a state's row (done, the order is the transport's) or a slaved rate
         prev_q = e_q[j - 1] @ a
+        prev_u = e_q[j - 1] @ b_u + rate_of(e_u[j - 1])
         prev_0 = e_q[j - 1] @ b
-        a[row], b[row] = q - prev_q, q0 - prev_0
+        a[row], b[row], b_u[row] = q - prev_q, q0 - prev_0, q_u - prev_u
     steady_x = np.zeros(n_x)
     steady_x[ys] = steady.state[:nr]
     if sim._free_spin:
         steady_x[nr + ny - 1] = steady.state[-1]  # the wheel's steady spin offset ψ̇
     steady_x[es] = steady.element_deflection_m[rows_st]
-    return RollingSystem(a, b, steady_x, nr, ny, rows_st, contact, stick)
+    inputs = b_u.reshape(n_x, 3, n_u).transpose(1, 0, 2)
+    return RollingSystem(a, b, inputs, steady_x, nr, ny, rows_st, contact, stick)
+
+
+def _operating_point(sim: InPlaneSimulator, torque_n_m: float):
+    """steady_rolling's state, or at rest the static footprint with no element deflected
+    (every element sticks: at rest the road renews none)."""
+    if sim.speed_m_s > 0.0:
+        return steady_rolling(sim, torque_n_m)
+    if torque_n_m != 0.0:
+        raise ParameterError([Problem("torque_n_m", torque_n_m, "N m", "0 at rest",
+                                      "a torque at rest winds the elements up: no steady "
+                                      "state to linearise about")])
+    y = sim.static_state()
+    fx, fz, my = sim.rim_force(y, np.zeros_like(y), spin_rad_s=0.0)
+    return SteadyRolling(float(fx), float(fz), float(my), 0.0, 0.0, 0,
+                         np.zeros(sim._zone.n_points), y)
 
 
 def steady_sets(sim: InPlaneSimulator, steady) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -218,7 +296,8 @@ def rolling_modes(sim: InPlaneSimulator, torque_n_m: float = 0.0,
     order = np.argsort(lam.imag)
     lam, vectors = lam[order], vectors[:, order]
     nr, ny = system.n_ring, system.n_rate
-    y, rate, e = vectors[:nr], vectors[nr:nr + ny], vectors[nr + ny:]
+    ns = system.stick_points.size  # at rest: none, the wheel's angle after the rates
+    y, rate, e = vectors[:nr], vectors[nr:nr + ny], vectors[nr + ny:nr + ny + ns]
     kinetic = np.real(np.einsum("ij,ij->j", rate.conj(), sim._m @ rate))
     k_ring = 0.5 * (sim._k[:nr, :nr] + sim._k[:nr, :nr].T)
     strain = np.abs(np.einsum("ij,ij->j", y.conj(), k_ring @ y))
@@ -296,7 +375,8 @@ def torque_step(sim: InPlaneSimulator, torque_before_n_m: float,
     x0[:nr] = before.state[:nr]
     if sim._free_spin:
         x0[nr + ny - 1] = before.state[-1]
-    x0[nr + ny:] = before.element_deflection_m[system.stick_points]
+    x0[nr + ny:nr + ny + system.stick_points.size] = \
+        before.element_deflection_m[system.stick_points]
     c, c0 = fx_rows(sim, system)
     lam, left, right = scipy.linalg.eig(system.a, left=True, right=True)
     weights = (left.conj().T @ (x0 - system.steady_x)) / np.einsum("ij,ij->j", left.conj(),
