@@ -42,7 +42,7 @@ import scipy.linalg as sla
 
 from .balanced import MINIMAL_RELATIVE_HSV, dense_gramians, psd_factor, residualise
 from .inplane_contact import InPlaneSimulator
-from .inplane_rolling_modes import RIM_INPUTS, rolling_system
+from .inplane_rolling_modes import RIM_INPUTS, rim_rows, rolling_system
 from .parameters import ParameterError, Problem
 
 #: Physical inputs: the wheel's torque (a free wheel's), the rim's fore-aft and vertical
@@ -109,12 +109,9 @@ class InPlaneStateSpace:
         s = 2j * np.pi * np.asarray(freqs_hz, dtype=float)
         out = np.empty((s.size, len(self.output_names), len(self.input_names)), dtype=complex)
         if self.n_states:
-            # scaled first: the ring's m, m/s and the elements' m span A's entries by 1e10
-            a, scale = sla.matrix_balance(self.a, permute=False, separate=True)
-            scale = scale[0]
+            a, b, c = scaled(self.a, self.b, self.c)
             t, z = sla.schur(a, output="complex")
-            zb = z.conj().T @ (self.b / scale[:, None])
-            cz = (self.c * scale[None, :]) @ z
+            zb, cz = z.conj().T @ b, c @ z
             eye = np.eye(self.n_states)
         for k, sk in enumerate(s):
             out[k] = self.d0 + sk * self.d1 + sk * sk * self.d2
@@ -139,6 +136,15 @@ class InPlaneStateSpace:
         return {"n_states": self.n_states, "inputs": list(self.input_names),
                 "outputs": list(self.output_names), "operating_point": self.operating_point,
                 "report": self.report}
+
+
+def scaled(a, b, c, with_scale: bool = False):
+    """(D⁻¹ A D, D⁻¹ B, C D) for the diagonal D that balances A's rows and columns (LAPACK's
+    ?gebal): the ring's m and m/s and the elements' m span A's entries by 1e10, and its
+    Schur form and Gramians lose digits to that. With ``with_scale``, D's diagonal too."""
+    a, (scale, _) = sla.matrix_balance(a, permute=False, separate=True)
+    out = (a, b / scale[:, None], c * scale[None, :])
+    return (*out, scale) if with_scale else out
 
 
 def road_window_response(delays_s: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -179,11 +185,8 @@ def linear_model(sim: InPlaneSimulator, torque_n_m: float = 0.0) -> InPlaneState
     a, (b0, b1, b2) = system.a, system.inputs
     nr, ny = system.n_ring, system.n_rate
     vs = slice(nr, nr + ny)
-    k_rows, c_rows, m_rows = sim.rim_force_rows()
-    c_out = np.zeros((3, a.shape[0]))
-    c_out[:, :nr] = -k_rows[:, :nr]
-    c_out[:, vs] = -c_rows
-    c_out -= m_rows @ a[vs]
+    c_out, _ = rim_rows(sim, system)
+    m_rows = sim.rim_force_rows()[2]
     d_out = [-m_rows @ bk[vs] for bk in (b0, b1, b2)]
     translation = sim._rim_rows["m_translation"]
     for name, column in (("rim_x", 0), ("rim_z", 1)):
@@ -346,9 +349,7 @@ def _balance(a, b, c):
         raise ValueError(f"the linearised tire is not stable (an eigenvalue at {worst:.4g} "
                          "1/s): no balanced reduction")
     # the Gramians of the scaled system (the same balanced realisation, better conditioned)
-    a, scale = sla.matrix_balance(a, permute=False, separate=True)
-    scale = scale[0]
-    b, c = b / scale[:, None], c * scale[None, :]
+    a, b, c, scale = scaled(a, b, c, with_scale=True)
     p, q = dense_gramians(a, b, c)
     lp, lq = psd_factor(p), psd_factor(q)
     u, sigma, vt = sla.svd(lq.T @ lp, full_matrices=False)

@@ -351,15 +351,22 @@ class TorqueStep:
                  float(2 * abs(self.fx_amplitudes_n[k]))) for k in order]
 
 
-def fx_rows(sim: InPlaneSimulator, system: RollingSystem) -> tuple[np.ndarray, float]:
-    """(c, c0) with the rim's Fx = c·x + c0 on the system's trajectories (the rim's rows of
+def rim_rows(sim: InPlaneSimulator, system: RollingSystem) -> tuple[np.ndarray, np.ndarray]:
+    """(C, c0), (3, states) and (3,): the rim's (Fx, Fz, My) = C x + c0 on the system's
+    trajectories with the inputs at rest (the rim's rows of
     :meth:`.inplane_contact.InPlaneSimulator.rim_force`, the acceleration from ẋ = A x + b)."""
     nr, ny = system.n_ring, system.n_rate
-    k, c, m = (-rows[0] for rows in sim.rim_force_rows())
+    k, c, m = (-rows for rows in sim.rim_force_rows())
     out = m @ system.a[nr:nr + ny]
-    out[:nr] += k[:nr]
-    out[nr:nr + ny] += c
-    return out, float(m @ system.b[nr:nr + ny])
+    out[:, :nr] += k[:, :nr]
+    out[:, nr:nr + ny] += c
+    return out, m @ system.b[nr:nr + ny]
+
+
+def fx_rows(sim: InPlaneSimulator, system: RollingSystem) -> tuple[np.ndarray, float]:
+    """(c, c0) with the rim's Fx = c·x + c0 (:func:`rim_rows`' first row)."""
+    rows, constant = rim_rows(sim, system)
+    return rows[0], float(constant[0])
 
 
 def torque_step(sim: InPlaneSimulator, torque_before_n_m: float,
