@@ -1098,7 +1098,10 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
               # in test_inplane_native_fmu.py, against both in-plane FMUs
               "MAX_TORQUE_N_M": "test_an_input_beyond_its_limit_is_refused_alike",
               "INPLANE_CRITICAL_SPEED_FRACTION":
-                  "test_a_speed_above_the_critical_fraction_is_refused"}
+                  "test_a_speed_above_the_critical_fraction_is_refused",
+              "INPLANE_MIN_STEP_S": "test_a_step_off_the_tire_grid_is_taken_alike_...",
+              "INPLANE_STATE_BASIS_TOLERANCE":
+                  "test_a_state_of_another_basis_continues_or_is_refused (both runtimes)"}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",

@@ -82,6 +82,7 @@ class CAssembled(InPlaneSimulator):
         self._lib = load_library()
         _declare(self._lib)
         self.builds = {"ring": 0, "tread": 0}
+        self._h = self.step_s
         self._set_spin(spin, self.speed_m_s)
         self._s0_c = points["s0"]
 

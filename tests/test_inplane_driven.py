@@ -50,17 +50,26 @@ def test_driven_at_the_nominal_spin_is_the_held_wheel(deflection, backend):
 
 @pytest.mark.parametrize("backend", ["numpy", "compiled"])
 def test_driven_at_a_braked_free_wheels_spin_gives_its_forces(deflection, backend):
+    """Driven at the spin a braked free wheel takes, given at each step's start as a host
+    reads it (the free wheel's spin at the end of its last step), the tire gives the free
+    wheel's forces and moment to the extension's error (the spin's last change carried over
+    the step): once the brake's step has passed, within 1 % of the load and 5 % of the
+    brake's torque (the slip builds a step late); the spin within what it changes in a
+    step."""
     free, driven = stepper(deflection, "free", backend), stepper(deflection, "driven", backend)
-    worst, fx = 0.0, []
+    differences, fx, spin = [], [], SPEED / MODEL.tire.R
     for k in range(1, 2001):
         f = free.advance(H, torque_n_m=-3000.0 if k > 100 else 0.0)
-        d = driven.advance(H, wheel_rate_rad_s=f.spin_rad_s - SPEED / MODEL.tire.R,
+        d = driven.advance(H, wheel_rate_rad_s=spin - SPEED / MODEL.tire.R,
                            torque_n_m=1e6)  # a driven wheel's torque is the host's: unread
-        worst = max(worst, float(np.abs(forces(f) - forces(d)).max()))
+        differences.append([*(forces(f) - forces(d)), f.spin_rad_s - d.spin_rad_s])
         fx.append(f.rim_fx_n)
-        assert d.spin_rad_s == pytest.approx(f.spin_rad_s, abs=1e-12)
+        spin = f.spin_rad_s
     assert min(fx) < -5e3  # the brake was felt
-    assert worst < 1e-9 * LOAD
+    after = np.abs(np.array(differences)[150:]).max(axis=0)
+    assert after[:2].max() < 1e-2 * LOAD, after
+    assert after[2] < 0.05 * 3000.0, after
+    assert after[3] < 0.02, after
 
 
 def test_a_driven_wheel_spun_up_drives_the_tire_forward(deflection):

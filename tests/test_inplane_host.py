@@ -47,9 +47,10 @@ def deflected():
 
 def test_host_road_converges_to_the_simulators_own_obstacle(deflected):
     """A rounded 20 mm bump given as road_z at the zone front, sampled per communication
-    step, gives the forces of the simulator reading the bump itself; the difference is the
-    host's sampling (cubic in time between communication points, linear along the road
-    between the tire's own steps), and halving the communication step more than halves it."""
+    step (its value and rate at the step's start), gives the forces of the simulator reading
+    the bump itself; the difference is the host's sampling (extended over the step as
+    input_path says, linear along the road between the tire's own steps), and halving the
+    communication step cuts it by more than five (third order)."""
     tire, deflection = deflected
     bump = cleat(0.02, 0.06, "rounded")
     options = dict(step_s=1e-4, point_spacing_m=0.01, f_max_hz=300.0)
@@ -62,7 +63,7 @@ def test_host_road_converges_to_the_simulators_own_obstacle(deflected):
                               host_road=True)
         front = host.road.front_m
         worst, span = 0.0, []
-        for k in range(1, int(round(0.1 / communication_s)) + 1):
+        for k in range(int(round(0.1 / communication_s))):  # the road at each step's start
             s = 10.0 * k * communication_s + front - ahead
             z, slope = bump.profile(np.array([s]))
             a = own.advance(communication_s)
@@ -72,8 +73,10 @@ def test_host_road_converges_to_the_simulators_own_obstacle(deflected):
             span.append(a.rim_fz_n)
         errors.append(worst / np.ptp(span))
     assert np.ptp(span) > 5e3  # the bump is felt
-    assert errors[0] < 5e-3
-    assert errors[1] < 0.5 * errors[0]
+    # a 6 ms bump seen through 1 ms samples taken at each step's start: extrapolated over the
+    # step, a few per cent; the extension's third order shows as the step halves
+    assert errors[0] < 5e-2
+    assert errors[1] < errors[0] / 5.0
 
 
 def test_at_rest_the_host_road_is_a_shaker_plate(deflected):
@@ -218,11 +221,11 @@ def _braking_axle(stepper, steps, deceleration_m_s2=20.0, torque_n_m=-3000.0):
     """A free wheel braked while the axle slows (the road's speed against it falls by a
     third in 0.15 s): (rim_Fx, rim_Fz, rim_My, spin) per step."""
     out, x, v = [], 0.0, 0.0
-    for i in range(steps):
-        v_new = -deceleration_m_s2 * max(i * 1e-4 - 0.005, 0.0)
-        x, v = x + 0.5e-4 * (v + v_new), v_new
+    for i in range(steps):  # the axle's state at each step's start
         o = stepper.advance(1e-4, x_m=x, vx_m_s=v, torque_n_m=torque_n_m if i > 20 else 0.0)
         out.append((o.rim_fx_n, o.rim_fz_n, o.rim_my_n_m, o.spin_rad_s))
+        v_new = -deceleration_m_s2 * max((i + 1) * 1e-4 - 0.005, 0.0)
+        x, v = x + 0.5e-4 * (v + v_new), v_new
     return np.array(out)
 
 
@@ -242,7 +245,7 @@ def test_the_ring_follows_the_spin_between_rebuilds(monkeypatch, backend, case):
     """Between rebuilds of the ring's step (an inverse of the coordinates' size) the step adds
     the terms of the spin's difference explicitly (and of the hysteretic share's). Against the
     step rebuilt at the wheel's exact spin every step (the model's definition) it agrees to
-    1e-4 of the load on Fx and Fz, where leaving the difference out is off by more, and the
+    2e-4 of the load on Fx and Fz, where leaving the difference out is off by more, and the
     ring is rebuilt every 5 % of spin instead of every step."""
     import tire_fmu.core.inplane_contact as ic
 
@@ -270,7 +273,10 @@ def test_the_ring_follows_the_spin_between_rebuilds(monkeypatch, backend, case):
     assert exact[-1, 3] < 0.75 * exact[0, 3]  # the spin fell by more than a quarter
     error = np.abs(followed - exact).max(axis=0)
     assert exact_builds >= steps - 1 and rebuilds[0] <= builds <= rebuilds[1]
-    assert np.all(error[:2] < 1e-4 * load)
+    # the axle's rate given at each step's start is extended over the step (input_path): its
+    # small jumps at the communication points ring the ring a little more than a path through
+    # the step's end values did, which the explicit terms follow to 1.3e-4 of the load
+    assert np.all(error[:2] < 2e-4 * load)
     assert np.abs(held - exact).max(axis=0)[:2].max() > 3 * error[:2].max()
 
 

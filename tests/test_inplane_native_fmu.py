@@ -232,23 +232,31 @@ def test_an_input_beyond_its_limit_is_refused_alike(native_path, python_path, na
     assert name in messages[0] and f"{limit:g}" in messages[0]
 
 
-def test_a_step_not_a_whole_multiple_of_step_size_is_refused_and_changes_nothing(
-        native_path, python_path):
-    def run(path, refuse: bool):
-        fmu = instance(path, speed=10.0).start()
-        rows = [fmu.step(1e-3, **braking(k * 1e-3)) for k in range(1, 6)]
-        if refuse:
-            with pytest.raises(FMICallException) as error:
-                fmu.fmu.doStep(fmu.t, 1.5e-4)
-            assert error.value.status == 3
-            assert "whole multiple" in fmu.log[-1][1] and "step_size" in fmu.log[-1][1]
-        rows += [fmu.step(1e-3, **braking(k * 1e-3)) for k in range(6, 21)]
-        fmu.close()
-        return np.array(rows)
+def test_a_step_off_the_tire_grid_is_taken_alike_in_both_runtimes(native_path, python_path):
+    """A host step that is no whole number of step_size (an input event between the tire's
+    steps) is cut into equal shorter steps that end exactly at t + h, in both runtimes alike;
+    a step shorter than the tire's shortest is refused and changes nothing."""
+    sizes = [1e-3] * 5 + [1.5e-4, 8.5e-4] + [1e-3] * 5 + [3.7e-4] * 3
 
-    refused = run(native_path, True)
-    assert np.array_equal(refused, run(native_path, False))
-    assert scaled_difference(refused, run(python_path, True), 10.0).max() < TOLERANCE
+    def run(path):
+        fmu = instance(path, speed=10.0).start()
+        rows = []
+        for h in sizes:
+            rows.append(fmu.step(h, **braking(fmu.t)))
+        with pytest.raises(FMICallException) as error:
+            fmu.fmu.doStep(fmu.t, 5e-8)
+        assert error.value.status == 3
+        assert "shortest step" in fmu.log[-1][1]
+        rows.append(fmu.step(1e-3, **braking(fmu.t)))
+        end = fmu.t
+        fmu.close()
+        return np.array(rows), end
+
+    native, end = run(native_path)
+    python, _ = run(python_path)
+    assert end == pytest.approx(sum(sizes) + 1e-3, abs=1e-15)
+    assert np.all(np.isfinite(native))
+    assert scaled_difference(native, python, 10.0).max() < TOLERANCE
 
 
 # -- FMU states ------------------------------------------------------------------------------
@@ -278,6 +286,63 @@ def test_fmu_states_round_trip_bit_for_bit(native_path):
     fresh.fmu.setFMUstate(fresh.fmu.deSerializeFMUstate(data))
     assert np.array_equal(run_on(fresh), first)
     fresh.close()
+
+
+def _foreign_basis(data: bytes, n_values: int, shift_dofs: float = 0.0) -> bytes:
+    """The state as another build of the same tire would have written it: another basis
+    fingerprint, its coordinates scrambled (they refer to that basis), its DOFs kept; with
+    ``shift_dofs`` the DOFs also moved off this basis (a shape no build of it reaches)."""
+    import struct
+
+    from tire_fmu.core.inplane_contact import STEPPER_SCALARS, STEPPER_STATE_HEAD
+    from tire_fmu.fmu.spec import STATE_MODEL_FLAGS, state_pack, state_unpack
+
+    f = state_unpack(data, n_values)
+    model = bytearray(f["model"])
+    at = 4 * STATE_MODEL_FLAGS
+    _, ny, p, samples, _, n_dof, fingerprint = struct.unpack_from(STEPPER_STATE_HEAD, model, at)
+    struct.pack_into("<I", model, at + 32, fingerprint ^ 0x5A5A5A5A)
+    doubles = at + struct.calcsize(STEPPER_STATE_HEAD)
+    y = np.frombuffer(model, "<f8", 3 * ny, doubles + 8 * STEPPER_SCALARS).copy()
+    model[doubles + 8 * STEPPER_SCALARS:doubles + 8 * (STEPPER_SCALARS + 3 * ny)] = (
+        y[::-1] * 7.0).astype("<f8").tobytes()
+    if shift_dofs:
+        dofs_at = doubles + 8 * (STEPPER_SCALARS + 3 * ny + 2 * p + 3 * samples)
+        u = np.frombuffer(model, "<f8", n_dof, dofs_at).copy()
+        u[:-1] += shift_dofs * np.cos(np.arange(n_dof - 1)) * np.abs(u[:-1]).max()
+        model[dofs_at:dofs_at + 8 * n_dof] = u.astype("<f8").tobytes()
+    return state_pack(f["phase"], f["guid"], f["time"], f["start_time"], bool(f["stale"]),
+                      f["values"], bytes(model), f["reason"].decode())
+
+
+@pytest.mark.parametrize("runtime", ["native", "python"])
+def test_a_state_of_another_basis_continues_or_is_refused(native_path, python_path, runtime):
+    """A state written by a build whose reduced basis came out otherwise (another BLAS, thread
+    count or CPU: other signs and rotations of the modes) is taken into this build's basis
+    through the tire's own DOFs it carries, and continues as the original within 1e-9 of the
+    load; one whose shape lies outside this basis is refused, saying why, never stepped."""
+    path = native_path if runtime == "native" else python_path
+    h = 5e-4
+    fmu = instance(path, speed=10.0).start()
+    for k in range(1, 21):
+        fmu.step(h, **rim_moving(k * h) | braking(k * h))
+    t, data = fmu.t, fmu.fmu.serializeFMUstate(fmu.fmu.getFMUstate())
+    n_values = len(read_model_description(str(path)).modelVariables)
+
+    def run_on():
+        fmu.t = t
+        return np.array([fmu.step(h, **rim_moving(k * h) | braking(k * h))
+                         for k in range(21, 41)])
+
+    first = run_on()
+    fmu.fmu.setFMUstate(fmu.fmu.deSerializeFMUstate(_foreign_basis(data, n_values)))
+    assert np.abs(run_on() - first)[:, :3].max() < 1e-9 * 27654.8
+    with pytest.raises(FMICallException):
+        fmu.fmu.setFMUstate(fmu.fmu.deSerializeFMUstate(
+            _foreign_basis(data, n_values, shift_dofs=1e-3)))
+    assert "lies outside this FMU's reduced basis" in fmu.log[-1][1]
+    assert "restore it in the process that saved it" in fmu.log[-1][1]
+    fmu.close()
 
 
 # -- the FMU itself --------------------------------------------------------------------------

@@ -87,8 +87,10 @@ def test_restoring_a_state_takes_the_same_path_bit_for_bit(models, steps_before)
             [y.tolist() for y in first]
 
 
-def test_step_size_jitter_of_a_host_reuses_the_coefficients(models):
-    """fmpy steps by differences of communication points, h jitters in the last bits."""
+def test_step_size_jitter_of_a_host_is_integrated_as_it_is(models):
+    """fmpy steps by differences of communication points, h jitters in the last bits: each
+    distinct h (a handful) gets coefficients of its own, so the tire integrates the time the
+    host's clock moved, and gives the outputs of the clean step."""
     model = models[15.0]
     fixed, jittered = ContactSimulator(model), ContactSimulator(model)
     h, start = 1e-4, 7.0
@@ -101,7 +103,7 @@ def test_step_size_jitter_of_a_host_reuses_the_coefficients(models):
         assert abs(jittered.time - t) <= 1e-14  # its own clock sums the host's steps
         b = jittered.step(t_next - t, *inputs)
         np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-9 * model.patch.load_n)
-    assert jittered.kernel.cached_steps == 1  # one set of coefficients for the jittered h
+    assert 1 <= jittered.kernel.cached_steps <= 4  # the distinct differences of points
 
 
 def test_inputs_out_of_range_are_refused_by_name_and_change_nothing(models):

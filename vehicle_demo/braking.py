@@ -222,9 +222,10 @@ def rough_road(settings: BrakingSettings):
 
 class FmuTire:
     """TireInPlane.fmu through fmpy, advanced as :class:`InPlaneStepper` is: the rim's
-    motion and the torque at each communication step's end, the road (``sim``'s obstacle,
-    ``sim.obstacle_ahead_m`` ahead at t = 0) given at the zone front as a host gives it.
-    ``sim`` is the same tire in process: its zone says where the front is."""
+    motion and the torque at each communication step's start (the values at t, as a master
+    sets them), the road (``sim``'s obstacle, ``sim.obstacle_ahead_m`` ahead at t = 0) given
+    at the zone front as a host gives it. ``sim`` is the same tire in process: its zone says
+    where the front is."""
 
     INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
     OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
@@ -260,8 +261,8 @@ class FmuTire:
 
         sim, end = self.sim, self.time_s + step_s
         road_z = road_vz = 0.0
-        if sim.obstacle is not None:  # the road at the zone front, where the FMU reads it
-            at = sim.speed_m_s * end + x_m + self._front - sim.obstacle_ahead_m
+        if sim.obstacle is not None:  # the road at the zone front now, where the FMU reads it
+            at = sim.speed_m_s * self.time_s + x_m + self._front - sim.obstacle_ahead_m
             height, slope = sim.obstacle.profile(np.array([at]))
             road_z, road_vz = float(height[0]), float(slope[0]) * (sim.speed_m_s + vx_m_s)
         self.slave.setReal(self._inputs, [z_m, vz_m_s, road_z, road_vz, x_m, vx_m_s,
@@ -289,11 +290,11 @@ def _tire_host(sim, settings, torque_n_m, fmu_path):
 
 
 def _braking_run(name, sim, settings, torque, bar, fmu_path=None) -> BrakingRun:
-    """The quarter car as an FMU host runs a tire: each communication step it integrates the
-    body and wheel (their exact discrete map over the step, the tire's last Fz held) and the
-    vehicle's speed (the tire's last Fx), then advances the tire with the wheel's height and
-    the axle's fore-aft motion at the step's end and the brake torque
-    (:class:`tire_fmu.core.inplane_contact.InPlaneStepper`)."""
+    """The quarter car as a co-simulation master runs a tire: each communication step from t
+    the tire advances from the wheel's height and the axle's fore-aft motion at t and the
+    brake torque (:class:`tire_fmu.core.inplane_contact.InPlaneStepper`), while the body and
+    wheel advance on their exact discrete map over the step and the vehicle's speed on its
+    trapezoid, the tire's forces at t held; then the two exchange what they have at t + h."""
     from scipy.linalg import expm
 
     from .vehicle_demo_quarter_car_dynamics import two_mass_state_space
@@ -315,14 +316,14 @@ def _braking_run(name, sim, settings, torque, bar, fmu_path=None) -> BrakingRun:
     fz, fx = settings.load_n, 0.0
     rows = []
     for k in range(1, steps + 1):
+        out = host.advance(dt, ahead, speed - v0, x[2], x[3], torque((k - 1) * dt))
         x = phi @ x + gamma * (fz - settings.load_n)
         new_speed = speed + dt * fx / settings.mass_kg
         ahead += dt * (0.5 * (speed + new_speed) - v0)
         speed = new_speed
+        fz, fx = out.rim_fz_n, out.rim_fx_n
         if speed < 0.5:
             break  # the vehicle has (nearly) stopped: slip is undefined from here
-        out = host.advance(dt, ahead, speed - v0, x[2], x[3], torque(k * dt))
-        fz, fx = out.rim_fz_n, out.rim_fx_n
         rows.append((k * dt, fx, fz, out.rim_my_n_m, out.spin_rad_s * radius, speed,
                      torque(k * dt), out.sliding_points))
         bar(k, steps)

@@ -50,12 +50,15 @@ from __future__ import annotations
 
 import math
 import struct
+import zlib
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import clock
 from .contact import DEFAULT_ZONE_LENGTH_M, contact_zone
 from .discretisation import Grid
+from .host_inputs import MIN_STEP_S, input_path, rate_changes, substeps
 from .inplane import InPlaneRing, InPlaneTire, hysteresis_share, quadratic_in_spin
 from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
@@ -155,14 +158,16 @@ class InPlaneSimulator:
     _state: dict = field(default_factory=dict, repr=False)
     #: a driven wheel (set by _build), and its spin less the tread's at the step's end
     _driven = False
+    #: the length of the step the matrices are built for (None: step_s; set_step_length)
+    _h = None
     _driven_rate = 0.0
 
     def __post_init__(self) -> None:
         problems = []
         if not (math.isfinite(self.speed_m_s) and 0.0 <= self.speed_m_s <= 150.0):
             problems.append(Problem("speed_m_s", self.speed_m_s, "m/s", "in [0, 150] m/s"))
-        if not (math.isfinite(self.step_s) and 1e-7 <= self.step_s <= 1e-2):
-            problems.append(Problem("step_s", self.step_s, "s", "in [1e-07, 0.01] s"))
+        if not (math.isfinite(self.step_s) and MIN_STEP_S <= self.step_s <= 1e-2):
+            problems.append(Problem("step_s", self.step_s, "s", f"in [{MIN_STEP_S:g}, 0.01] s"))
         if self.wheel not in WHEELS:
             problems.append(Problem("wheel", self.wheel, "", "'free', 'held' or 'driven'"))
         if self.f_max_hz is not None and not (math.isfinite(self.f_max_hz)
@@ -313,6 +318,9 @@ class InPlaneSimulator:
         self._x_lo, self._x_hi = zone.road_windows_m(self.deflection_m)
         self._ny, self._free_spin = ny, free_spin
         self._cx = t.beta * self._kx
+        # the length of the step the matrices are built for: step_s, or a host's step that is
+        # no whole number of it, cut into equal shorter ones (set_step_length)
+        self._h = self.step_s
         self._set_spin(self.spin_rad_s, self.speed_m_s)
 
     def _set_spin(self, spin_rad_s: float, speed_m_s: float) -> None:
@@ -327,7 +335,7 @@ class InPlaneSimulator:
         the points' forces (the costly part: an inverse of the coordinates' size). Between
         these builds the step adds the spin's terms for the difference to the wheel's actual
         spin explicitly (:meth:`_spin_correction`)."""
-        h, o = self.step_s, spin_rad_s
+        h, o = self.step_length_s, spin_rad_s
         terms = self._spin_terms
         self._ring_spin = o
         self._c = terms["c0"] + o * terms["c1"]
@@ -361,7 +369,7 @@ class InPlaneSimulator:
     def _set_tread_spin(self, spin_rad_s: float, speed_m_s: float) -> None:
         """The tread's step at this spin and road speed: the slip's reference, the elements'
         gain and force on the ring, their carry through the footprint (cheap: points-sized)."""
-        h, o = self.step_s, spin_rad_s
+        h, o = self.step_length_s, spin_rad_s
         self._spin_now = o
         self._set_speed(speed_m_s)
         (ka, kb), (na, nb), (xa, xb) = self._kg_parts, self._kgn_parts, self._kgx_parts
@@ -385,9 +393,74 @@ class InPlaneSimulator:
         else:  # in place, as the carry (the C step keeps the addresses)
             self._carry_base[:], self._carry_weights[...] = base, weights
 
-    def _take_spins(self, ring_spin: float, spin: float, speed: float) -> None:
+    @property
+    def basis_fingerprint(self) -> int:
+        """CRC-32 of the map from the coordinates to the tire's absolute DOFs (``to_abs``): two
+        simulators whose fingerprints agree step the same coordinates; another BLAS, thread
+        count or CPU may build the reduced basis with other signs or rotations of its modes,
+        and then a state's coordinates mean another shape here (:meth:`coordinates_of`)."""
+        if getattr(self, "_fingerprint", None) is None:
+            self._fingerprint = zlib.crc32(np.ascontiguousarray(self._to_abs, "<f8").tobytes())
+        return self._fingerprint
+
+    def coordinates_of(self, dofs: np.ndarray) -> tuple[np.ndarray | None, float]:
+        """This simulator's coordinates of the tire's absolute DOFs (rows: DOFs; columns: the
+        shapes to map, e.g. displacement, rate, acceleration), and how far the shapes lie
+        outside its basis: the largest residual of the ring's DOFs over their largest value
+        (None when that exceeds :data:`STATE_BASIS_TOLERANCE`: the DOFs were stepped in a
+        basis that spans another subspace)."""
+        to_abs = self._to_abs
+        if getattr(self, "_to_abs_pinv", None) is None:
+            self._to_abs_pinv = np.linalg.pinv(to_abs)
+        y = self._to_abs_pinv @ dofs
+        residual = to_abs @ y - dofs
+        # the last DOF is the rim's turn (it grows as the wheel rolls): checked on its own
+        ring = np.abs(residual[:-1]).max(initial=0.0) / max(np.abs(dofs[:-1]).max(initial=0.0),
+                                                            1e-12)
+        turn = np.abs(residual[-1]).max(initial=0.0) / max(np.abs(dofs[-1]).max(initial=0.0),
+                                                           1.0)
+        worst = max(ring, turn)
+        return (y if worst <= STATE_BASIS_TOLERANCE else None), worst
+
+    @property
+    def translation_projection(self) -> np.ndarray:
+        """(coordinates, 2): the coordinates' change that holds the tire's material where it
+        is while the rim translates by (x, z) (m): minus the rigid translation's share in the
+        coordinates, M⁻¹ (to_absᵀ M P), mass-weighted, so that a jump of the rim keeps the
+        tire's momentum (a driven wheel's given turn excluded)."""
+        if getattr(self, "_projection", None) is None:
+            projection = np.linalg.solve(self._m, self._rim_inertia)
+            if self._driven:
+                projection[-1] = 0.0
+            self._projection = projection
+        return self._projection
+
+    @property
+    def step_length_s(self) -> float:
+        """The length of the step the matrices are built for (s): ``step_s`` unless a host's
+        step that is no whole number of it has cut it shorter (:meth:`set_step_length`)."""
+        return self.step_s if self._h is None else self._h
+
+    def set_step_length(self, h: float) -> None:
+        """Build the step for steps of ``h`` (s) at the current spins: what depends on the
+        step's length (the ring's inverse, the tread's gain and carry) is built again; the
+        state carries over (the trapezoidal rule takes any sequence of step lengths)."""
+        if h == self._h:
+            return
+        if not (math.isfinite(h) and MIN_STEP_S <= h <= self.step_s):
+            raise ParameterError([Problem("h", h, "s",
+                                          f"in [{MIN_STEP_S:g}, {self.step_s:g}] s")])
+        self._h = h
+        self._set_ring_spin(self._ring_spin)
+        self._set_tread_spin(self._spin_now, self._speed_now)
+
+    def _take_spins(self, ring_spin: float, spin: float, speed: float,
+                    length_s: float | None = None) -> None:
         """Rebuild what differs from these spins (a state taken back): the ring's step at
-        ``ring_spin``, the tread's at ``spin`` and ``speed``."""
+        ``ring_spin``, the tread's at ``spin`` and ``speed``, for steps of ``length_s``."""
+        if length_s is not None and length_s != self._h:
+            self._h = length_s
+            self._ring_spin = math.nan  # both parts again, at the spins below
         rebuilt = ring_spin != self._ring_spin
         if rebuilt:
             self._set_ring_spin(ring_spin)
@@ -423,7 +496,7 @@ class InPlaneSimulator:
         state predicted from the step's start, for a spin ``offset`` from the ring's and a
         hysteretic ``share`` change (explicit: ΔC and ΔK are the spin's small change, d c1
         and d (k1 + 2 o k2) + d² k2, and the share's change times kh, below its full speed)."""
-        h = self.step_s
+        h = self.step_length_s
         v_end = yd + h * ydd
         y_end = y + h * yd + 0.5 * h * h * ydd
         out = -(offset * (self._c1 @ v_end + self._k1s @ y_end)
@@ -514,6 +587,7 @@ class InPlaneSimulator:
             return np.zeros(6) if rim_motion is None else np.asarray(rim_motion(t), float)
 
         rim = rim_at(0.0)
+        self.set_step_length(self.step_s)
         self._set_spin(self.spin_rad_s, self.speed_m_s)
         speed_now, distance = self.speed_m_s, 0.0
         steps = int(round(duration_s / h))
@@ -583,7 +657,7 @@ class InPlaneSimulator:
             raise ContactSetError(f"step at t = {time:g} s: the contact and stick sets did "
                                   + (f"not settle in {MAX_SET_PASSES} passes" if status == 1
                                      else "not give a solvable point solve"))
-        h = self.step_s
+        h = self.step_length_s
         y, yd, ydd, e = state.y, state.yd, state.ydd, state.e
         contact, stick, slip_sign = state.contact, state.stick, state.slip_sign
         s_old = self._slip(y, yd)
@@ -648,6 +722,11 @@ class InPlaneSimulator:
         f_n = f_trial
         yd_new = 2.0 / h * (y_new - y) - yd
         ydd = 4.0 / h**2 * (y_new - y) - 4.0 / h * yd - ydd
+        if self._driven:
+            # a driven turn's rate is the host's, linear over the step: its acceleration is
+            # that line's slope (the trapezoidal recurrence would carry any change of slope on
+            # as an undamped alternation of sign, and the rim's moment with it)
+            ydd[-1] = (yd_new[-1] - yd[-1]) / h
         y, yd = y_new, yd_new
         f_n = np.where(contact, f_n, 0.0)
         e = np.where(contact, np.where(stick, e_trial,
@@ -658,7 +737,7 @@ class InPlaneSimulator:
     def _driven_psi(self, y, yd) -> float:
         """A driven wheel's turn at the step's end: the trapezoid of its rates, the step's
         start's and the given one (so that the step's ψ̇ is the host's exactly)."""
-        return float(y[-1] + 0.5 * self.step_s * (yd[-1] + self._driven_rate))
+        return float(y[-1] + 0.5 * self.step_length_s * (yd[-1] + self._driven_rate))
 
     def _point_forces(self, contact, stick, slip_sign, a_n, beta_n, n_z0, t_z0):
         """(f_n, f_x) of the step for given sets: the point laws with y eliminated, solved
@@ -789,22 +868,6 @@ class InPlaneSimulator:
         return float(self.rim_force(self.static_state(deflection_m), np.zeros(self._ny))[1])
 
 
-def hermite(p0, v0, p1, v1, duration_s: float, tau: float) -> tuple[float, float, float]:
-    """(position, velocity, acceleration) at ``tau`` into a step of ``duration_s`` on the
-    cubic through the step's end values and rates: exact for cubic motion, and the
-    velocity and acceleration are the position's own derivatives."""
-    u, d = tau / duration_s, duration_s
-    h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, (
-        u**3 - u**2)
-    g00, g10, g01, g11 = 6 * u**2 - 6 * u, 3 * u**2 - 4 * u + 1, -6 * u**2 + 6 * u, (
-        3 * u**2 - 2 * u)
-    a00, a10, a01, a11 = 12 * u - 6, 6 * u - 4, -12 * u + 6, 6 * u - 2
-    position = h00 * p0 + h10 * d * v0 + h01 * p1 + h11 * d * v1
-    velocity = (g00 * p0 + g10 * d * v0 + g01 * p1 + g11 * d * v1) / d
-    acceleration = (a00 * p0 + a10 * d * v0 + a01 * p1 + a11 * d * v1) / d**2
-    return position, velocity, acceleration
-
-
 @dataclass(frozen=True)
 class InPlaneOutputs:
     """What a host reads after a step (SI): the forces and moment on the rim, the road's
@@ -821,18 +884,24 @@ class InPlaneOutputs:
 
 class InPlaneStepper:
     """:class:`InPlaneSimulator` stepped by a host one communication step at a time, as an
-    FMU steps: the host gives the rim's fore-aft and vertical position and velocity (x, vx,
-    z, vz; m, m/s, deviations from the static state, x forward, z up) at the end of each
-    step and the torque on the wheel over it; inside, the simulator's steps follow the cubic
-    through the step's end values (:func:`hermite`), so a motion the host integrates at
-    second order or better is met exactly where it is cubic. A free wheel's spin follows the
-    axle's speed.
+    FMU steps. The host gives, at each communication point t, the rim's fore-aft and vertical
+    position and velocity (x, vx, z, vz; m, m/s, deviations from the static state, x forward,
+    z up), the torque on the wheel and with ``host_road`` the road at the zone front: the
+    values AT t, as every co-simulation master sets them. Over the step to t + h the tire
+    extends them as :func:`input_path` says (a position along its rate, the rate along its last
+    change; the torque held) and cuts the step into its own (:func:`substeps`). Where the
+    host's next values differ from where that extension ended, the rim goes there at once and
+    the tire's own motion carries on: its coordinates take the rim's jump off
+    (:attr:`InPlaneSimulator.translation_projection`, the tire's momentum kept), so an
+    inconsistent input (a position step with its rate zero) moves the rim, not the tire's
+    mass, and the forces stay those of the stretched sidewall. A free wheel's spin follows
+    the axle's speed.
 
     The road is the simulator's (its obstacle, at its speed), or with ``host_road`` the one
     the host gives: ``road_z`` and ``road_vz`` at the front of the contact zone, as the radial
-    FMU takes them (cubic in time between communication points, kept along the road as it
-    passes, :class:`~.obstacles.HostRoad`). At rest (``sim.speed_m_s`` = 0) the road
-    does not pass, and the host's road moves under every point at once, a shaker plate."""
+    FMU takes them (extended over the step as the rim is, kept along the road as it passes,
+    :class:`~.obstacles.HostRoad`). At rest (``sim.speed_m_s`` = 0) the road does not pass,
+    and the host's road moves under every point at once, a shaker plate."""
 
     def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0, host_road: bool = False):
         """Start from the static state, with ``torque_n_m`` on the wheel at t = 0."""
@@ -848,6 +917,7 @@ class InPlaneStepper:
             self.road = HostRoad(front, front - rear + HOST_ROAD_MARGIN_M)
             self.road.record(0.0, 0.0)
             sim.obstacle, sim.obstacle_ahead_m = self.road, 0.0  # the road travels from here
+        sim.set_step_length(sim.step_s)
         sim._set_spin(sim.spin_rad_s, sim.speed_m_s)
         ny = sim._ny
         y = sim.static_state()
@@ -861,36 +931,59 @@ class InPlaneStepper:
         else:
             ydd = np.linalg.solve(sim._m, load)
         self.state = StepState(y, np.zeros(ny), ydd, e, *forces[1:5])
-        self.steps = 0
-        self._end = np.zeros(6)  # x, vx, z, vz, road z, road vz at the end of the last step
+        self.steps = 0  # the tire's own steps taken
+        self.elapsed_s, self._carry_s = 0.0, 0.0  # their lengths summed (clock.advance)
+        # the host's values at the last communication point (x, vx, z, vz, road z, road vz),
+        # the wheel_rate given there and the step that followed (0 before the first step):
+        # the rates' last change is the extension's acceleration
+        self._given = np.zeros(6)
+        self._rate_given = 0.0
+        self._h_given = 0.0
+        self._accel, self._h_accel = np.zeros(3), 0.0
 
     @property
     def time_s(self) -> float:
-        return self.steps * self.sim.step_s
+        return self.elapsed_s
 
     def advance(self, step_s: float, x_m: float = 0.0, vx_m_s: float = 0.0, z_m: float = 0.0,
                 vz_m_s: float = 0.0, torque_n_m: float = 0.0, road_z_m: float = 0.0,
-                road_vz_m_s: float = 0.0, wheel_rate_rad_s: float = 0.0) -> InPlaneOutputs:
-        """Advance by ``step_s`` (a whole number of the simulator's steps) to the rim's
-        state (and with ``host_road`` the road's at the zone front) given for the step's end;
-        returns the outputs there. A driven wheel (``sim.wheel == "driven"``) spins at
-        ``speed / R + wheel_rate_rad_s`` at the step's end, linearly from its spin at the
-        start (its turn itself is immaterial: a rigid turn of the rim and tire stores
-        nothing); ``torque_n_m`` is then not read."""
-        sim, h = self.sim, self.sim.step_s
-        count = steps_in(step_s, h)
+                road_vz_m_s: float = 0.0, wheel_rate_rad_s: float = 0.0,
+                at_time_s: float = 0.0) -> InPlaneOutputs:
+        """Advance by ``step_s`` from the communication point where the rim's state (and with
+        ``host_road`` the road's at the zone front) is the one given (the values at the
+        step's start); returns the outputs at its end. ``at_time_s`` is the host's time there
+        (only the resolution of its clock is read, :func:`substeps`). A driven wheel
+        (``sim.wheel == "driven"``) spins at ``speed / R + wheel_rate_rad_s`` at the step's
+        start; over the step its spin goes on linearly from the tire's to that rate extended
+        by its last change (its turn itself is immaterial: a rigid turn of the rim and tire
+        stores nothing); ``torque_n_m`` is then not read, else it is held over the step."""
+        sim = self.sim
+        count, h = substeps(step_s, sim.step_s, at_time_s)
+        sim.set_step_length(h)
+        given = np.array([x_m, vx_m_s, z_m, vz_m_s, road_z_m, road_vz_m_s], dtype=float)
+        known = self._h_given > 0.0
+        accel, jerk = rate_changes(given[1::2], self._given[1::2], self._h_given,
+                                   self._accel, self._h_accel)
+        paths = [input_path(given[2 * i], given[2 * i + 1], accel[i], jerk[i])
+                 for i in range(3)]
+        # the last change of the rates, over the step it was made in (0: none yet)
+        self._accel = (given[1::2] - self._given[1::2]) / self._h_given if known else accel
+        self._h_accel = self._h_given
+        self._take_rim_jump(given)
         if sim._driven:  # the wheel's spin at the start and the end (rad/s)
             spin_start = sim.spin_total_rad_s(self.state.yd)
-            spin_end = sim.spin_rad_s + wheel_rate_rad_s
-        start = self._end
-        end = np.array([x_m, vx_m_s, z_m, vz_m_s, road_z_m, road_vz_m_s], dtype=float)
+            change = ((wheel_rate_rad_s - self._rate_given) / self._h_given * step_s
+                      if known else 0.0)
+            spin_end = sim.spin_rad_s + wheel_rate_rad_s + change
         rim, road, plate = self._rim, self.road, sim.speed_m_s == 0.0
+        x_path, z_path, front_path = paths
+        rim = np.array([*x_path(0.0), *z_path(0.0)])
+        start_s = self.elapsed_s
         for k in range(1, count + 1):
             self.steps += 1
-            time = self.steps * h
-            x = hermite(start[0], start[1], end[0], end[1], step_s, k * h)
-            z = hermite(start[2], start[3], end[2], end[3], step_s, k * h)
-            rim_old, rim = rim, np.array([*x, *z])
+            tau = k * h
+            time = start_s + tau
+            rim_old, rim = rim, np.array([*x_path(tau), *z_path(tau)])
             if sim._free_spin:
                 self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
             if sim._driven:
@@ -898,8 +991,7 @@ class InPlaneStepper:
                 sim._driven_rate = spin - sim._spin_now
             distance = sim.speed_m_s * time + rim[0]
             if road is not None:
-                front, front_rate, _ = hermite(start[4], start[5], end[4], end[5], step_s,
-                                               k * h)
+                front, front_rate, _ = front_path(tau)
                 if plate:
                     height = np.full(sim._zone.n_points, front)
                     rate = np.full(sim._zone.n_points, front_rate)
@@ -915,8 +1007,24 @@ class InPlaneStepper:
                 height, rate = sim.road(time, distance, sim._speed_now + rim[1])
             self.state = sim._step(self.state, time, torque_n_m, rim_old, rim,
                                    height - rim[3], rate - rim[4])
-        self._rim, self._end = rim, end
+        self._rim = rim
+        self.elapsed_s, self._carry_s = clock.advance(self.elapsed_s, self._carry_s, count * h)
+        self._given, self._rate_given, self._h_given = given, float(wheel_rate_rad_s), step_s
         return self.outputs()
+
+    def _take_rim_jump(self, given: np.ndarray) -> None:
+        """The rim from where the last step's extension left it to the host's values now: its
+        jump (position and rate) is taken off the tire's coordinates, so that the tire's own
+        motion (its momentum) carries on through it."""
+        rim = self._rim
+        dp = np.array([given[0] - rim[0], given[2] - rim[3]])
+        dv = np.array([given[1] - rim[1], given[3] - rim[4]])
+        if not (dp.any() or dv.any()):
+            return
+        projection = self.sim.translation_projection
+        st = self.state
+        st.y = st.y - projection @ dp
+        st.yd = st.yd - projection @ dv
 
     def outputs(self) -> InPlaneOutputs:
         """What the host reads at the last step's end."""
@@ -936,15 +1044,21 @@ class InPlaneStepper:
         if road is not None:
             last = road._buffer[:, road._hi - 1].copy() if road._hi > road._lo else None
             kept_road = (road._buffer, road._lo, road._hi, last)
-        return (self.state, self.steps, self._end, self._rim, sim._ring_spin, sim._spin_now,
-                sim._speed_now, sim._s0, kept_road)
+        return (StepState(**vars(self.state)), self.steps, self.elapsed_s, self._carry_s,
+                self._given, self._rate_given, self._h_given, self._accel, self._h_accel,
+                self._rim, sim.step_length_s,
+                sim._ring_spin, sim._spin_now, sim._speed_now, sim._s0, kept_road)
 
     def rollback(self, checkpoint: tuple) -> None:
         """Back to the :meth:`checkpoint` (a step that failed leaves the stepper as it was)."""
-        state, steps, end, rim, ring_spin, spin, speed, s0, kept_road = checkpoint
-        self.sim._take_spins(ring_spin, spin, speed)
+        (state, steps, elapsed, carry, given, rate_given, h_given, accel, h_accel, rim, length,
+         ring_spin, spin, speed, s0, kept_road) = checkpoint
+        self.sim._take_spins(ring_spin, spin, speed, length)
         self.sim._s0 = s0
-        self.state, self.steps, self._end, self._rim = state, steps, end, rim
+        self.state, self.steps, self._rim = state, steps, rim
+        self.elapsed_s, self._carry_s = elapsed, carry
+        self._given, self._rate_given, self._h_given = given, rate_given, h_given
+        self._accel, self._h_accel = accel, h_accel
         if kept_road is not None:
             buffer, lo, hi, last = kept_road
             road = self.road
@@ -954,14 +1068,21 @@ class InPlaneStepper:
 
     # -- the stepper's state as bytes (an FMU's state): everything a step reads ---------------
     def state_bytes(self) -> bytes:
-        """The stepper's state: :data:`STEPPER_STATE_HEAD`, then the doubles and flags."""
+        """The stepper's state: :data:`STEPPER_STATE_HEAD`, then the doubles
+        (:data:`STEPPER_SCALARS` scalars, y, ẏ, ÿ, e, f_n, the road's samples) and flags."""
         st, sim = self.state, self.sim
         road = self.road.state() if self.road is not None else np.zeros((0, 3))
+        to_abs = sim._to_abs
         head = struct.pack(STEPPER_STATE_HEAD, STEPPER_STATE_MAGIC, st.y.size, st.e.size,
-                           road.shape[0], self.steps)
-        doubles = np.concatenate([self._end, self._rim, [sim._spin_now, sim._speed_now,
-                                                         sim._ring_spin],
-                                  st.y, st.yd, st.ydd, st.e, st.f_n, road.ravel()])
+                           road.shape[0], self.steps, to_abs.shape[0], sim.basis_fingerprint)
+        scalars = [*self._given, *self._rim, sim._spin_now, sim._speed_now, sim._ring_spin,
+                   self._rate_given, self._h_given, self.elapsed_s, self._carry_s,
+                   sim.step_length_s, *self._accel, self._h_accel]
+        # the coordinates, and what they are in the tire's own DOFs (what another basis of the
+        # same tire takes them back from)
+        dofs = to_abs @ np.column_stack([st.y, st.yd, st.ydd])
+        doubles = np.concatenate([scalars, st.y, st.yd, st.ydd, st.e, st.f_n, road.ravel(),
+                                  dofs.T.ravel()])
         flags = np.concatenate([st.contact, st.stick]).astype(np.int8)
         return head + doubles.astype("<f8").tobytes() + flags.tobytes() + np.asarray(
             st.slip_sign, dtype=np.int8).tobytes()
@@ -971,15 +1092,21 @@ class InPlaneStepper:
         head = struct.calcsize(STEPPER_STATE_HEAD)
         if len(data) < head:
             return f"its stepper part is {len(data)} bytes, shorter than its header"
-        magic, ny, points, samples, steps = struct.unpack_from(STEPPER_STATE_HEAD, data)
+        magic, ny, points, samples, steps, n_dof, _ = struct.unpack_from(STEPPER_STATE_HEAD,
+                                                                         data)
         if magic != STEPPER_STATE_MAGIC:
             return "its stepper part is not an in-plane tire's"
-        if ny != self.state.y.size or points != self.state.e.size:
-            return (f"its stepper part has {ny} coordinates and {points} points, this tire "
-                    f"{self.state.y.size} and {self.state.e.size}")
+        own_dof = self.sim._to_abs.shape[0]
+        if n_dof != own_dof or points != self.state.e.size:
+            return (f"its stepper part has {n_dof} DOFs and {points} points, this tire "
+                    f"{own_dof} and {self.state.e.size}")
         if (samples > 0) != (self.road is not None) or steps < 0:
             return "its stepper part's road or step count does not fit this tire"
-        doubles = 15 + 3 * ny + 2 * points + 3 * samples
+        if not 0 < ny <= n_dof:
+            return f"its stepper part has {ny} coordinates for {n_dof} DOFs"
+        if samples > (len(data) - head) // 24:
+            return "its stepper part's road or step count does not fit this tire"
+        doubles = STEPPER_SCALARS + 3 * ny + 2 * points + 3 * samples + 3 * n_dof
         if len(data) != head + 8 * doubles + 3 * points:
             return "its stepper part has the wrong size"
         values = np.frombuffer(data, "<f8", doubles, head)
@@ -990,12 +1117,44 @@ class InPlaneStepper:
                 np.abs(flags[2 * points:]) > 1):
             return "its stepper part's contact flags are not flags"
         spin, speed, ring_spin = values[12], values[13], values[14]
+        h_given, elapsed, length, h_accel = values[16], values[17], values[19], values[23]
         if speed != self.sim.speed_m_s:
             return f"its road speed {speed!r} m/s is not this tire's {self.sim.speed_m_s!r}"
         for value in (spin, ring_spin):
             if not abs(value) <= STATE_SPIN_FACTOR * max(self.sim.spin_rad_s, 1.0):
                 return f"its wheel spin {value!r} rad/s is beyond what this tire can hold"
-        return None
+        if not (0.0 <= h_given and 0.0 <= h_accel and 0.0 <= elapsed
+                and MIN_STEP_S <= length <= self.sim.step_s):
+            return (f"its clock (elapsed {elapsed!r} s, last step {h_given!r} s, the tire's "
+                    f"step {length!r} s) is no clock of this tire (step_size "
+                    f"{self.sim.step_s!r} s)")
+        if samples > 1:
+            road_at = STEPPER_SCALARS + 3 * ny + 2 * points
+            s = values[road_at:road_at + 3 * samples:3]
+            if not np.all(np.diff(s) > 0):
+                return "its road's samples are not in order along the road"
+        _, problem = self._state_coordinates(data)
+        return problem
+
+    def _state_coordinates(self, data: bytes) -> tuple[np.ndarray | None, str | None]:
+        """(y, ẏ, ÿ) of a state whose layout is sound, in this simulator's coordinates: its own
+        where its basis is this one's (the same fingerprint), else its DOFs taken into this
+        basis; or why they cannot be."""
+        head = struct.calcsize(STEPPER_STATE_HEAD)
+        _, ny, p, samples, _, n_dof, fingerprint = struct.unpack_from(STEPPER_STATE_HEAD, data)
+        values = np.frombuffer(data, "<f8", STEPPER_SCALARS + 3 * ny + 2 * p + 3 * samples
+                               + 3 * n_dof, head)
+        sim = self.sim
+        if fingerprint == sim.basis_fingerprint and ny == self.state.y.size:
+            return values[STEPPER_SCALARS:STEPPER_SCALARS + 3 * ny].reshape(3, ny).copy(), None
+        dofs = values[-3 * n_dof:].reshape(3, n_dof).T
+        y, off = sim.coordinates_of(dofs)
+        if y is None:
+            return None, (f"its tire's shape lies outside this FMU's reduced basis ({off:.2g} of "
+                          "it): it was stepped in a basis built differently (another BLAS, "
+                          "thread count or CPU can build the modes otherwise), whose span this "
+                          "build does not reproduce; restore it in the process that saved it")
+        return y.T.copy(), None
 
     def set_state_bytes(self, data: bytes) -> None:
         """Take back a state :meth:`state_bytes` wrote (checked with :meth:`state_problem`)."""
@@ -1003,16 +1162,21 @@ class InPlaneStepper:
         if problem:
             raise ValueError(problem)
         head = struct.calcsize(STEPPER_STATE_HEAD)
-        _, ny, p, samples, steps = struct.unpack_from(STEPPER_STATE_HEAD, data)
-        doubles = 15 + 3 * ny + 2 * p + 3 * samples
+        _, ny, p, samples, steps, n_dof, _ = struct.unpack_from(STEPPER_STATE_HEAD, data)
+        doubles = STEPPER_SCALARS + 3 * ny + 2 * p + 3 * samples + 3 * n_dof
         values = np.frombuffer(data, "<f8", doubles, head).copy()
         flags = np.frombuffer(data, np.int8, 3 * p, head + 8 * doubles)
-        cut = np.cumsum([6, 6, 3, ny, ny, ny, p, p])
-        end, rim, spins, y, yd, ydd, e, f_n, road = np.split(values, cut)
-        self.sim._take_spins(float(spins[2]), float(spins[0]), float(spins[1]))
+        cut = np.cumsum([6, 6, 3, 5, 4, ny, ny, ny, p, p, 3 * samples])
+        given, rim, spins, clocks, changes, _, _, _, e, f_n, road, _ = np.split(values, cut)
+        (y, yd, ydd), _ = self._state_coordinates(data)
+        rate_given, h_given, elapsed, carry, length = (float(v) for v in clocks)
+        self._accel, self._h_accel = changes[:3].copy(), float(changes[3])
+        self.sim._take_spins(float(spins[2]), float(spins[0]), float(spins[1]), length)
         self.state = StepState(y, yd, ydd, e, flags[:p] == 1, flags[p:2 * p] == 1,
                                flags[2 * p:].astype(float), f_n)
-        self._end, self._rim, self.steps = end, rim, int(steps)
+        self._given, self._rim, self.steps = given, rim, int(steps)
+        self._rate_given, self._h_given = rate_given, h_given
+        self.elapsed_s, self._carry_s = elapsed, carry
         if self.road is not None:
             self.road.restore(road)
 
@@ -1022,9 +1186,18 @@ class InPlaneStepper:
 HOST_ROAD_MARGIN_M = 1.0
 #: A state's spins may be at most this many times the nominal one (or 1 rad/s).
 STATE_SPIN_FACTOR = 10.0
-#: The stepper's state: magic, coordinates, points, road samples, steps taken.
-STEPPER_STATE_HEAD = "<8sIIIq"
-STEPPER_STATE_MAGIC = b"INPLANE2"
+#: The stepper's state: magic, coordinates, points, road samples, the tire's steps taken, the
+#: tire's absolute DOFs and its basis' fingerprint (InPlaneSimulator.basis_fingerprint).
+STEPPER_STATE_HEAD = "<8sIIIqII"
+#: How far (relative) a state's DOFs may lie outside the basis they are restored into: a basis
+#: of the same span reproduces them to rounding.
+STATE_BASIS_TOLERANCE = 1e-9
+STEPPER_STATE_MAGIC = b"INPLANE3"
+#: Its scalars: the host's values at the last communication point (6), the rim (6), the
+#: spins (the tread's, the road speed, the ring's), the wheel_rate given, the last host step,
+#: the elapsed time and its Kahan carry, the tire's step length, the rates' last change (3)
+#: and the step it was made over.
+STEPPER_SCALARS = 24
 
 
 def _not_driven(sim: InPlaneSimulator, what: str) -> None:
@@ -1033,17 +1206,6 @@ def _not_driven(sim: InPlaneSimulator, what: str) -> None:
     if sim.wheel == "driven":
         raise ValueError(f"{what}: wheel = 'driven' turns as a host says; build the simulator "
                          "with wheel = 'free' (the wheel's inertia in the tire) or 'held'")
-
-
-def steps_in(step_s: float, simulator_step_s: float) -> int:
-    """How many simulator steps make a host's step; refused unless a whole number."""
-    count = int(round(step_s / simulator_step_s)) if math.isfinite(step_s) else 0
-    if count < 1 or abs(count * simulator_step_s - step_s) > 1e-9 * max(step_s,
-                                                                        simulator_step_s):
-        raise ParameterError([Problem("step_s", step_s, "s",
-                                      f"a whole multiple of the simulator's step "
-                                      f"{simulator_step_s:g} s")])
-    return count
 
 
 @dataclass(frozen=True, eq=False)

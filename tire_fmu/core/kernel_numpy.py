@@ -35,6 +35,7 @@ import numpy as np
 
 from . import clock
 from .contract import StepContract
+from .host_inputs import input_path, on_grid, rate_changes
 from .road import SAME_POINT_EPS, RoadReader, RoadWindows
 from .stepping import phi_functions
 
@@ -163,6 +164,9 @@ class NumpyKernel:
         self.penetration = c.pen_static.copy()
         self.rate = np.zeros(p)
         self.seen = (0.0, 0.0, np.zeros(p), np.zeros(p))  # z, ż, heights, slopes
+        # the rim's rate given at the last communication point, its last change over the step
+        # it was made in and that step's length (0: none yet): the extension's history
+        self.given_vz, self.change, self.h_change = 0.0, 0.0, 0.0
         self.ring_out = np.zeros(3)
         self.last: _Interface | None = None
         self.last_step = math.nan
@@ -176,11 +180,13 @@ class NumpyKernel:
 
     # -- stepping ------------------------------------------------------------------------
     def interface(self, h: float) -> tuple[int, _Interface]:
-        """The communication step h: (substeps, the substep's interface); a step within
-        rounding of a cached one is that step (hosts jitter h in the last bits)."""
-        for cached_h, entry in self._interfaces.items():
-            if cached_h == h or abs(h - cached_h) <= SAME_POINT_EPS * (abs(self.time) + h):
-                return entry
+        """The communication step h: (substeps, the substep's interface), cached by h itself:
+        a host's h jittered by its clock's rounding (far from t = 0 a few distinct values)
+        gets coefficients of its own, so the tire integrates exactly the time the host's clock
+        moved and a run reads the same from any start time."""
+        entry = self._interfaces.get(h)
+        if entry is not None:
+            return entry
         n_sub = max(1, math.ceil(h / self.contract.substep_s * (1 - SUBSTEP_SLACK)))
         entry = (n_sub, _Interface(self, h / n_sub))
         if len(self._interfaces) >= KERNEL_CACHE_SIZE:
@@ -227,13 +233,29 @@ class NumpyKernel:
         inputs = tuple(float(x) for x in inputs)
         if self.step_problems(h, inputs):
             return None
+        # a host's h that is a whole number of substeps to its clock's resolution is that
+        # number: the tire's clock stays on its grid from any start time (host_inputs.on_grid)
+        h = on_grid(h, self.contract.substep_s, self.time)
         z, vz, self._road_z, self._road_vz = inputs
         n_sub, interface = self.interface(h)
+        # the rim extended over the step (host_inputs), each substep on its chord
+        h_before = self.last_step if self.last is not None else 0.0
+        (accel,), (jerk,) = rate_changes([vz], [self.given_vz], h_before, [self.change],
+                                         self.h_change)
+        path = input_path(z, vz, accel, jerk)
+        ends = [path(i * interface.h) for i in range(n_sub + 1)]
         heights, slopes = self._road(h)
         self._start(z, vz, heights, slopes)
+        position = z
         for i in range(n_sub):
-            heights, slopes = self._substep(interface, z + i * interface.h * vz, vz, heights,
-                                            slopes)
+            # the ring integrated on the chord; the rate at the substep's end in the direct
+            # terms and the penetrations' rates
+            chord = (ends[i + 1][0] - position) / interface.h
+            heights, slopes = self._substep(interface, position, chord, heights, slopes,
+                                            ends[i + 1][1])
+            position = ends[i + 1][0]
+        self.change = (vz - self.given_vz) / h_before if h_before > 0.0 else 0.0
+        self.given_vz, self.h_change = vz, h_before
         self.elapsed_s, self.carry_s = clock.advance(self.elapsed_s, self.carry_s, h)
         self.last_step = h
         self.outputs = self._outputs()
@@ -302,16 +324,17 @@ class NumpyKernel:
         self.penetration, self.rate = pen, rate
         self.seen = (z, vz, heights.copy(), slopes.copy())
 
-    def _substep(self, k: _Interface, z, vz, heights, slopes):
+    def _substep(self, k: _Interface, z, vz, heights, slopes, vz_end=None):
         h = k.h
+        vz_end = vz if vz_end is None else vz_end
         p = self.contract.n_points
         df_nodes = self.interp.T @ self.df
         self.q = k.decay * self.q + k.g_start @ df_nodes + k.g_z * z + k.g_vz * vz
-        y = np.real(self.c_ring @ self.q) + self.d_rim * (z + h * vz) + self.e_rim * vz \
+        y = np.real(self.c_ring @ self.q) + self.d_rim * (z + h * vz) + self.e_rim * vz_end \
             - self.e_f @ df_nodes / h
         w_pt, r_pt = self.interp @ y[self.w_rows], self.interp @ y[self.r_rows]
         pen0 = w_pt - self.sec * (z + h * vz) + self.sec * (heights + h * slopes) + k.pen_const
-        rate0 = r_pt - self.sec * vz + self.sec * slopes + k.rate_const
+        rate0 = r_pt - self.sec * vz_end + self.sec * slopes + k.rate_const
         base = np.concatenate([self.k * pen0 + self.c * rate0, pen0, rate0])
         f, combined = self._solve(k, base)
         df_end = f - self.f_static
@@ -320,7 +343,7 @@ class NumpyKernel:
         self.df = df_end
         self.penetration, self.rate = combined[p:2 * p], combined[2 * p:]
         heights = heights + h * slopes  # the road ramps on into the next substep
-        self.seen = (z + h * vz, vz, heights.copy(), slopes.copy())
+        self.seen = (z + h * vz, vz_end, heights.copy(), slopes.copy())
         self.last = k
         return heights, slopes
 
@@ -406,7 +429,8 @@ class NumpyKernel:
             "start_time": self.start_time, "elapsed_s": self.elapsed_s, "carry_s": self.carry_s,
             "last_step_s": self.last_step if self.last is not None else math.nan,
             "seen_z": self.seen[0], "seen_vz": self.seen[1], "ring_out": self.ring_out,
-            "outputs": self.outputs, "q": self.q, "df": self.df,
+            "outputs": self.outputs, "given_vz": self.given_vz, "change": self.change,
+            "h_change": self.h_change, "q": self.q, "df": self.df,
             "penetration": self.penetration, "rate": self.rate, "seen_heights": self.seen[2],
             "seen_slopes": self.seen[3], "history_t": t, "history_z": z, "history_v": v,
             "active": self.active})
@@ -428,6 +452,7 @@ class NumpyKernel:
         self.df, self.penetration, self.rate = (x.copy() for x in (
             fields.df, fields.penetration, fields.rate))
         self.seen = (fields.seen_z, fields.seen_vz, fields.heights.copy(), fields.slopes.copy())
+        self.given_vz, self.change, self.h_change = fields.given_vz, fields.change, fields.h_change
         self.road.reset(self.start_time)
         self.road.history_t, self.road.history_z, self.road.history_v = (
             x.copy() for x in (fields.t, fields.z, fields.v))
@@ -440,7 +465,8 @@ class NumpyKernel:
 #: contact point (pushing or not). Names as ContactState.fields gives them.
 _STATE_INTS = 4
 STATE_HEAD = ("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z", "seen_vz",
-              "ring_out", "ring_out", "ring_out", *("outputs",) * 6)
+              "ring_out", "ring_out", "ring_out", *("outputs",) * 6, "given_vz", "change",
+              "h_change")
 _STATE_HEAD = len(STATE_HEAD)
 STATE_ARRAYS = ("q", "df", "penetration", "rate", "seen_heights", "seen_slopes", "history_t",
                 "history_z", "history_v")
@@ -456,7 +482,8 @@ def state_fields(data: bytes) -> dict:
            "carry_s": float(head[2]),
            "last_step_s": float(head[3]) if has_last else math.nan,
            "seen_z": float(head[4]), "seen_vz": float(head[5]),
-           "ring_out": head[6:9].copy(), "outputs": head[9:15].copy()}
+           "ring_out": head[6:9].copy(), "outputs": head[9:15].copy(),
+           "given_vz": float(head[15]), "change": float(head[16]), "h_change": float(head[17])}
     rest = values[_STATE_HEAD:]
     out["q"] = rest[:2 * modes].copy().view(complex)
     sizes = (points,) * 5 + (history,) * 3
@@ -476,7 +503,8 @@ def state_data(fields: dict) -> bytes:
     has_last = not math.isnan(last)
     head = [fields["start_time"], fields["elapsed_s"], fields["carry_s"],
             last if has_last else 0.0, fields["seen_z"], fields["seen_vz"],
-            *fields["ring_out"], *fields["outputs"]]
+            *fields["ring_out"], *fields["outputs"], fields.get("given_vz", 0.0),
+            fields.get("change", 0.0), fields.get("h_change", 0.0)]
     active = np.asarray(fields["active"])
     return b"".join([
         struct.pack("<4i", q.size, active.size, history, int(has_last)),
@@ -496,6 +524,7 @@ class _StateFields:
         self.start, self.elapsed, self.carry = f["start_time"], f["elapsed_s"], f["carry_s"]
         self.last = f["last_step_s"] if self.has_last else 0.0
         self.seen_z, self.seen_vz = f["seen_z"], f["seen_vz"]
+        self.given_vz, self.change, self.h_change = f["given_vz"], f["change"], f["h_change"]
         self.ring_out, self.outputs, self.q = f["ring_out"], f["outputs"], f["q"]
         self.df, self.penetration, self.rate = f["df"], f["penetration"], f["rate"]
         self.heights, self.slopes = f["seen_heights"], f["seen_slopes"]
@@ -587,6 +616,9 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
     if not abs(s.seen_vz) <= MAX_VELOCITY_M_S:
         problems.append(f"the rim velocity it saw, {s.seen_vz!r} m/s, is beyond the input "
                         f"limit {MAX_VELOCITY_M_S:g} m/s")
+    if not (abs(s.given_vz) <= MAX_VELOCITY_M_S and 0.0 <= s.h_change <= MAX_STEP_S):
+        problems.append(f"the rim velocity given last, {s.given_vz!r} m/s, or the step of its "
+                        f"last change, {s.h_change!r} s, is beyond what a host gives")
     if not (abs(s.ring_out[0]) <= bound.sum() and abs(s.ring_out[1]) <= bound.sum()):
         problems.append(f"its rim forces exceed what the zone springs give at {length:g} m "
                         f"and {rate:g} m/s")

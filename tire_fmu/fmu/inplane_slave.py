@@ -21,8 +21,9 @@ import struct
 import time
 
 import tire_fmu
+from tire_fmu.core.host_inputs import MIN_STEP_S
 from tire_fmu.core.inplane import TANGENTIAL_RANGES
-from tire_fmu.core.inplane_contact import ContactSetError, steps_in
+from tire_fmu.core.inplane_contact import STEPPER_STATE_HEAD, ContactSetError
 from tire_fmu.core.inplane_host import FMU_NAMES, HostSettings, build_host_stepper
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError
 from tire_fmu.fmu.interface import (
@@ -38,6 +39,8 @@ from tire_fmu.fmu.slave import TireModal, _cause, _input_problem
 from tire_fmu.fmu.spec import MESSAGES, STATE_MODEL_FLAGS, Phase, fmu_message
 
 MODEL_IDENTIFIER = "TireInPlane"
+#: Where the stepper's state holds its elapsed time (after its head and 17 scalars).
+STEPPER_ELAPSED_OFFSET = struct.calcsize(STEPPER_STATE_HEAD) + 8 * 17
 #: The in-plane FMU's names for the core's settings (HostSettings), for its messages.
 INPLANE_FMU_NAMES = FMU_NAMES
 #: Every tangential datum is a parameter (loss_factor too: it was once left out of the build,
@@ -123,20 +126,15 @@ class TireInPlane(TireModal):
         if not 0.0 < step_size <= MAX_STEP_S:  # false for nan too
             return self._refuse_step(current_time, step_size, MESSAGES["STEP_RANGE"] % (
                 repr(float(step_size)), MAX_STEP_S))
+        if not step_size >= MIN_STEP_S:
+            return self._refuse_step(current_time, step_size, MESSAGES["INPLANE_STEP_SHORT"] % (
+                repr(float(step_size)), MIN_STEP_S))
         stepper = self._simulator.stepper
-        if step_size != self._checked_h:  # the core's rule, checked once per step size
-            try:
-                steps_in(step_size, stepper.sim.step_s)
-            except ParameterError:
-                return self._refuse_step(current_time, step_size, (
-                    f"step size h = {float(step_size)!r} s: must be a whole multiple of the "
-                    f"tire's step_size = {stepper.sim.step_s:g} s (set step_size to divide "
-                    "the host's step)"))
-            self._checked_h = step_size
         z, vz, road_z, road_vz, x, vx, torque, rate = self._values[self._INPUTS]
         before = stepper.checkpoint()
         try:
-            out = stepper.advance(step_size, x, vx, z, vz, torque, road_z, road_vz, rate)
+            out = stepper.advance(step_size, x, vx, z, vz, torque, road_z, road_vz, rate,
+                                  at_time_s=current_time)
         except ContactSetError as error:
             stepper.rollback(before)
             return self._refuse_step(current_time, step_size, f"{error}; nothing changed "
@@ -195,12 +193,11 @@ class TireInPlane(TireModal):
         problem = stepper.state_problem(part)
         if problem:
             return problem
-        steps = struct.unpack_from("<q", part, 20)[0]
-        stepped = steps * stepper.sim.step_s
-        if not abs(start + stepped - time_s) <= max(TIME_ABS_TOLERANCE_S,
+        elapsed = struct.unpack_from("<d", part, STEPPER_ELAPSED_OFFSET)[0]
+        if not abs(start + elapsed - time_s) <= max(TIME_ABS_TOLERANCE_S,
                                                      TIME_REL_TOLERANCE * abs(time_s)) + 1e-9:
             return MESSAGES["STATE_MODEL_CLOCK"] % (repr(time_s), repr(start),
-                                                    repr(start + stepped), repr(start))
+                                                    repr(start + elapsed), repr(start))
         return None
 
     @staticmethod

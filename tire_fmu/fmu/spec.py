@@ -33,6 +33,7 @@ from ..core import (
     contact,
     contact_dynamics,
     free_ring,
+    host_inputs,
     inplane,
     inplane_contact,
     inplane_host,
@@ -146,6 +147,8 @@ CONSTANTS: dict[str, float | int] = {
     "INPLANE_SETTLE_PASSES": inplane_contact.SETTLE_PASSES,
     "INPLANE_MIN_ENTERING_FRACTION": inplane_contact.MIN_ENTERING_FRACTION,
     "INPLANE_STATE_SPIN_FACTOR": inplane_contact.STATE_SPIN_FACTOR,
+    "INPLANE_MIN_STEP_S": host_inputs.MIN_STEP_S,
+    "INPLANE_STATE_BASIS_TOLERANCE": inplane_contact.STATE_BASIS_TOLERANCE,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -257,6 +260,8 @@ MESSAGES: dict[str, str] = {
     "NOT_LAST_POINT": "t = %s s: must be the last communication point t = %s s (roll back "
                       "with fmi2SetFMUstate to step from an earlier time)",
     "STEP_RANGE": "step size h = %s s: must be in (0, %g] s",
+    "INPLANE_STEP_SHORT": "step size h = %s s: must be at least %g s, the in-plane tire's "
+                          "shortest step",
     "STEP_DELAY": "step size h = %s s: must be at least %.3g s at this speed: the road "
                   "reaches the contact zone's last node %.3g s after its front, and the FMU "
                   "keeps at most %d steps of its history",

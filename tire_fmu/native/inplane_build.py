@@ -74,7 +74,7 @@ def build_input(sim) -> tuple[InPlaneBuildInput, list]:
         sim._m, *(terms[name] for name in _TERMS),
         sim._jn, sim._jnw, sim._jxw, sim._jl, sim._kx, sim._cx, sim._zone.point_theta)]
     data = InPlaneBuildInput(int(sim._ny), int(sim._zone.n_points),
-                             int(bool(sim.model.tangential.loss_factor)), float(sim.step_s),
+                             int(bool(sim.model.tangential.loss_factor)), float(sim.step_length_s),
                              float(sim.model.tire.R), *(a.ctypes.data_as(_P) for a in arrays),
                              int(getattr(sim, "_driven", False)))
     return data, arrays

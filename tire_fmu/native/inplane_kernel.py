@@ -92,7 +92,7 @@ class InPlaneKernel:
             base = sim._carry_base  # int32, written in place as the carry is
             self._keep += [base, sim._carry_weights]
             self._step = _Step(sim._ny, sim._zone.n_points, int(sim._free_spin), MAX_SET_PASSES,
-                               SETTLE_PASSES, sim.step_s, sim._mu, sim._spin_now, 0.0, 0.0,
+                               SETTLE_PASSES, sim.step_length_s, sim._mu, sim._spin_now, 0.0, 0.0,
                                *(a.ctypes.data_as(_P) for a in arrays.values()),
                                base.ctypes.data_as(ctypes.POINTER(ctypes.c_int)),
                                sim._carry_weights.ctypes.data_as(_P), sim._carry_shift,

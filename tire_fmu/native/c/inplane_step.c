@@ -347,6 +347,10 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
         out->ydd[k] = 4.0 / (h * h) * dy - 4.0 / h * s->yd[k] - s->ydd[k];
         out->y[k] = y_new[k];
     }
+    /* a driven turn's rate is the host's, linear over the step: its acceleration is that
+     * line's slope (the trapezoidal recurrence would carry any change of slope on as an
+     * undamped alternation of sign, and the rim's moment with it) */
+    if (d->driven) out->ydd[ny - 1] = (out->yd[ny - 1] - s->yd[ny - 1]) / h;
     for (int i = 0; i < p; ++i) {
         out->contact[i] = contact[i];
         out->stick[i] = stick[i];

@@ -7,7 +7,11 @@
  * speed, which needs the tire; then what needs the built model: the deflection and the
  * footprint against the zone), and the model is built by one call, inplane_model_build. Each
  * step then does what core/inplane_contact.py's InPlaneStepper.advance does, line for line:
- * the rim's motion on the cubic through the step's end values (hermite), a free wheel's step
+ * the host's values taken as those at the step's start (the rim's jump from where the last
+ * step's extension left it taken off the tire's coordinates), extended over the step along
+ * their rates and the rates' last change (input_path), cut into the tire's own steps
+ * (substeps: whole step_size steps, or equal shorter ones ending exactly at t + h), a free
+ * wheel's step
  * following its spin (_follow_spin: the tread's terms rebuilt when the spin has moved by
  * SPEC_INPLANE_SPIN_REBUILD_FRACTION, the ring's by SPEC_INPLANE_RING_REBUILD_FRACTION), the
  * host's road kept along the road as it passes (HostRoad), and inplane_step.c's step. A step
@@ -32,11 +36,15 @@
 #define FLAGS SPEC_STATE_MODEL_FLAGS
 #define ROAD_MIN_CAPACITY 64
 
-/* the stepper part of a state (core/inplane_contact.py's STEPPER_STATE_HEAD "<8sIIIq":
- * magic, coordinates, points, road samples, steps taken) */
-#define STEPPER_MAGIC "INPLANE2"
-#define STEPPER_HEAD (8 + 4 + 4 + 4 + 8)
-#define STEPPER_SCALARS 15 /* end (6), rim (6), spin, road speed, the ring's spin */
+/* the stepper part of a state (core/inplane_contact.py's STEPPER_STATE_HEAD "<8sIIIqII":
+ * magic, coordinates, points, road samples, steps taken, the tire's absolute DOFs, its basis'
+ * fingerprint) */
+#define STEPPER_MAGIC "INPLANE3"
+#define STEPPER_HEAD (8 + 4 + 4 + 4 + 8 + 4 + 4)
+/* given (6), rim (6), spin, road speed, the ring's spin, the wheel_rate given, the last host
+ * step, the elapsed time, its carry, the tire's step length, the rates' last change (3) and
+ * the step it was made over (STEPPER_SCALARS in the core) */
+#define STEPPER_SCALARS 24
 
 struct Model {
     ModelHost host;
@@ -50,6 +58,8 @@ struct Model {
     double *x_lo, *x_hi;  /* np: the road each point's arc covers (m, at the deflection) */
     double *height, *rate;
     double* rim_rows;     /* 7 x 3 x ny: the rim's rows k0 k1 k2 kh c0 c1 m on the coordinates */
+    double* projection;   /* ny x 2: translation_projection, M^-1 (to_abs^T M P) */
+    uint32_t fingerprint; /* basis_fingerprint: CRC-32 of to_abs, (n_dof + 3) x ny */
     double* work;
     int* iwork;
     double* build_work;
@@ -59,7 +69,12 @@ struct Model {
     double* state_doubles;
     int* state_ints;
     long long steps, saved_steps;
-    double end[6], rim[6], saved_end[6], saved_rim[6];
+    /* the host's values at the last communication point (x, vx, z, vz, road z, road vz), the
+     * wheel_rate given there, the host step that followed (0 before the first), the tire's
+     * elapsed time and its Kahan carry; the rim at the last step's end */
+    double given[6], rim[6], saved_given[6], saved_rim[6];
+    double rate_given, h_given, elapsed, carry, saved_clock[5];
+    double accel[3], h_accel, saved_accel[4]; /* the rates' last change and its step */
     double spin_now, speed_now, saved_spin, saved_speed, saved_ring_spin;
     /* the host's road: rows s, z, at of road_capacity each, live samples [road_lo, road_hi) */
     double* road;
@@ -89,7 +104,7 @@ static void model_clear(Model* model)
 {
     const Memory* mem = &model->host.mem;
     void* owned[] = {model->cos_theta, model->x_lo, model->x_hi, model->height, model->rate,
-                     model->rim_rows, model->work, model->iwork, model->build_work,
+                     model->rim_rows, model->projection, model->work, model->iwork, model->build_work,
                      model->build_iwork, model->state_doubles, model->state_ints, model->road};
     size_t i;
     inplane_model_free(&model->m);
@@ -300,10 +315,14 @@ static int follow_spin(Model* model, double* yd)
     return status;
 }
 
-/* _take_spins: the step at these spins (a state taken back) */
-static int take_spins(Model* model, double ring_spin, double spin, double speed)
+/* _take_spins: the step at these spins for steps of length_s (a state taken back) */
+static int take_spins(Model* model, double ring_spin, double spin, double speed,
+                      double length_s)
 {
-    int rebuilt = ring_spin != model->m.build.ring_spin, status = 0;
+    int rebuilt = ring_spin != model->m.build.ring_spin || length_s != model->step.h,
+        status = 0;
+    model->m.build_in.h = length_s;
+    model->step.h = length_s;
     if (rebuilt) status = set_ring_spin(model, ring_spin);
     if (status == 0 && (rebuilt || spin != model->spin_now))
         status = set_tread_spin(model, spin, speed);
@@ -354,6 +373,36 @@ static void point_step_at(Model* model)
     d->min_entering = SPEC_INPLANE_MIN_ENTERING_FRACTION;
     d->driven = model->driven;
     d->a0_psi = b->a0_psi;
+}
+
+/* translation_projection: M^-1 (to_abs^T M P), ny x 2 (a driven wheel's turn row zero) */
+static int translation_projection(Model* model)
+{
+    const Memory* mem = &model->host.mem;
+    int ny = model->ny, i, column, failed = 0;
+    double* lu = (double*)mem_alloc(mem, (size_t)ny * ny, sizeof(double));
+    double* b = (double*)mem_alloc(mem, (size_t)ny, sizeof(double));
+    int* pivot = (int*)mem_alloc(mem, (size_t)ny, sizeof(int));
+    if (lu == NULL || b == NULL || pivot == NULL) {
+        failed = -1;
+        goto done;
+    }
+    memcpy(lu, model->m.terms.m, (size_t)ny * ny * sizeof(double));
+    if (lu_factor(lu, ny, pivot) != 0) {
+        failed = -1;
+        goto done;
+    }
+    for (column = 0; column < 2; column++) {
+        for (i = 0; i < ny; i++) b[i] = model->m.terms.rim_inertia[2 * (size_t)i + column];
+        lu_solve(lu, ny, pivot, b);
+        if (model->driven) b[ny - 1] = 0.0;
+        for (i = 0; i < ny; i++) model->projection[2 * (size_t)i + column] = b[i];
+    }
+done:
+    mem_free(mem, lu);
+    mem_free(mem, b);
+    mem_free(mem, pivot);
+    return failed;
 }
 
 /* the rim's rows of the tire's forces on the coordinates (_rim_stack): rows (3 x n_dof + 3)
@@ -502,6 +551,7 @@ static int allocate(Model* model)
     TAKE(height, p, double);
     TAKE(rate, p, double);
     TAKE(rim_rows, 21 * (size_t)ny, double);
+    TAKE(projection, 2 * (size_t)ny, double);
     TAKE(work, inplane_work_doubles(ny, p), double);
     TAKE(iwork, inplane_work_ints(p), int);
     TAKE(build_work, inplane_build_work_doubles(ny, p), double);
@@ -693,6 +743,17 @@ static int build(Model* model, const double* values, Problems* p)
     }
     for (i = 0; i < model->np; i++) model->cos_theta[i] = cos(model->m.point_theta[i]);
     rim_rows_on_coordinates(model);
+    {   /* basis_fingerprint: CRC-32 (zlib's) of to_abs's bytes, as the core's */
+        const unsigned char* bytes = (const unsigned char*)model->m.terms.to_abs;
+        size_t count = ((size_t)model->m.n_dof + 3) * (size_t)model->ny * sizeof(double), i;
+        unsigned long crc = 0xfffffffful;
+        for (i = 0; i < count; i++) crc = SPEC_CRC32_TABLE[(crc ^ bytes[i]) & 0xff] ^ (crc >> 8);
+        model->fingerprint = (uint32_t)(crc ^ 0xfffffffful);
+    }
+    if (translation_projection(model) != 0) {
+        PROBLEM(p, "the tire's mass on its %d coordinates is singular", model->ny);
+        return MODEL_ERROR;
+    }
     point_step_at(model);
     model->step.mu = data.friction_coefficient;
     /* InPlaneStepper: the step at the nominal spin (the one call built it there) */
@@ -706,7 +767,9 @@ static int build(Model* model, const double* values, Problems* p)
         return MODEL_ERROR;
     }
     model->steps = 0;
-    memset(model->end, 0, sizeof model->end);
+    model->elapsed = model->carry = model->rate_given = model->h_given = 0.0;
+    model->accel[0] = model->accel[1] = model->accel[2] = model->h_accel = 0.0;
+    memset(model->given, 0, sizeof model->given);
     memset(model->rim, 0, sizeof model->rim);
     model->road_lo = model->road_hi = 0;
     if (road_record(model, 0.0, 0.0) != 0) {
@@ -787,45 +850,59 @@ int model_built_for(const Model* model, const double* values)
 
 /* -- stepping ---------------------------------------------------------------------------------- */
 
-/* steps_in: how many of the tire's steps make the host's (0: not a whole number) */
-static long long steps_in(double step_s, double tire_step_s)
+/* substeps: how the tire cuts a host's step (count, length): whole step_size steps when h is
+ * a whole number of them to within the resolution of the host's clock at time_s, else the
+ * fewest equal ones no longer than step_size (they end exactly at t + h) */
+static long long substeps(double h, double tire_step_s, double time_s, double* length)
 {
-    double count = isfinite(step_s) ? nearbyint(step_s / tire_step_s) : 0.0;
-    if (!(count >= 1.0) || count > 1e15 ||
-        fabs(count * tire_step_s - step_s) > 1e-9 * fmax(step_s, tire_step_s))
-        return 0;
+    double count = nearbyint(h / tire_step_s), at = fabs(time_s) + h;
+    double slack = fmin(fmax(1e-9 * h, 2.0 * (nextafter(at, INFINITY) - at)),
+                        0.25 * tire_step_s);
+    if (count < 1.0) count = 1.0;
+    if (fabs(count * tire_step_s - h) <= slack) {
+        *length = tire_step_s;
+        return (long long)count;
+    }
+    count = ceil(h / tire_step_s);
+    *length = h / count;
     return (long long)count;
 }
 
 const char* model_step_problem(const Model* model, double h, char* why, size_t size)
 {
     char text[40];
-    if (steps_in(h, model->h) > 0) return NULL;
+    (void)model;
+    if (h >= SPEC_INPLANE_MIN_STEP_S) return NULL;
     py_repr(h, text, size < sizeof text ? size : sizeof text);
-    snprintf(why, size,
-             "step size h = %s s: must be a whole multiple of the tire's step_size = %g s (set "
-             "step_size to divide the host's step)",
-             text, model->h);
+    snprintf(why, size, SPEC_MSG_INPLANE_STEP_SHORT, text, SPEC_INPLANE_MIN_STEP_S);
     return why;
 }
 
 const char* model_step_refusal(const Model* model) { return model->refusal; }
 
-/* hermite: (position, velocity, acceleration) at tau into a step of duration on the cubic
- * through its end values and rates (the same operations as the core's) */
-static void hermite(double p0, double v0, double p1, double v1, double duration, double tau,
-                    double* out)
+/* rate_changes: the acceleration and jerk at the communication point from the rates' last
+ * two changes (zero without the history) */
+static void rate_changes(double rate, double rate_before, double h_before, double change_before,
+                         double h_change_before, double* acceleration, double* jerk)
 {
-    double u = tau / duration, d = duration;
-    double u2 = pow(u, 2.0), u3 = pow(u, 3.0);
-    double h00 = 2 * u3 - 3 * u2 + 1, h10 = u3 - 2 * u2 + u, h01 = -2 * u3 + 3 * u2,
-           h11 = u3 - u2;
-    double g00 = 6 * u2 - 6 * u, g10 = 3 * u2 - 4 * u + 1, g01 = -6 * u2 + 6 * u,
-           g11 = 3 * u2 - 2 * u;
-    double a00 = 12 * u - 6, a10 = 6 * u - 4, a01 = -12 * u + 6, a11 = 6 * u - 2;
-    out[0] = h00 * p0 + h10 * d * v0 + h01 * p1 + h11 * d * v1;
-    out[1] = (g00 * p0 + g10 * d * v0 + g01 * p1 + g11 * d * v1) / d;
-    out[2] = (a00 * p0 + a10 * d * v0 + a01 * p1 + a11 * d * v1) / pow(d, 2.0);
+    double change;
+    *acceleration = *jerk = 0.0;
+    if (!(h_before > 0.0)) return;
+    change = (rate - rate_before) / h_before;
+    *acceleration = change;
+    if (!(h_change_before > 0.0)) return;
+    *jerk = (change - change_before) / (0.5 * (h_before + h_change_before));
+    *acceleration = change + 0.5 * h_before * *jerk;
+}
+
+/* input_path: (value, rate, acceleration) at tau into the step of an input given at its start
+ * with its rate, on the cubic with the acceleration and jerk of rate_changes */
+static void input_path(double value, double rate, double acceleration, double jerk, double tau,
+                       double* out)
+{
+    out[0] = value + tau * (rate + tau * (0.5 * acceleration + tau * jerk / 6.0));
+    out[1] = rate + tau * (acceleration + 0.5 * tau * jerk);
+    out[2] = acceleration + tau * jerk;
 }
 
 static void copy_state(const Model* model, const InPlaneState* from, InPlaneState* to)
@@ -846,8 +923,15 @@ static void checkpoint(Model* model)
     int hi = model->road_hi;
     copy_state(model, &model->now, &model->saved);
     model->saved_steps = model->steps;
-    memcpy(model->saved_end, model->end, sizeof model->end);
+    memcpy(model->saved_given, model->given, sizeof model->given);
     memcpy(model->saved_rim, model->rim, sizeof model->rim);
+    model->saved_clock[0] = model->rate_given;
+    model->saved_clock[1] = model->h_given;
+    model->saved_clock[2] = model->elapsed;
+    model->saved_clock[3] = model->carry;
+    model->saved_clock[4] = model->step.h;
+    memcpy(model->saved_accel, model->accel, sizeof model->accel);
+    model->saved_accel[3] = model->h_accel;
     model->saved_spin = model->spin_now;
     model->saved_speed = model->speed_now;
     model->saved_ring_spin = model->m.build.ring_spin;
@@ -863,11 +947,18 @@ static void checkpoint(Model* model)
 static int rollback(Model* model)
 {
     int hi = model->saved_hi, status;
-    status = take_spins(model, model->saved_ring_spin, model->saved_spin, model->saved_speed);
+    status = take_spins(model, model->saved_ring_spin, model->saved_spin, model->saved_speed,
+                        model->saved_clock[4]);
     copy_state(model, &model->saved, &model->now);
     model->steps = model->saved_steps;
-    memcpy(model->end, model->saved_end, sizeof model->end);
+    memcpy(model->given, model->saved_given, sizeof model->given);
     memcpy(model->rim, model->saved_rim, sizeof model->rim);
+    model->rate_given = model->saved_clock[0];
+    model->h_given = model->saved_clock[1];
+    model->elapsed = model->saved_clock[2];
+    model->carry = model->saved_clock[3];
+    memcpy(model->accel, model->saved_accel, sizeof model->accel);
+    model->h_accel = model->saved_accel[3];
     model->road_lo = model->saved_lo;
     model->road_hi = hi;
     if (hi > model->road_lo) {
@@ -890,40 +981,98 @@ static void contact_event(Model* model, const double* values)
     model->in_contact = in_contact;
 }
 
+/* _take_rim_jump: the rim from where the last step's extension left it to the host's values,
+ * its jump taken off the tire's coordinates (the tire's momentum carries on) */
+static void take_rim_jump(Model* model)
+{
+    double dp[2], dv[2];
+    int i, ny = model->ny;
+    dp[0] = model->given[0] - model->rim[0];
+    dp[1] = model->given[2] - model->rim[3];
+    dv[0] = model->given[1] - model->rim[1];
+    dv[1] = model->given[3] - model->rim[4];
+    if (dp[0] == 0.0 && dp[1] == 0.0 && dv[0] == 0.0 && dv[1] == 0.0) return;
+    for (i = 0; i < ny; i++) {
+        const double* row = model->projection + 2 * (size_t)i;
+        model->now.y[i] -= row[0] * dp[0] + row[1] * dp[1];
+        model->now.yd[i] -= row[0] * dv[0] + row[1] * dv[1];
+    }
+}
+
+/* clock.advance: elapsed + h with Kahan compensation */
+static void clock_advance(Model* model, double h)
+{
+    double y = h - model->carry, total = model->elapsed + y;
+    model->carry = (total - model->elapsed) - y;
+    model->elapsed = total;
+}
+
 /* InPlaneStepper.advance */
 int model_step(Model* model, double step_s, double* values)
 {
-    long long count = steps_in(step_s, model->h), k;
-    double start[6], end[6], x[3], z[3], front[3], rim_old[6];
-    double torque = values[SPEC_VR_WHEEL_TORQUE];
-    int plate = model->speed == 0.0, P = model->np, i, status = 0;
-    /* a driven wheel's spin at the step's start and end (InPlaneStepper.advance) */
-    double spin_start = model->spin_now + (model->free_spin ? model->now.yd[model->ny - 1] : 0.0);
-    double spin_end = model->speed / model->radius + values[SPEC_VR_WHEEL_RATE];
+    double length, accel[3], jerk[3], x[3], z[3], front[3], rim_old[6];
+    double start_s = model->elapsed;
+    long long count = substeps(step_s, model->h, model_time(model), &length), k;
+    double torque = values[SPEC_VR_WHEEL_TORQUE], rate_given = values[SPEC_VR_WHEEL_RATE];
+    int plate = model->speed == 0.0, P = model->np, i, status = 0,
+        known = model->h_given > 0.0;
+    double spin_start = 0.0, spin_end = 0.0;
     model->refusal[0] = '\0';
     if (road_compact(model, count < 1000000 ? (int)count : 1000000) != 0) return MODEL_ERROR;
     checkpoint(model);
-    memcpy(start, model->end, sizeof start);
-    end[0] = values[SPEC_VR_RIM_X];
-    end[1] = values[SPEC_VR_RIM_VX];
-    end[2] = values[SPEC_VR_RIM_Z];
-    end[3] = values[SPEC_VR_RIM_VZ];
-    end[4] = values[SPEC_VR_ROAD_Z];
-    end[5] = values[SPEC_VR_ROAD_VZ];
+    if (length != model->step.h &&
+        take_spins(model, model->m.build.ring_spin, model->spin_now, model->speed_now,
+                   length) != 0) {
+        rollback(model);
+        snprintf(model->refusal, sizeof model->refusal,
+                 "the step could not be built for steps of %g s; nothing changed", length);
+        return MODEL_DISCARD;
+    }
+    {   /* the host's values at the step's start; each position's acceleration over the step
+         * is its rate's last change */
+        double given[6];
+        given[0] = values[SPEC_VR_RIM_X];
+        given[1] = values[SPEC_VR_RIM_VX];
+        given[2] = values[SPEC_VR_RIM_Z];
+        given[3] = values[SPEC_VR_RIM_VZ];
+        given[4] = values[SPEC_VR_ROAD_Z];
+        given[5] = values[SPEC_VR_ROAD_VZ];
+        for (i = 0; i < 3; i++) {
+            rate_changes(given[2 * i + 1], model->given[2 * i + 1], model->h_given,
+                         model->accel[i], model->h_accel, &accel[i], &jerk[i]);
+            /* the last change of the rates, over the step it was made in */
+            if (known)
+                model->accel[i] = (given[2 * i + 1] - model->given[2 * i + 1]) / model->h_given;
+            else
+                model->accel[i] = accel[i];
+        }
+        model->h_accel = model->h_given;
+        memcpy(model->given, given, sizeof given);
+    }
+    take_rim_jump(model);
+    if (model->driven) { /* the wheel's spin at the step's start and end */
+        double change = known ? (rate_given - model->rate_given) / model->h_given * step_s : 0.0;
+        spin_start = model->spin_now + model->now.yd[model->ny - 1];
+        spin_end = model->speed / model->radius + rate_given + change;
+    }
+    input_path(model->given[0], model->given[1], accel[0], jerk[0], 0.0, x);
+    input_path(model->given[2], model->given[3], accel[1], jerk[1], 0.0, z);
+    for (i = 0; i < 3; i++) {
+        model->rim[i] = x[i];
+        model->rim[3 + i] = z[i];
+    }
     for (k = 1; k <= count; k++) {
-        double time, distance, tau = (double)k * model->h;
+        double time, distance, tau = (double)k * length;
         InPlaneState swap;
         model->steps++;
-        time = (double)model->steps * model->h;
-        hermite(start[0], start[1], end[0], end[1], step_s, tau, x);
-        hermite(start[2], start[3], end[2], end[3], step_s, tau, z);
+        time = start_s + tau;
+        input_path(model->given[0], model->given[1], accel[0], jerk[0], tau, x);
+        input_path(model->given[2], model->given[3], accel[1], jerk[1], tau, z);
         memcpy(rim_old, model->rim, sizeof rim_old);
-        model->rim[0] = x[0];
-        model->rim[1] = x[1];
-        model->rim[2] = x[2];
-        model->rim[3] = z[0];
-        model->rim[4] = z[1];
-        model->rim[5] = z[2];
+        for (i = 0; i < 3; i++) {
+            model->rim[i] = x[i];
+            model->rim[3 + i] = z[i];
+        }
         if (model->free_spin && follow_spin(model, model->now.yd) != 0) {
             status = 3;
             break;
@@ -932,10 +1081,10 @@ int model_step(Model* model, double step_s, double* values)
             double spin = spin_start + (spin_end - spin_start) * ((double)k / (double)count);
             double rate = spin - model->spin_now;
             model->step.psi_new = model->now.y[model->ny - 1] +
-                                  0.5 * model->h * (model->now.yd[model->ny - 1] + rate);
+                                  0.5 * length * (model->now.yd[model->ny - 1] + rate);
         }
         distance = model->speed * time + model->rim[0];
-        hermite(start[4], start[5], end[4], end[5], step_s, tau, front);
+        input_path(model->given[4], model->given[5], accel[2], jerk[2], tau, front);
         if (plate) {
             for (i = 0; i < P; i++) {
                 model->height[i] = front[0];
@@ -983,11 +1132,14 @@ int model_step(Model* model, double step_s, double* values)
                      : "step at t = %g s: the contact and stick sets did not give a solvable "
                        "point solve; nothing changed (a shorter step_size settles the sets "
                        "sooner)",
-                 model->h * (double)model->steps, SPEC_INPLANE_MAX_SET_PASSES);
+                 start_s + (double)(model->steps - model->saved_steps) * length,
+                 SPEC_INPLANE_MAX_SET_PASSES);
         rollback(model);
         return MODEL_DISCARD;
     }
-    memcpy(model->end, end, sizeof end);
+    clock_advance(model, (double)count * length);
+    model->rate_given = rate_given;
+    model->h_given = step_s;
     show_outputs(model, values);
     contact_event(model, values);
     return MODEL_OK;
@@ -1001,10 +1153,7 @@ int model_refresh(Model* model, double* values)
     return MODEL_OK;
 }
 
-double model_time(const Model* model)
-{
-    return model->start_time + (double)model->steps * model->h;
-}
+double model_time(const Model* model) { return model->start_time + model->elapsed; }
 
 const TireContract* model_contract(const Model* model)
 {
@@ -1024,14 +1173,15 @@ double model_min_step(const Model* model)
     return 0.0;
 }
 
-/* the in-plane step has no work rule of the radial kernel's: every step is the tire's own
- * step_size, so a host's step costs its count of them */
+/* the in-plane step has no work rule of the radial kernel's: a host's step costs its count of
+ * the tire's steps (substeps) */
 int model_step_work(const Model* model, double h, int* n_sub, double* substep, int* work,
                     double* longest)
 {
-    long long count = steps_in(h, model->h);
+    double length;
+    long long count = substeps(h, model->h, model_time(model), &length);
     *n_sub = count < 2147483647 ? (int)count : 2147483647;
-    *substep = model->h;
+    *substep = length;
     *work = 1;
     *longest = SPEC_MAX_STEP_S;
     return 0;
@@ -1043,17 +1193,24 @@ int model_step_work(const Model* model, double h, int* n_sub, double* substep, i
  * (the step's end inputs, the rim, the spins, y, yd, ydd, e, f_n, the road's samples) and int8
  * flags (contact, stick, slip sign). */
 
-static size_t stepper_size(const Model* model, int samples)
+static size_t n_abs(const Model* model) { return (size_t)model->m.n_dof + 3; }
+
+/* the doubles of a stepper part with ny coordinates, np points, samples road samples and
+ * n_dof absolute DOFs */
+static size_t stepper_doubles(size_t ny, size_t np, size_t samples, size_t n_dof)
 {
-    return STEPPER_HEAD +
-           8 * ((size_t)STEPPER_SCALARS + 3 * (size_t)model->ny + 2 * (size_t)model->np +
-                3 * (size_t)samples) +
-           3 * (size_t)model->np;
+    return STEPPER_SCALARS + 3 * ny + 2 * np + 3 * samples + 3 * n_dof;
+}
+
+static size_t stepper_size(size_t ny, size_t np, size_t samples, size_t n_dof)
+{
+    return STEPPER_HEAD + 8 * stepper_doubles(ny, np, samples, n_dof) + 3 * np;
 }
 
 size_t model_state_size(const Model* model)
 {
-    return FLAGS * 4 + stepper_size(model, model->road_hi - model->road_lo);
+    return FLAGS * 4 + stepper_size((size_t)model->ny, (size_t)model->np,
+                                    (size_t)(model->road_hi - model->road_lo), n_abs(model));
 }
 
 static void put(unsigned char** out, const void* value, size_t size)
@@ -1072,8 +1229,9 @@ void model_state_write(const Model* model, unsigned char* out)
     int32_t flag = 1, contact = model->in_contact;
     uint32_t ny = (uint32_t)model->ny, np = (uint32_t)model->np;
     uint32_t samples = (uint32_t)(model->road_hi - model->road_lo);
+    uint32_t dofs = (uint32_t)n_abs(model);
     int64_t steps = (int64_t)model->steps;
-    double spins[3];
+    double spins[3], clocks[5], changes[4];
     const InPlaneState* s = &model->now;
     int i;
     put(&out, &flag, 4);
@@ -1083,12 +1241,23 @@ void model_state_write(const Model* model, unsigned char* out)
     put(&out, &np, 4);
     put(&out, &samples, 4);
     put(&out, &steps, 8);
-    put_doubles(&out, model->end, 6);
+    put(&out, &dofs, 4);
+    put(&out, &model->fingerprint, 4);
+    put_doubles(&out, model->given, 6);
     put_doubles(&out, model->rim, 6);
     spins[0] = model->spin_now;
     spins[1] = model->speed_now;
     spins[2] = model->m.build.ring_spin;
     put_doubles(&out, spins, 3);
+    clocks[0] = model->rate_given;
+    clocks[1] = model->h_given;
+    clocks[2] = model->elapsed;
+    clocks[3] = model->carry;
+    clocks[4] = model->step.h;
+    put_doubles(&out, clocks, 5);
+    memcpy(changes, model->accel, sizeof model->accel);
+    changes[3] = model->h_accel;
+    put_doubles(&out, changes, 4);
     put_doubles(&out, s->y, model->ny);
     put_doubles(&out, s->yd, model->ny);
     put_doubles(&out, s->ydd, model->ny);
@@ -1100,6 +1269,17 @@ void model_state_write(const Model* model, unsigned char* out)
         sample[1] = road_z(model)[i];
         sample[2] = road_at(model)[i];
         put_doubles(&out, sample, 3);
+    }
+    {   /* the coordinates in the tire's own DOFs: to_abs y, y', y'' */
+        const double* shapes[3] = {s->y, s->yd, s->ydd};
+        const double* to_abs = model->m.terms.to_abs;
+        size_t row, n = n_abs(model);
+        int g;
+        for (g = 0; g < 3; g++)
+            for (row = 0; row < n; row++) {
+                double v = dot(to_abs + row * (size_t)model->ny, shapes[g], model->ny);
+                put_doubles(&out, &v, 1);
+            }
     }
     for (i = 0; i < model->np; i++) *out++ = (unsigned char)(s->contact[i] ? 1 : 0);
     for (i = 0; i < model->np; i++) *out++ = (unsigned char)(s->stick[i] ? 1 : 0);
@@ -1116,13 +1296,80 @@ static double get_double(const unsigned char* at, size_t index)
     return v;
 }
 
+/* InPlaneStepper._state_coordinates: a state's y, y', y'' (out: 3 x ny, this model's ny) in
+ * this model's coordinates: its own where its basis is this one's (the same fingerprint and
+ * size), else its DOFs taken into this basis (least squares on to_abs); 0, or 1 when they lie
+ * outside it by more than SPEC_INPLANE_STATE_BASIS_TOLERANCE (off: how far), -1 out of
+ * memory */
+static int state_coordinates(const Model* model, const unsigned char* doubles, size_t ny_state,
+                             size_t np, size_t samples, uint32_t fingerprint, double* out,
+                             double* off)
+{
+    const Memory* mem = &model->host.mem;
+    const double* a = model->m.terms.to_abs;
+    size_t ny = (size_t)model->ny, n = n_abs(model), g, i, j, k;
+    size_t dofs_at = STEPPER_SCALARS + 3 * ny_state + 2 * np + 3 * samples;
+    double *lu, *u, worst = 0.0;
+    int *pivot, status = 0;
+    *off = 0.0;
+    if (fingerprint == model->fingerprint && ny_state == ny) {
+        for (g = 0; g < 3 * ny; g++) out[g] = get_double(doubles, STEPPER_SCALARS + g);
+        return 0;
+    }
+    lu = (double*)mem_alloc(mem, ny * ny, sizeof(double));
+    u = (double*)mem_alloc(mem, n, sizeof(double));
+    pivot = (int*)mem_alloc(mem, ny, sizeof(int));
+    if (lu == NULL || u == NULL || pivot == NULL) {
+        status = -1;
+        goto done;
+    }
+    for (i = 0; i < ny; i++)  /* the normal matrix to_abs^T to_abs */
+        for (j = 0; j < ny; j++) {
+            double sum = 0.0;
+            for (k = 0; k < n; k++) sum += a[k * ny + i] * a[k * ny + j];
+            lu[i * ny + j] = sum;
+        }
+    if (lu_factor(lu, (int)ny, pivot) != 0) {
+        status = 1;
+        *off = INFINITY;
+        goto done;
+    }
+    for (g = 0; g < 3; g++) {
+        double* y = out + g * ny;
+        double ring_scale = 1e-12, ring_off = 0.0, turn, turn_off;
+        for (k = 0; k < n; k++) u[k] = get_double(doubles, dofs_at + g * n + k);
+        for (i = 0; i < ny; i++) {
+            double sum = 0.0;
+            for (k = 0; k < n; k++) sum += a[k * ny + i] * u[k];
+            y[i] = sum;
+        }
+        lu_solve(lu, (int)ny, pivot, y);
+        /* the last DOF is the rim's turn (it grows as the wheel rolls): checked on its own */
+        for (k = 0; k + 1 < n; k++) {
+            double r = fabs(dot(a + k * ny, y, (int)ny) - u[k]);
+            if (r > ring_off) ring_off = r;
+            if (fabs(u[k]) > ring_scale) ring_scale = fabs(u[k]);
+        }
+        turn = fabs(u[n - 1]);
+        turn_off = fabs(dot(a + (n - 1) * ny, y, (int)ny) - u[n - 1]) / (turn > 1.0 ? turn : 1.0);
+        worst = fmax(worst, fmax(ring_off / ring_scale, turn_off));
+    }
+    *off = worst;
+    status = worst <= SPEC_INPLANE_STATE_BASIS_TOLERANCE ? 0 : 1;
+done:
+    mem_free(mem, lu);
+    mem_free(mem, u);
+    mem_free(mem, pivot);
+    return status;
+}
+
 int model_state_check(const Model* model, const unsigned char* in, size_t size,
                       const double* values, double time, double start_time, char* why,
                       size_t why_size)
 {
     const unsigned char *part = in + FLAGS * 4, *doubles, *flags;
     int32_t flag;
-    uint32_t ny, np, samples;
+    uint32_t ny, np, samples, dofs, fingerprint;
     int64_t steps;
     size_t n_doubles, i;
     double nominal = fmax(model->speed / model->radius, 1.0);
@@ -1146,21 +1393,29 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
     memcpy(&np, part + 12, 4);
     memcpy(&samples, part + 16, 4);
     memcpy(&steps, part + 20, 8);
-    if (ny != (uint32_t)model->ny || np != (uint32_t)model->np) {
-        snprintf(why, why_size, "its stepper part has %lu coordinates and %lu points, this tire "
-                 "%d and %d", (unsigned long)ny, (unsigned long)np, model->ny, model->np);
+    memcpy(&dofs, part + 28, 4);
+    memcpy(&fingerprint, part + 32, 4);
+    if (dofs != (uint32_t)n_abs(model) || np != (uint32_t)model->np) {
+        snprintf(why, why_size, "its stepper part has %lu DOFs and %lu points, this tire "
+                 "%lu and %d", (unsigned long)dofs, (unsigned long)np,
+                 (unsigned long)n_abs(model), model->np);
         return MODEL_ERROR;
     }
     if (samples == 0 || steps < 0 || samples > (size - FLAGS * 4) / 24) {
         snprintf(why, why_size, "its stepper part's road or step count does not fit this tire");
         return MODEL_ERROR;
     }
-    if (size - FLAGS * 4 != stepper_size(model, (int)samples)) {
+    if (!(ny > 0 && ny <= dofs)) {
+        snprintf(why, why_size, "its stepper part has %lu coordinates for %lu DOFs",
+                 (unsigned long)ny, (unsigned long)dofs);
+        return MODEL_ERROR;
+    }
+    if (size - FLAGS * 4 != stepper_size(ny, np, samples, dofs)) {
         snprintf(why, why_size, "its stepper part has the wrong size");
         return MODEL_ERROR;
     }
     doubles = part + STEPPER_HEAD;
-    n_doubles = STEPPER_SCALARS + 3 * (size_t)ny + 2 * (size_t)np + 3 * (size_t)samples;
+    n_doubles = stepper_doubles(ny, np, samples, dofs);
     for (i = 0; i < n_doubles; i++) {
         if (!isfinite(get_double(doubles, i))) {
             snprintf(why, why_size, "its stepper part holds values that are not finite");
@@ -1202,8 +1457,20 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
                 }
             }
         }
-        {   /* the clock: the steps taken from the start to the layer's time */
-            double stepped = start_time + (double)steps * model->h;
+        {   /* the clock: the tire's elapsed time from the start to the layer's time */
+            double h_given = get_double(doubles, 16), elapsed = get_double(doubles, 17),
+                   length = get_double(doubles, 19), h_accel = get_double(doubles, 23),
+                   stepped = start_time + elapsed;
+            if (!(0.0 <= h_given && 0.0 <= h_accel && 0.0 <= elapsed &&
+                  SPEC_INPLANE_MIN_STEP_S <= length && length <= model->h)) {
+                py_repr(elapsed, a, sizeof a);
+                py_repr(h_given, b, sizeof b);
+                py_repr(length, c, sizeof c);
+                py_repr(model->h, d, sizeof d);
+                snprintf(why, why_size, "its clock (elapsed %s s, last step %s s, the tire's "
+                         "step %s s) is no clock of this tire (step_size %s s)", a, b, c, d);
+                return MODEL_ERROR;
+            }
             if (!(fabs(stepped - time) <= fmax(SPEC_TIME_ABS_TOLERANCE_S,
                                               SPEC_TIME_REL_TOLERANCE * fabs(time)) + 1e-9)) {
                 py_repr(time, a, sizeof a);
@@ -1215,6 +1482,26 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
             }
         }
     }
+    {   /* what its coordinates are here */
+        double* scratch = (double*)mem_alloc(&model->host.mem, 3 * (size_t)model->ny,
+                                             sizeof(double));
+        double off = 0.0;
+        int status = scratch == NULL ? -1
+                                     : state_coordinates(model, doubles, ny, np, samples,
+                                                         fingerprint, scratch, &off);
+        mem_free(&model->host.mem, scratch);
+        if (status < 0) {
+            snprintf(why, why_size, "out of memory reading its coordinates");
+            return MODEL_ERROR;
+        }
+        if (status > 0) {
+            snprintf(why, why_size, "its tire's shape lies outside this FMU's reduced basis "
+                     "(%.2g of it): it was stepped in a basis built differently (another BLAS, "
+                     "thread count or CPU can build the modes otherwise), whose span this build "
+                     "does not reproduce; restore it in the process that saved it", off);
+            return MODEL_ERROR;
+        }
+    }
     (void)values;
     return MODEL_OK;
 }
@@ -1223,28 +1510,50 @@ void model_state_apply(Model* model, const unsigned char* in)
 {
     const unsigned char* part = in + FLAGS * 4;
     const unsigned char *doubles = part + STEPPER_HEAD, *flags;
-    uint32_t samples;
+    uint32_t samples, ny_state, dofs, fingerprint;
     int64_t steps;
     int ny = model->ny, P = model->np, i;
     size_t at = 0;
     InPlaneState* s = &model->now;
     int32_t contact;
     memcpy(&contact, in + 4, 4);
+    memcpy(&ny_state, part + 8, 4);
     memcpy(&samples, part + 16, 4);
     memcpy(&steps, part + 20, 8);
-    for (i = 0; i < 6; i++) model->end[i] = get_double(doubles, at++);
+    memcpy(&dofs, part + 28, 4);
+    memcpy(&fingerprint, part + 32, 4);
+    for (i = 0; i < 6; i++) model->given[i] = get_double(doubles, at++);
     for (i = 0; i < 6; i++) model->rim[i] = get_double(doubles, at++);
     {
         double spin = get_double(doubles, at), speed = get_double(doubles, at + 1),
                ring_spin = get_double(doubles, at + 2);
-        at += 3;
-        if (take_spins(model, ring_spin, spin, speed) != 0)
+        model->rate_given = get_double(doubles, at + 3);
+        model->h_given = get_double(doubles, at + 4);
+        model->elapsed = get_double(doubles, at + 5);
+        model->carry = get_double(doubles, at + 6);
+        at += 7;
+        if (take_spins(model, ring_spin, spin, speed, get_double(doubles, at++)) != 0)
             say(model, MODEL_ERROR, "logStatusError",
                 "fmi2SetFMUstate: the step could not be rebuilt at the state's spin");
+        for (i = 0; i < 3; i++) model->accel[i] = get_double(doubles, at++);
+        model->h_accel = get_double(doubles, at++);
     }
-    for (i = 0; i < ny; i++) s->y[i] = get_double(doubles, at++);
-    for (i = 0; i < ny; i++) s->yd[i] = get_double(doubles, at++);
-    for (i = 0; i < ny; i++) s->ydd[i] = get_double(doubles, at++);
+    {   /* y, y', y'' here (checked by model_state_check: they fit) */
+        double* scratch = (double*)mem_alloc(&model->host.mem, 3 * (size_t)ny, sizeof(double));
+        double off;
+        if (scratch == NULL ||
+            state_coordinates(model, doubles, ny_state, (size_t)P, samples, fingerprint,
+                              scratch, &off) != 0) {
+            say(model, MODEL_ERROR, "logStatusError",
+                "fmi2SetFMUstate: out of memory taking the state's coordinates");
+        } else {
+            memcpy(s->y, scratch, (size_t)ny * sizeof(double));
+            memcpy(s->yd, scratch + ny, (size_t)ny * sizeof(double));
+            memcpy(s->ydd, scratch + 2 * (size_t)ny, (size_t)ny * sizeof(double));
+        }
+        mem_free(&model->host.mem, scratch);
+        at += 3 * (size_t)ny_state;
+    }
     for (i = 0; i < P; i++) s->e[i] = get_double(doubles, at++);
     for (i = 0; i < P; i++) s->f_n[i] = get_double(doubles, at++);
     model->road_lo = model->road_hi = 0;
@@ -1260,6 +1569,7 @@ void model_state_apply(Model* model, const unsigned char* in)
         road_at(model)[i] = get_double(doubles, at++);
     }
     model->road_hi = (int)samples;
+    at += 3 * (size_t)dofs; /* the DOFs: read through state_coordinates */
     flags = doubles + 8 * at;
     for (i = 0; i < P; i++) s->contact[i] = flags[i] == 1;
     for (i = 0; i < P; i++) s->stick[i] = flags[P + i] == 1;

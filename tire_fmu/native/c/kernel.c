@@ -86,6 +86,9 @@ struct TireKernel {
     double* penetration;
     double* rate;
     double seen_z, seen_vz;
+    /* the rim's rate given at the last communication point, its last change over the step it
+     * was made in and that step's length (0: none yet): the extension's history (host_inputs) */
+    double given_vz, change, h_change;
     double* seen_heights;
     double* seen_slopes;
     double ring_out[3];
@@ -428,14 +431,11 @@ static int instant_interface(TireKernel* kn, Interface* k)
 static Interface* step_interface(TireKernel* kn, double h)
 {
     int i, slot;
+    /* only the step itself: a host's h jittered by its clock's rounding (far from t = 0 a few
+     * distinct values) gets coefficients of its own, so the tire integrates exactly the time
+     * the host's clock moved and a run reads the same from any start time */
     for (i = 0; i < kn->n_kernels; i++) {
         if (kn->kernels[i].h_comm == h) return &kn->kernels[i];
-    }
-    for (i = 0; i < kn->n_kernels; i++) {
-        if (fabs(h - kn->kernels[i].h_comm) <=
-            SPEC_SAME_POINT_EPS * (fabs(kn->start_time + kn->elapsed) + h)) {
-            return &kn->kernels[i];
-        }
     }
     {
         Interface made;
@@ -843,7 +843,7 @@ static int start(TireKernel* kn, double z, double vz, const double* heights,
 
 /* one substep of length k->h with the rim at z moving at vz; the road in kn->heights and
  * kn->slopes, which ramp on into the next substep */
-static int substep(TireKernel* kn, Interface* k, double z, double vz)
+static int substep(TireKernel* kn, Interface* k, double z, double vz, double vz_end)
 {
     int P = kn->P, Z = kn->Z, n, q, j, i, l, rows = kn->rows;
     double h = k->h;
@@ -918,7 +918,7 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz)
     /* direct terms: D r(t + h) + E r' with r = [z + h vz, forces held]; on the forces only
      * when the truncation reaches them */
     for (i = 0; i < rows; i++) {
-        y[i] += D_AT(kn, i, 0) * (z + h * vz) + E_AT(kn, i, 0) * vz;
+        y[i] += D_AT(kn, i, 0) * (z + h * vz) + E_AT(kn, i, 0) * vz_end;
     }
     if (kn->truncated) {
         double* node_df = kn->node_b;
@@ -936,7 +936,7 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz)
         double sec = kn->sec[j];
         double p = w_pt[j] - sec * (z + h * vz) + sec * (kn->heights[j] + h * kn->slopes[j])
                    + k->pen_const[j];
-        double r = r_pt[j] - sec * vz + sec * kn->slopes[j] + k->rate_const[j];
+        double r = r_pt[j] - sec * vz_end + sec * kn->slopes[j] + k->rate_const[j];
         base[j] = kn->k[j] * p + kn->c[j] * r;
         base[P + j] = p;
         base[2 * P + j] = r;
@@ -961,7 +961,7 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz)
         kn->seen_slopes[j] = kn->slopes[j];
     }
     kn->seen_z = z + h * vz;
-    kn->seen_vz = vz;
+    kn->seen_vz = vz_end;
     kn->last = k;
     kn->dft_ok = 1;  /* F holds the DFT of df */
     return 0;
@@ -1077,24 +1077,79 @@ static void fill_report(const TireKernel* kn, double report[KERNEL_REPORT])
     report[KERNEL_REPORT_ZONE_EDGE] = kernel_at_zone_edge(kn) ? 1.0 : 0.0;
 }
 
+/* core/host_inputs.py's rate_changes: the acceleration and jerk at the communication point
+ * from the rate's last two changes (zero without the history) */
+static void rate_changes(double rate, double rate_before, double h_before, double change_before,
+                         double h_change_before, double* acceleration, double* jerk)
+{
+    double change;
+    *acceleration = *jerk = 0.0;
+    if (!(h_before > 0.0)) return;
+    change = (rate - rate_before) / h_before;
+    *acceleration = change;
+    if (!(h_change_before > 0.0)) return;
+    *jerk = (change - change_before) / (0.5 * (h_before + h_change_before));
+    *acceleration = change + 0.5 * h_before * *jerk;
+}
+
+/* input_path's position and rate at tau into the step */
+static double path_position(double value, double rate, double acceleration, double jerk,
+                            double tau)
+{
+    return value + tau * (rate + tau * (0.5 * acceleration + tau * jerk / 6.0));
+}
+
+static double path_rate(double rate, double acceleration, double jerk, double tau)
+{
+    return rate + tau * (acceleration + 0.5 * tau * jerk);
+}
+
+/* core/host_inputs.py's on_grid: h as the whole number of grid steps it is to within the
+ * resolution of the host's clock at time, else h */
+static double on_grid(double h, double grid, double time)
+{
+    double count = nearbyint(h / grid), at = fabs(time) + h;
+    double slack = fmin(fmax(1e-9 * h, 2.0 * (nextafter(at, INFINITY) - at)),
+                        0.25 * grid);
+    return count >= 1.0 && fabs(count * grid - h) <= slack ? count * grid : h;
+}
+
 int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
                 double report[KERNEL_REPORT])
 {
     Interface* k;
     int i;
+    double h_before, accel, jerk, z0, z1;
     if (kernel_step_problems(kn, h, inputs) != 0) return KERNEL_REFUSED;
+    /* a host's h that is a whole number of substeps to its clock's resolution is that number:
+     * the tire's clock stays on its grid from any start time */
+    h = on_grid(h, kn->substep_s, kn->start_time + kn->elapsed);
     k = step_interface(kn, h);
     if (k == NULL) return KERNEL_NO_MEMORY;
     if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
                   kn->slopes) != 0) {
         return KERNEL_NO_MEMORY;
     }
-    if (start(kn, inputs[0], inputs[1], kn->heights, kn->slopes) != 0) return KERNEL_NO_MEMORY;
+    /* the rim extended over the step (core/host_inputs.py), each substep on its chord */
+    h_before = kn->has_last ? kn->last_step : 0.0;
+    rate_changes(inputs[1], kn->given_vz, h_before, kn->change, kn->h_change, &accel, &jerk);
+    z0 = inputs[0];
+    z1 = path_position(inputs[0], inputs[1], accel, jerk, k->h);
+    if (start(kn, z0, inputs[1], kn->heights, kn->slopes) != 0) return KERNEL_NO_MEMORY;
     for (i = 0; i < k->n_sub; i++) {
-        if (substep(kn, k, inputs[0] + i * k->h * inputs[1], inputs[1]) != 0) {
-            return KERNEL_NO_MEMORY;
+        if (i > 0) {
+            z0 = z1;
+            z1 = path_position(inputs[0], inputs[1], accel, jerk, (i + 1) * k->h);
         }
+        /* the ring integrated on the chord; the rate at the substep's end in the direct terms
+         * and the penetrations' rates */
+        if (substep(kn, k, z0, (z1 - z0) / k->h,
+                    path_rate(inputs[1], accel, jerk, (i + 1) * k->h)) != 0)
+            return KERNEL_NO_MEMORY;
     }
+    kn->change = h_before > 0.0 ? (inputs[1] - kn->given_vz) / h_before : 0.0;
+    kn->given_vz = inputs[1];
+    kn->h_change = h_before;
     {   /* elapsed += h, compensated (core/clock.py: advance) */
         double y = h - kn->carry, total = kn->elapsed + y;
         kn->carry = (total - kn->elapsed) - y;
@@ -1154,6 +1209,7 @@ void kernel_reset(TireKernel* kn, double start_time)
         kn->seen_slopes[j] = 0.0;
     }
     kn->seen_z = kn->seen_vz = 0.0;
+    kn->given_vz = kn->change = kn->h_change = 0.0;
     kn->ring_out[0] = kn->ring_out[1] = kn->ring_out[2] = 0.0;
     kn->last = NULL;
     kn->has_last = 0;
@@ -1429,12 +1485,13 @@ memory:
 
 /* -- the kernel's state -------------------------------------------------------------------------
  * int32: K, P, history length, has_last; then doubles: start time, elapsed time, its carry,
- * last step, seen z and z', ring_out (3), outputs (6), q (2K), df, penetration, rate, seen
+ * last step, seen z and z', ring_out (3), outputs (6), the rim's rate given last, its last
+ * change and that change's step, q (2K), df, penetration, rate, seen
  * heights, seen slopes (P each), history t, z, v; then the active flags (P bytes). All
  * little-endian as x86-64 and arm64 write them; the numpy kernel writes the same bytes. */
 
 #define STATE_INTS 4
-#define STATE_HEAD 15
+#define STATE_HEAD 18
 
 static const char* const OUTPUT_NAMES[KERNEL_N_OUTPUTS] = {
     "rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"};
@@ -1485,6 +1542,9 @@ void kernel_state_write(TireKernel* kn, unsigned char* out)
     head[5] = kn->seen_vz;
     memcpy(head + 6, kn->ring_out, sizeof(double) * 3);
     memcpy(head + 9, kn->outputs, sizeof(double) * KERNEL_N_OUTPUTS);
+    head[15] = kn->given_vz;
+    head[16] = kn->change;
+    head[17] = kn->h_change;
     put_doubles(&out, head, STATE_HEAD);
     put_doubles(&out, (const double*)kn->q, 2 * K);
     put_doubles(&out, kn->df, P);
@@ -1701,6 +1761,14 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
                  "%g m/s", a, SPEC_MAX_VELOCITY_M_S);
         add_why(why, why_size, text);
     }
+    if (!(fabs(get_double(in, 15)) <= SPEC_MAX_VELOCITY_M_S && 0.0 <= get_double(in, 17) &&
+          get_double(in, 17) <= SPEC_MAX_STEP_S)) {
+        py_repr(get_double(in, 15), a, sizeof a);
+        py_repr(get_double(in, 17), b, sizeof b);
+        snprintf(text, sizeof text, "the rim velocity given last, %s m/s, or the step of its "
+                 "last change, %s s, is beyond what a host gives", a, b);
+        add_why(why, why_size, text);
+    }
     if (!(fabs(get_double(in, 6)) <= total_bound && fabs(get_double(in, 7)) <= total_bound)) {
         snprintf(text, sizeof text, "its rim forces exceed what the zone springs give at %g "
                  "m and %g m/s", length, rate);
@@ -1819,6 +1887,9 @@ int kernel_state_apply(TireKernel* kn, const unsigned char* in)
     kn->seen_vz = head[5];
     memcpy(kn->ring_out, head + 6, sizeof(double) * 3);
     memcpy(kn->outputs, head + 9, sizeof(double) * KERNEL_N_OUTPUTS);
+    kn->given_vz = head[15];
+    kn->change = head[16];
+    kn->h_change = head[17];
     memcpy(kn->q, p, sizeof(double) * (size_t)(2 * K));
     p += sizeof(double) * (size_t)(2 * K);
 #define TAKE(field)                                        \

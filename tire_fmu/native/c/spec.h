@@ -72,6 +72,8 @@
 #define SPEC_INPLANE_SETTLE_PASSES 12
 #define SPEC_INPLANE_MIN_ENTERING_FRACTION 0.001
 #define SPEC_INPLANE_STATE_SPIN_FACTOR 10.0
+#define SPEC_INPLANE_MIN_STEP_S 1e-07
+#define SPEC_INPLANE_STATE_BASIS_TOLERANCE 1e-09
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -445,6 +447,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_STEP_CALL "fmi2DoStep(t = %s s, h = %s s)"
 #define SPEC_MSG_NOT_LAST_POINT "t = %s s: must be the last communication point t = %s s (roll back with fmi2SetFMUstate to step from an earlier time)"
 #define SPEC_MSG_STEP_RANGE "step size h = %s s: must be in (0, %g] s"
+#define SPEC_MSG_INPLANE_STEP_SHORT "step size h = %s s: must be at least %g s, the in-plane tire's shortest step"
 #define SPEC_MSG_STEP_DELAY "step size h = %s s: must be at least %.3g s at this speed: the road reaches the contact zone's last node %.3g s after its front, and the FMU keeps at most %d steps of its history"
 #define SPEC_MSG_NO_STEP_PENDING "no step is pending (fmi2DoStep always completes)"
 #define SPEC_MSG_INPUT_RANGE "%s = %s %s: must be in [-%g, %g] %s"
