@@ -41,6 +41,7 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 import tire_fmu
 from tire_fmu.core import clock, kernel_numpy
+from tire_fmu.core.blas_threads import blas_threads, unavailable
 from tire_fmu.core.contact_dynamics import (
     MAX_DISPLACEMENT_M,
     MAX_VELOCITY_M_S,
@@ -138,6 +139,7 @@ class TireModal(Fmi2Slave):
         self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
         self._contact_logged = True  # the in_contact the last lift-off event was logged for
+        self._said_blas_unlimited = False  # the warning that BLAS threads cannot be limited
         # Inputs set since the outputs were last computed: the next read recomputes the
         # forces at the current point with them (see ContactSimulator.outputs_with).
         self._stale = False
@@ -337,7 +339,9 @@ class TireModal(Fmi2Slave):
         except ParameterError as error:
             problems += error.details
         settings = ContactSettings(law="linear" if named["linear_contact"] else "unilateral")
-        with warnings.catch_warnings(record=True) as caught:
+        # the build's BLAS threads limited (numpy's only: this build never loads scipy), the
+        # host's given back after
+        with warnings.catch_warnings(record=True) as caught, blas_threads(load_scipy=False):
             warnings.simplefilter("always")
             try:  # the load and speed checks need the assembled model: build it if we can
                 tire, op = validate(tire_values, op_values)
@@ -346,12 +350,20 @@ class TireModal(Fmi2Slave):
                 problems += error.details
             if problems:
                 raise ParameterError(problems)
-        library, why = self._kernel_library()
-        simulator = ContactSimulator(contact, start_time=self._start_time,
-                                     backend="compiled" if library else "numpy",
-                                     library=library)
+            library, why = self._kernel_library()
+            simulator = ContactSimulator(contact, start_time=self._start_time,
+                                         backend="compiled" if library else "numpy",
+                                         library=library)
+        self._say_if_blas_unlimited()
         self._kernel_note = why or "stepping with the compiled kernel"
         return simulator, contact, [fmu_message(str(w.message)) for w in caught]
+
+    def _say_if_blas_unlimited(self) -> None:
+        """Warn once (per instance) when the build could not limit BLAS's threads."""
+        why = unavailable()
+        if why and not self._said_blas_unlimited:
+            self._said_blas_unlimited = True
+            self.log(why, Fmi2Status.warning)
 
     def _kernel_library(self) -> tuple:
         """The compiled step kernel this FMU carries for the platform it runs on (loaded
