@@ -154,9 +154,14 @@ class TireModal(Fmi2Slave):
         return fmu_variables(parameter_values=parameter_values)
 
     def _register(self, vr: int, v: FmuVariable) -> None:
+        # the getter closes over the values list, not over self: a getter holding self would
+        # be a reference cycle (self.vars -> variable -> getter -> self), and a freed instance
+        # would then wait for the cycle collector, with its whole model, instead of going at
+        # fmi2FreeInstance (the list is never rebound, only assigned into)
+        values = self._values
         kwargs = dict(causality=Fmi2Causality[v.causality], description=v.description,
                       variability=Fmi2Variability[v.variability],
-                      getter=lambda: self._values[vr], setter=lambda value: None)
+                      getter=lambda: values[vr], setter=lambda value: None)
         if v.causality == "parameter":
             kwargs.update(initial=Fmi2Initial.exact)
         elif v.causality == "output":  # computed: no start value, listed as initial unknowns
