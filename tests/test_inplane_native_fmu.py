@@ -36,6 +36,7 @@ from tire_fmu.core.step_limits import (  # noqa: E402
     MAX_VELOCITY_M_S,
 )
 from tire_fmu.fmu.interface import inplane_fmu_variables  # noqa: E402
+from tire_fmu.fmu.spec import MESSAGES  # noqa: E402
 
 pytestmark = pytest.mark.fmu
 
@@ -311,6 +312,25 @@ def test_it_declares_tireinplanes_variables_and_ships_its_sources(native_path, p
                            "-I", str(tmp_path / "sources"), "-o", str(tmp_path / "t.so"),
                            *map(str, sources), "-lm"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def test_a_bad_reference_or_a_string_is_refused_in_the_fmus_own_name(native_path,
+                                                                     python_path):
+    """TireInPlane's message named TireModal ("TireModal has 49 variables")."""
+    count = len(inplane_fmu_variables())
+    for path, name in ((python_path, "TireInPlane"), (native_path, "TireInPlaneNative")):
+        run = instance(path).start()
+        for call, arguments in ((run.fmu.getReal, ([999],)),
+                                (run.fmu.setReal, ([999], [0.0])),
+                                (run.fmu.getString, ([0],))):
+            with pytest.raises(FMICallException):
+                call(*arguments)
+        said = [m for status, m in run.log if status >= 3]
+        missing = MESSAGES["REFERENCE_MISSING"] % (999, name, count)
+        assert said == [MESSAGES["REFUSED"] % (call, why) for call, why in (
+            ("fmi2GetReal", missing), ("fmi2SetReal", missing),
+            ("fmi2GetString", MESSAGES["NO_STRINGS"] % name))], said
+        run.close()
 
 
 def test_the_cli_builds_it(tmp_path, capsys):

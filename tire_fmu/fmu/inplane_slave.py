@@ -55,6 +55,7 @@ class TireInPlane(TireModal):
                    "axle moment My from the rim's motion, the wheel torque and the road; "
                    "reduced step built at initialisation for the load and speed. Needs Python "
                    "with numpy and scipy.")
+    model_identifier = MODEL_IDENTIFIER
     _INPUTS, _OUTPUTS, _IN_CONTACT = INPLANE_INPUTS, INPLANE_OUTPUTS, INPLANE_IN_CONTACT
 
     @staticmethod

@@ -107,6 +107,8 @@ def fmi_message(text: str) -> str:
 class TireModal(Fmi2Slave):
     """In-plane modal ring tire (GL073A defaults): rim and road motion in, rim force out."""
 
+    #: the name the FMU's messages give it (a subclass is another FMU, with its own)
+    model_identifier = MODEL_IDENTIFIER
     author = "tire_fmu contributors"
     description = ("Open in-plane modal ring tire (0-300 Hz): reduced modal model built at "
                    "initialisation for the load and speed; inputs are deviations from static "
@@ -473,7 +475,7 @@ class TireModal(Fmi2Slave):
 
     def get_string(self, vrs):
         if self._allowed("fmi2GetString") and vrs:
-            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
+            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
         return ["" for _ in vrs]
 
     def _get(self, call, vrs, kind, convert, fallback):
@@ -491,7 +493,8 @@ class TireModal(Fmi2Slave):
 
     def _reference_problem(self, vr, kind: str) -> str | None:
         if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
-            return MESSAGES["REFERENCE_MISSING"] % (vr, MODEL_IDENTIFIER, len(self._table))
+            return MESSAGES["REFERENCE_MISSING"] % (vr, self.model_identifier,
+                                                 len(self._table))
         v = self._table[vr]
         if v.type != kind:
             return MESSAGES["REFERENCE_TYPE"] % (vr, v.name, v.type, v.type, v.type)
@@ -516,7 +519,7 @@ class TireModal(Fmi2Slave):
 
     def set_string(self, vrs, values):
         if self._allowed("fmi2SetString") and vrs:
-            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
+            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
 
     def _set(self, call, vrs, values, kind) -> None:
         """Set every value or, if one is refused, none."""
