@@ -12,9 +12,9 @@ are loaded; the slave module pythonfmu loads is a two-line module of the same na
 imports the slave class from the package. ``requirements.txt`` lists what the host's Python
 needs (pythonfmu embeds the host's interpreter and installs nothing).
 
-pythonfmu 0.7 writes no units, no ``UnitDefinitions`` and no ``ModelStructure/
-InitialUnknowns``; :func:`complete_model_description` adds them, and the build fails unless
-``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does
+pythonfmu 0.7 writes no units, no ``UnitDefinitions``, no ``ModelStructure/InitialUnknowns``
+and no output dependencies; :func:`complete_model_description` adds them, and the build fails
+unless ``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does
 all of this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
 
 The Linux binary pythonfmu ships is its generic C++ wrapper, which crashes on a folder path
@@ -51,7 +51,14 @@ from xml.etree import ElementTree
 import tire_fmu
 
 from ..publish import published_file
-from .interface import BAKED_PARAMETERS_FILE, CAPABILITIES, fmu_variables, unit_definitions
+from .interface import (
+    BAKED_PARAMETERS_FILE,
+    CAPABILITIES,
+    fmu_variables,
+    model_structure,
+    output_dependencies,
+    unit_definitions,
+)
 
 MODEL_IDENTIFIER = "TireModal"
 INPLANE_MODEL_IDENTIFIER = "TireInPlane"
@@ -159,7 +166,7 @@ def _build_tire_fmu(model_identifier: str, table, out, validate: bool,
             shim, fmu_destination(out, model_identifier), f"{package}_slave",
             project_files=project, capabilities=CAPABILITIES,
             units={v.name: v.unit for v in table if v.unit}, validate=validate,
-            real_starts=starts, kernel=True)
+            real_starts=starts, kernel=True, dependencies=output_dependencies(table))
 
 
 def fmu_destination(out: str | Path, model_identifier: str) -> Path:
@@ -173,7 +180,8 @@ def fmu_destination(out: str | Path, model_identifier: str) -> Path:
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                     project_files=(), capabilities: dict, units: dict[str, str],
                     validate: bool = True, real_starts: dict[str, float] | None = None,
-                    kernel: bool = False) -> Path:
+                    kernel: bool = False,
+                    dependencies: dict[str, tuple[str, ...]] | None = None) -> Path:
     """Build a pythonfmu FMU from ``slave_source`` and complete its model description.
 
     The slave is built under ``module_name``: every pythonfmu FMU in a process shares
@@ -183,7 +191,8 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
     model description (pythonfmu 0.7 writes none); ``capabilities`` are the flags the slave
     really supports; ``real_starts`` are Real start values to write exactly (pythonfmu rounds
     to 16 digits); ``kernel`` ships the compiled step kernel for every platform a compiler is
-    found for.
+    found for; ``dependencies`` gives, for an output, the inputs it depends on directly (an
+    output not in it depends on every input, FMI's default).
     """
     try:
         from pythonfmu.builder import FmuBuilder
@@ -222,7 +231,7 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
         kernels = compile_kernels(staging / "kernel") if kernel else {}
         with published_file(dest) as partial:
             complete_fmu(built, capabilities, units, real_starts, guard, target=partial,
-                         kernels=kernels)
+                         kernels=kernels, dependencies=dependencies)
             if validate:
                 problems = validation_problems(partial)
                 if problems:
@@ -368,7 +377,8 @@ def compile_kernels(folder: Path) -> dict[str, Path]:
 def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                  real_starts: dict[str, float] | None = None, guard: Path | None = None,
                  target: str | Path | None = None,
-                 kernels: dict[str, Path] | None = None) -> None:
+                 kernels: dict[str, Path] | None = None,
+                 dependencies: dict[str, tuple[str, ...]] | None = None) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`;
     with ``guard``, that library becomes the linux64 binary and pythonfmu's wrapper moves to
     ``binaries/linux64/pythonfmu-export.so``; ``kernels`` ({platform: library}) go into
@@ -378,7 +388,8 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
     kernels = kernels or {}
     if target is None:
         with published_file(fmu) as partial:
-            complete_fmu(fmu, capabilities, units, real_starts, guard, partial, kernels)
+            complete_fmu(fmu, capabilities, units, real_starts, guard, partial, kernels,
+                         dependencies)
         return
     with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w",
                                                           zipfile.ZIP_DEFLATED) as archive:
@@ -387,7 +398,8 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
             if item.filename == BUILD_RECORD or "/__pycache__/" in item.filename:
                 continue  # of an earlier completion: written anew
             if item.filename == "modelDescription.xml":
-                data = complete_model_description(data, capabilities, units, real_starts)
+                data = complete_model_description(data, capabilities, units, real_starts,
+                                                  dependencies)
             elif guard is not None and re.fullmatch(r"binaries/linux64/[^/]+\.so",
                                                     item.filename):
                 wrapper = zipfile.ZipInfo(f"binaries/linux64/{WRAPPER_FILE}", item.date_time)
@@ -439,10 +451,11 @@ def build_record(fmu: str | Path) -> dict | None:
 
 
 def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str],
-                               real_starts: dict[str, float] | None = None) -> bytes:
-    """Write the units and their definitions, the outputs and initial unknowns, exact Real
-    start values (``repr``, which reads back to the same double), and pin the capability
-    flags."""
+                               real_starts: dict[str, float] | None = None,
+                               dependencies: dict[str, tuple[str, ...]] | None = None) -> bytes:
+    """Write the units and their definitions, the outputs (with the inputs each depends on
+    directly, for those in ``dependencies``) and initial unknowns, exact Real start values
+    (``repr``, which reads back to the same double), and pin the capability flags."""
     root = ElementTree.fromstring(xml)
     co_simulation = root.find("CoSimulation")
     for name, value in capabilities.items():
@@ -459,18 +472,12 @@ def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, 
         for old in root.findall("UnitDefinitions"):
             root.remove(old)
         root.insert(list(root).index(co_simulation) + 1, unit_definitions(used))
-    variables = root.find("ModelVariables").findall("ScalarVariable")
-    outputs = [i for i, v in enumerate(variables, 1) if v.get("causality") == "output"]
-    calculated = [i for i in outputs
-                  if variables[i - 1].get("initial", "calculated") in ("calculated", "approx")]
-    structure = root.find("ModelStructure")
-    for old in list(structure):
-        structure.remove(old)
-    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", calculated)):
-        if indices:
-            group = ElementTree.SubElement(structure, tag)
-            for index in indices:
-                ElementTree.SubElement(group, "Unknown", index=str(index))
+    variables = [(v.get("name"), v.get("causality", "local"), v.get("initial", "calculated"))
+                 for v in root.find("ModelVariables").findall("ScalarVariable")]
+    old = root.find("ModelStructure")
+    position = list(root).index(old)
+    root.remove(old)
+    root.insert(position, model_structure(variables, dependencies))
     ElementTree.indent(root, space="  ")
     return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
 
