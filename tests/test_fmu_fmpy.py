@@ -644,10 +644,13 @@ def test_without_a_c_compiler_the_fmu_still_builds_on_pythonfmus_wrapper(tmp_pat
     """The guard needs a C compiler; without one the build warns and ships pythonfmu's own
     wrapper (the statuses of docs/fmu.md's win64 note). Not loaded here: that wrapper is the
     one whose interpreter finalisation can abort the process at exit (issue 12)."""
-    from tire_fmu.fmu.builder import GuardMissingWarning
+    from tire_fmu.fmu.builder import GuardMissingWarning, KernelMissingWarning
 
     monkeypatch.setenv("CC", "no-such-compiler")
-    with pytest.warns(GuardMissingWarning, match="no-such-compiler"):
+    # no linux64 step kernel either (it needs $CC too): the build says both, and what to do
+    with pytest.warns(GuardMissingWarning, match="no-such-compiler"), \
+            pytest.warns(KernelMissingWarning, match=r"no C compiler for linux64 found "
+                         r"\(install gcc, or set CC\), then build again"):
         path = build_fmu(tmp_path)
     with zipfile.ZipFile(path) as archive:
         binaries = [n for n in archive.namelist() if n.startswith("binaries/linux64/")]

@@ -29,7 +29,7 @@ from ..core.blas_threads import (  # noqa: F401  (BLAS_THREADS_ENV: the CLI's na
     parse_blas_threads,
 )
 from .commands import COMMANDS
-from .parsing import Parser, interrupted, stdout_failure, write_stdout
+from .parsing import Parser, interrupted, stdout_failure, warning_line, write_stdout
 
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
 DEBUG_HELP = "show tracebacks on errors"
@@ -106,9 +106,11 @@ def _main(argv: list[str], prog: str) -> int:
         with warnings.catch_warnings(record=True) as caught, \
                 blas_threads(threads):
             warnings.simplefilter("always")
-            output: Output = args.handler(args)
-        for warning in caught:
-            print(f"{prog}: warning: {warning.message}", file=sys.stderr)
+            try:
+                output: Output = args.handler(args)
+            finally:  # also before the error line of a command that then failed
+                for warning in caught:
+                    print(warning_line(prog, warning.message), file=sys.stderr)
     except (ParameterError, CliError, OSError) as error:
         if args.debug:
             raise

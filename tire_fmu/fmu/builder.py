@@ -228,7 +228,7 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                           f"the guard (fmi2Error statuses, the exit fix), see docs/fmu.md",
                           GuardMissingWarning, stacklevel=2)
             guard = None
-        kernels = compile_kernels(staging / "kernel") if kernel else {}
+        kernels = compile_kernels(staging / "kernel", dest.name) if kernel else {}
         with published_file(dest) as partial:
             complete_fmu(built, capabilities, units, real_starts, guard, target=partial,
                          kernels=kernels, dependencies=dependencies)
@@ -357,10 +357,11 @@ def compile_guard(folder: Path) -> Path:
     return library
 
 
-def compile_kernels(folder: Path) -> dict[str, Path]:
+def compile_kernels(folder: Path, fmu_name: str = "TireModal.fmu") -> dict[str, Path]:
     """The step kernel (native/c/kernel.c and what it needs) compiled for every platform
     this machine has a compiler for: {platform: library}. A platform without one is named in
-    a KernelMissingWarning (the FMU runs there with the numpy reference kernel)."""
+    a KernelMissingWarning (the FMU ``fmu_name`` runs there with the numpy reference kernel),
+    which says what to install."""
     from ..native.kernel import PLATFORMS, KernelUnavailable, compile_kernel
 
     built = {}
@@ -368,9 +369,9 @@ def compile_kernels(folder: Path) -> dict[str, Path]:
         try:
             built[platform] = compile_kernel(folder / platform / name, platform)
         except KernelUnavailable as error:
-            warnings.warn(f"{error}: on {platform} TireModal.fmu steps with the numpy "
-                          "reference kernel (the same outputs, slower)", KernelMissingWarning,
-                          stacklevel=3)
+            warnings.warn(f"{error}, then build again: without it {fmu_name} steps on "
+                          f"{platform} with the numpy reference kernel (the same outputs, "
+                          "slower)", KernelMissingWarning, stacklevel=3)
     return built
 
 
