@@ -12,10 +12,11 @@ PROG = "build_fmu.py"
 
 
 def main(argv=None) -> int:
-    from tire_fmu.cli.parsing import interrupted
+    from tire_fmu.cli.parsing import interrupted, one_line_warnings
 
     try:
-        return _main(argv)
+        with one_line_warnings(PROG):  # e.g. no compiler for a platform: what to install
+            return _main(argv)
     except KeyboardInterrupt:  # the build cleans up after itself: nothing half-built stays
         return interrupted(PROG)
 

@@ -1,9 +1,9 @@
 """Recorded benchmark results: the figures the docs quote, with the command that measured them.
 
 ``python benchmarks/bench_x.py --record docs/measured/bench_x.json`` writes one JSON file:
-``command`` (what to run to measure again), ``recorded`` (UTC date), ``machine`` (cores, load
-average at the start and the end, Python, BLAS threads) and ``results``. ``docs/generate.py``
-turns the files into the marked sections of README.md and docs/*.md.
+``command`` (what to run to measure again), ``recorded`` (UTC date), ``machine`` (cores, the
+CPU model, load average at the start and the end, Python, BLAS threads) and ``results``.
+``docs/generate.py`` turns the files into the marked sections of README.md and docs/*.md.
 """
 
 from __future__ import annotations
@@ -26,6 +26,18 @@ def load_average() -> float | None:
         return None
 
 
+def cpu_model() -> str:
+    """The processor's name (Linux's /proc/cpuinfo; else what the platform module knows)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as info:
+            for line in info:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine() or "unknown"
+
+
 def command_line() -> str:
     """This run's command, from the repository root."""
     script = Path(sys.argv[0])
@@ -44,6 +56,7 @@ def write_record(path: str | Path, results: dict, load_at_start: float | None) -
         "recorded": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d"),
         "machine": {
             "cores": os.cpu_count(),
+            "cpu": cpu_model(),
             "load_average_start": load_at_start,
             "load_average_end": load_average(),
             "python": platform.python_version(),

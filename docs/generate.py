@@ -1116,6 +1116,37 @@ def fmu_init_fresh() -> str:
     return "\n".join(lines)
 
 
+@generator("fmu-init-threads")
+def fmu_init_threads() -> str:
+    data = record("bench_fmu_init_threads")
+    results = data["results"]
+    environments = list(results["environments"])
+    names = {"default": "BLAS's default threads", "one thread": "one thread",
+             "BLAS as the host has it": "the FMU leaving BLAS alone"}
+    lines = [f"| `fmi2ExitInitializationMode`, N = {results['n_elements']} | "
+             + " | ".join(names.get(e, e) for e in environments) + " | default / one |",
+             "|---" * (len(environments) + 2) + "|"]
+    left_alone = []
+    for label, cases in results["cases"].items():
+        for key, what in (("wall_s", "wall"), ("cpu_s", "CPU")):
+            ratio = cases["default"][key] / cases["one thread"][key]
+            left_alone.append(cases["BLAS as the host has it"][key] / cases["one thread"][key])
+            lines.append(f"| {label}, {what} | " + " | ".join(
+                f"{cases[e][key]:.3f} s" for e in environments) + f" | {ratio:.2f} |")
+    worst = max(results["ratios"].values())
+    machine = data["machine"]
+    lines += ["", f"Medians of {results['rounds']} fresh processes per cell (CPU: every "
+              "thread of the process), on one extraction of each FMU, the three "
+              "environments alternating round by round so that load hits them alike. With "
+              "BLAS's default threads (a thread per core, "
+              "OPENBLAS_NUM_THREADS unset) the FMUs build within "
+              f"{worst:.2f} times their one-thread cost (the aim: {results['aim_ratio']:g}); "
+              "left to those threads (`TIRE_FMU_BLAS_THREADS=0`), up to "
+              f"{max(left_alone):.1f} times. CPU: {machine.get('cpu', 'not recorded')}. "
+              + provenance(data)]
+    return "\n".join(lines)
+
+
 @generator("fmu-step-cost")
 def fmu_step_cost() -> str:
     data = record("bench_fmu")

@@ -39,6 +39,23 @@ needs_windows_tools = pytest.mark.skipif(
            "gcc-mingw-w64-x86-64 wine64)")
 
 
+def declared_dependencies(path) -> dict[str, list[str] | None]:
+    """{output: the inputs its ModelStructure/Outputs entry lists}, read from the FMU's own
+    modelDescription.xml (None where it has no ``dependencies``: every input, to FMI)."""
+    import zipfile
+    from xml.etree import ElementTree
+
+    with zipfile.ZipFile(path) as archive:
+        root = ElementTree.fromstring(archive.read("modelDescription.xml"))
+    names = [v.get("name") for v in root.find("ModelVariables")]
+    found = {}
+    for unknown in root.find("ModelStructure").find("Outputs"):
+        text = unknown.get("dependencies")
+        found[names[int(unknown.get("index")) - 1]] = (
+            None if text is None else [names[int(i) - 1] for i in text.split()])
+    return found
+
+
 @dataclass
 class Opened:
     """An extracted FMU, opened once per test session."""

@@ -715,3 +715,58 @@ def test_the_default_load_a_help_states_is_the_one_used(capsys, monkeypatch, tmp
         data = run_json(capsys, command, *extra[command])
         used = data.get("operating_point", data)["load_n"]
     assert used == pytest.approx(stated, rel=1e-12)
+
+
+#: In a child: a build without a compiler for win64 (as on a machine without mingw-w64), each
+#: entry point's build ended right after the kernels (not timed here: the rest of a build).
+NO_WIN64_COMPILER = (
+    "import runpy, sys\n"
+    "from pathlib import Path\n"
+    "scratch = Path(sys.argv[1])\n"
+    "import tire_fmu.fmu.builder as b, tire_fmu.native.kernel as k\n"
+    "def compile_kernel(destination, platform='linux64'):\n"
+    "    if platform == 'win64':\n"
+    "        raise k.KernelUnavailable('no C compiler for win64 found (install '\n"
+    "                                  'x86_64-w64-mingw32-gcc)')\n"
+    "    Path(destination).parent.mkdir(parents=True, exist_ok=True)\n"
+    "    Path(destination).write_bytes(b'')\n"
+    "    return Path(destination)\n"
+    "k.compile_kernel = compile_kernel\n"
+    "def build(out, **_):\n"
+    "    b.compile_kernels(scratch / 'kernels', 'TireModal.fmu')\n"
+    "    path = b.fmu_destination(out, 'TireModal')\n"
+    "    path.parent.mkdir(parents=True, exist_ok=True)\n"
+    "    path.write_bytes(b'')\n"
+    "    return path\n"
+    "b.build_fmu = build\n")
+WIN64_ADVICE = ("warning: no C compiler for win64 found (install x86_64-w64-mingw32-gcc), then "
+                "build again: without it TireModal.fmu steps on win64 with the numpy reference "
+                "kernel (the same outputs, slower)")
+
+
+@pytest.mark.parametrize("entry", ["tire-fmu", "build_fmu.py", "vehicle_demo"])
+def test_a_build_warning_is_one_line_that_says_what_to_do(tmp_path, entry):
+    """Without a win64 compiler the demo printed Python's raw warning, its file, line and
+    source line (`KernelMissingWarning`)."""
+    run = {
+        "tire-fmu": ("import tire_fmu.cli as cli\n"
+                     "sys.exit(cli.main(['build-fmu', sys.argv[1]]))\n"),
+        "build_fmu.py": ("sys.argv = ['build_fmu.py', '-o', sys.argv[1]]\n"
+                         "runpy.run_path('build_fmu.py', run_name='__main__')\n"),
+        "vehicle_demo": ("import vehicle_demo.demo as demo\n"
+                         "from vehicle_demo.__main__ import main\n"
+                         "def ensure_fmus(folder, *_, **__):\n"
+                         "    build(folder)\n"
+                         "    raise demo.DemoError('stopped after the build')\n"
+                         "demo.ensure_fmus = ensure_fmus\n"
+                         "sys.exit(main(['--out', sys.argv[1] + '/out', '--quick']))\n"),
+    }[entry]
+    done = subprocess.run([sys.executable, "-c", NO_WIN64_COMPILER + run, str(tmp_path)],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    prog = {"tire-fmu": "tire-fmu build-fmu", "build_fmu.py": "build_fmu.py",
+            "vehicle_demo": "vehicle_demo"}[entry]
+    said = [line for line in done.stderr.splitlines()
+            if ": warning:" in line or "MissingWarning" in line]
+    assert said == [f"{prog}: {WIN64_ADVICE}"], done.stderr
+    # no file, line number or source line of Python's
+    assert not re.search(r"\.py:\d+|warnings\.warn|Traceback", done.stderr), done.stderr

@@ -26,7 +26,7 @@ from fmpy.fmi2 import (
     fmi2String,
     fmi2ValueReference,
 )
-from native_support import Instance, Opened, relative_errors, road_drop
+from native_support import Instance, Opened, declared_dependencies, relative_errors, road_drop
 
 from tire_fmu.core import clock, kernel_numpy
 from tire_fmu.core.parameters import ParameterError, TireParameters
@@ -1118,3 +1118,43 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "INPLANE_MAX_SET_PASSES", "INPLANE_SETTLE_PASSES", "INPLANE_MIN_ENTERING_FRACTION",
              "INPLANE_STATE_SPIN_FACTOR"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)
+
+
+# -- the model structure ---------------------------------------------------------------------
+
+@pytest.mark.parametrize("speed", [0.0, 10.0])
+def test_the_outputs_declare_the_inputs_that_feed_through_and_no_other(fmu, speed):
+    """Both FMUs declare, per output, the inputs it depends on directly (interface.py's one
+    declaration): every output on every input but the deflection, the rim's and the road's
+    positions alone. Checked against what they do: an input set after a step changes, at
+    the next read, only the outputs declared to depend on it (once declared nothing, which
+    FMI reads as every input)."""
+    from fmpy.validation import validate_fmu
+
+    from tire_fmu.fmu.interface import output_dependencies
+
+    expected = {name: list(inputs) for name, inputs in
+                output_dependencies(fmu_variables()).items()}
+    assert declared_dependencies(fmu.path) == expected
+    assert expected["deflection"] == ["rim_z", "road_z"] and len(expected) == 7
+    assert validate_fmu(fmu.path) == []
+    instance = started(fmu, speed=speed, f_max=300.0)
+    by_vr = {v.valueReference: v.name for v in fmu.model_description.modelVariables}
+    names = [by_vr[vr] for vr in instance.outputs]
+    run_on(instance, 0.0, 20, signal=lambda t: (5e-4, 0.0, 1e-3, 0.0))
+    state = instance.slave.getFMUstate()
+    instance.slave.setReal(instance.inputs, [5e-4, 0.0, 1e-3, 0.0])  # read as at a new point
+    before = instance.outputs_now()
+    moved = set()
+    for i, name in enumerate(("rim_z", "rim_vz", "road_z", "road_vz")):
+        inputs = [5e-4, 0.0, 1e-3, 0.0]
+        inputs[i] += 1e-4 if name.endswith("_z") else 0.05
+        instance.slave.setReal(instance.inputs, inputs)
+        after = instance.outputs_now()
+        changed = {out for out, a, b in zip(names, before, after) if a != b}
+        assert all(name in expected[out] for out in changed), (name, changed)
+        moved |= changed
+        instance.slave.setFMUstate(state)
+    assert {"rim_Fz", "contact_Fz", "deflection"} <= moved  # it does feed through
+    instance.slave.freeFMUstate(state)
+    instance.free()

@@ -9,6 +9,7 @@ import gc
 import json
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -33,6 +34,7 @@ from fmpy.fmi2 import (  # noqa: E402
 )
 from fmpy.validation import validate_fmu  # noqa: E402
 
+import tire_fmu  # noqa: E402
 from tire_fmu.core import (  # noqa: E402
     DEFAULT_LOAD_N,
     OperatingPoint,
@@ -47,7 +49,7 @@ from tire_fmu.core.contact_dynamics import (  # noqa: E402
 )
 from tire_fmu.core.frequency_response import ringing_modes, sine_response  # noqa: E402
 from tire_fmu.core.io_model import build_io_model  # noqa: E402
-from tire_fmu.fmu.builder import SLAVE_MODULE, build_fmu  # noqa: E402
+from tire_fmu.fmu.builder import build_fmu  # noqa: E402
 from vehicle_demo.cosim import printed  # noqa: E402
 
 pytestmark = pytest.mark.fmu
@@ -195,22 +197,26 @@ def test_capabilities_units_and_the_shipped_core(fmu_path, unpacked):
         names = set(archive.namelist())
         requirements = archive.read("resources/requirements.txt").decode()
         module = archive.read("resources/slavemodule.txt").decode().strip()
-    assert {"resources/tire_fmu/__init__.py", "resources/tire_fmu/core/contact_dynamics.py",
-            "resources/tire_fmu/fmu/interface.py", f"resources/{SLAVE_MODULE}.py"} <= names
-    # the core and the variable table only: no CLI, no builder, no slave twice; bytecode
-    # only of what is shipped (written by the build from these sources, no stale caches)
-    shipped_fmu = {n for n in names if "/tire_fmu/fmu/" in n and "__pycache__" not in n}
-    assert shipped_fmu == {"resources/tire_fmu/fmu/__init__.py",
-                           "resources/tire_fmu/fmu/interface.py",
-                           "resources/tire_fmu/fmu/spec.py"}  # the wording both FMUs share
+    # the package under a name of its own (issue 35), which the slave module loads it by
+    package = module.removesuffix("_slave")
+    version = re.sub(r"\W", "_", tire_fmu.__version__)
+    assert re.fullmatch(rf"tire_fmu_tiremodal_{version}_[0-9a-f]{{12}}", package)
+    assert {f"resources/{package}/__init__.py", f"resources/{package}/core/contact_dynamics.py",
+            f"resources/{package}/fmu/interface.py", f"resources/{module}.py"} <= names
+    assert not any(n.startswith("resources/tire_fmu/") for n in names)
+    # the core, the variable table and the slave only: no CLI, no builder, no slave twice;
+    # bytecode only of what is shipped (written by the build from these sources, no stale
+    # caches)
+    shipped_fmu = {n for n in names if f"/{package}/fmu/" in n and "__pycache__" not in n}
+    assert shipped_fmu == {f"resources/{package}/fmu/{name}.py"  # the wording both FMUs share
+                           for name in ("__init__", "interface", "spec", "slave")}
     assert not any("/cli/" in n for n in names)
     import importlib.util
 
     cached = {n for n in names if "__pycache__" in n}
     assert cached == {importlib.util.cache_from_source(n) for n in names
                       if n.startswith("resources/") and n.endswith(".py")}
-    assert module == SLAVE_MODULE and module.startswith("tire_fmu_modal_slave_")
-    assert "numpy" in requirements and "scipy" in requirements
+    assert all(name in requirements for name in ("numpy", "scipy", "threadpoolctl"))
 
 
 def test_the_command_line_and_build_fmu_py_build_it_too(tmp_path, capsys):
@@ -395,7 +401,7 @@ def test_bad_cases_in_a_fresh_process_leave_it_alive(fmu_path):
     assert any("rim_z = nan m: must be in" in m for m in log)
     assert any("the buffer holds 1 bytes and the state needs" in m for m in log)
     ready = [m for m in log if "TireModal ready" in m]
-    assert ready and "/resources/tire_fmu/__init__.py" in ready[0]  # the shipped core
+    assert ready and re.search(r"/resources/tire_fmu_tiremodal_\w+/__init__\.py", ready[0])
 
 
 @pytest.mark.parametrize("folder", ["a%b", "c%25d", "é x", "100% sure"])
@@ -421,7 +427,8 @@ def test_an_fmu_unpacked_where_the_path_holds_escapes_runs(fmu_path, tmp_path, f
     assert report["statuses"] == {"exit": 0, "step": 0}
     if logging_on:
         [ready] = [m for _, m in report["log"] if "TireModal ready" in m]
-        assert f"{target}/resources/tire_fmu/__init__.py" in ready
+        assert re.search(re.escape(f"{target}/resources/tire_fmu_tiremodal_") + r"\w+/__init__",
+                         ready)
 
 
 def test_a_folder_the_wrapper_would_misread_is_refused_with_a_message(fmu_path, tmp_path):
@@ -637,10 +644,13 @@ def test_without_a_c_compiler_the_fmu_still_builds_on_pythonfmus_wrapper(tmp_pat
     """The guard needs a C compiler; without one the build warns and ships pythonfmu's own
     wrapper (the statuses of docs/fmu.md's win64 note). Not loaded here: that wrapper is the
     one whose interpreter finalisation can abort the process at exit (issue 12)."""
-    from tire_fmu.fmu.builder import GuardMissingWarning
+    from tire_fmu.fmu.builder import GuardMissingWarning, KernelMissingWarning
 
     monkeypatch.setenv("CC", "no-such-compiler")
-    with pytest.warns(GuardMissingWarning, match="no-such-compiler"):
+    # no linux64 step kernel either (it needs $CC too): the build says both, and what to do
+    with pytest.warns(GuardMissingWarning, match="no-such-compiler"), \
+            pytest.warns(KernelMissingWarning, match=r"no C compiler for linux64 found "
+                         r"\(install gcc, or set CC\), then build again"):
         path = build_fmu(tmp_path)
     with zipfile.ZipFile(path) as archive:
         binaries = [n for n in archive.namelist() if n.startswith("binaries/linux64/")]

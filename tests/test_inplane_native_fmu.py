@@ -19,6 +19,7 @@ from fmpy.fmi1 import FMICallException  # noqa: E402
 from inplane_support import OUTPUTS, Instance  # noqa: E402
 from native_support import (  # noqa: E402
     compile_host,
+    declared_dependencies,
     host_outputs,
     in_host,
     needs_windows_tools,
@@ -36,6 +37,7 @@ from tire_fmu.core.step_limits import (  # noqa: E402
     MAX_VELOCITY_M_S,
 )
 from tire_fmu.fmu.interface import inplane_fmu_variables  # noqa: E402
+from tire_fmu.fmu.spec import MESSAGES  # noqa: E402
 
 pytestmark = pytest.mark.fmu
 
@@ -376,6 +378,47 @@ def test_it_declares_tireinplanes_variables_and_ships_its_sources(native_path, p
                            "-I", str(tmp_path / "sources"), "-o", str(tmp_path / "t.so"),
                            *map(str, sources), "-lm"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def test_no_output_declares_a_dependency_and_none_feeds_through(native_path, python_path):
+    """The outputs declared no dependencies, which FMI reads as every input, and a host
+    looking for algebraic loops found false ones: each output is the last step's."""
+    from fmpy.validation import validate_fmu
+
+    from tire_fmu.fmu.interface import output_dependencies
+
+    names = [v.name for v in inplane_fmu_variables() if v.causality == "output"]
+    assert output_dependencies(inplane_fmu_variables()) == {name: () for name in names}
+    for path in (python_path, native_path):
+        assert declared_dependencies(path) == {name: [] for name in names}, path
+        assert validate_fmu(str(path)) == []
+        run = instance(path, speed=10.0).start()
+        run.step(1e-3, **rim_moving(1e-3), **over_a_cleat(0.02))
+        before = run.outputs()
+        for name in ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx",
+                     "wheel_torque"):
+            run.fmu.setReal([run.vr[name]], [1e-3])
+            assert np.array_equal(run.outputs(), before), (path, name)
+        run.close()
+
+
+def test_a_bad_reference_or_a_string_is_refused_in_the_fmus_own_name(native_path,
+                                                                     python_path):
+    """TireInPlane's message named TireModal ("TireModal has 49 variables")."""
+    count = len(inplane_fmu_variables())
+    for path, name in ((python_path, "TireInPlane"), (native_path, "TireInPlaneNative")):
+        run = instance(path).start()
+        for call, arguments in ((run.fmu.getReal, ([999],)),
+                                (run.fmu.setReal, ([999], [0.0])),
+                                (run.fmu.getString, ([0],))):
+            with pytest.raises(FMICallException):
+                call(*arguments)
+        said = [m for status, m in run.log if status >= 3]
+        missing = MESSAGES["REFERENCE_MISSING"] % (999, name, count)
+        assert said == [MESSAGES["REFUSED"] % (call, why) for call, why in (
+            ("fmi2GetReal", missing), ("fmi2SetReal", missing),
+            ("fmi2GetString", MESSAGES["NO_STRINGS"] % name))], said
+        run.close()
 
 
 def test_the_cli_builds_it(tmp_path, capsys):

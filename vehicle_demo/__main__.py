@@ -19,7 +19,13 @@ import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-from tire_fmu.cli.parsing import Parser, interrupted, stdout_failure, write_stdout  # noqa: E402
+from tire_fmu.cli.parsing import (  # noqa: E402
+    Parser,
+    interrupted,
+    one_line_warnings,
+    stdout_failure,
+    write_stdout,
+)
 
 PROG = "vehicle_demo"
 
@@ -201,7 +207,8 @@ def _sweep(argv) -> int:
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        return _main(argv)
+        with one_line_warnings(PROG):  # e.g. a build without a win64 compiler: what to install
+            return _main(argv)
     except KeyboardInterrupt:
         return interrupted(PROG)
 

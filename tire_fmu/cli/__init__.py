@@ -10,44 +10,43 @@ head``) silently with 141 (:mod:`.parsing`).
 Only the module of the command given is imported (:mod:`.commands` lists the others with
 their help lines), so ``tire-fmu --help`` answers without loading numpy or scipy. Commands run
 with one BLAS thread unless ``--blas-threads`` or ``TIRE_FMU_BLAS_THREADS`` says otherwise: the
-dense eigenproblems here are small enough that threads on a shared machine mostly fight.
+dense eigenproblems here are small enough that threads on a shared machine mostly fight
+(:mod:`tire_fmu.core.blas_threads`, which the library's own calls and the FMUs use too).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import sys
 import warnings
 from collections.abc import Sequence
 
+from ..core.blas_threads import (  # noqa: F401  (BLAS_THREADS_ENV: the CLI's name for it)
+    BLAS_THREADS_ENV,
+    blas_threads,
+    configured_blas_threads,
+    parse_blas_threads,
+)
 from .commands import COMMANDS
-from .parsing import Parser, interrupted, stdout_failure, write_stdout
+from .parsing import Parser, interrupted, stdout_failure, warning_line, write_stdout
 
 COMMAND_MODULES = tuple(dict.fromkeys(module for module, _ in COMMANDS.values()))
-#: Environment variable with the BLAS thread count (0: the library's default).
-BLAS_THREADS_ENV = "TIRE_FMU_BLAS_THREADS"
 DEBUG_HELP = "show tracebacks on errors"
 
 
 def _blas_threads(text: str) -> int:
     try:
-        value = int(text)
-    except ValueError:
-        value = -1
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer >= 0 (0: the BLAS "
-                                         "library's default)")
-    return value
+        return parse_blas_threads(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _default_blas_threads() -> int:
-    text = os.environ.get(BLAS_THREADS_ENV, "1")
     try:
-        return _blas_threads(text)
-    except argparse.ArgumentTypeError as error:
-        sys.exit(f"tire-fmu: error: {BLAS_THREADS_ENV} = {error}")
+        return configured_blas_threads()
+    except ValueError as error:
+        sys.exit(f"tire-fmu: error: {error}")
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
@@ -98,9 +97,6 @@ def _main(argv: list[str], prog: str) -> int:
     args = parser.parse_args(argv)
     import json
 
-    import scipy.linalg  # noqa: F401  (numpy's and scipy's BLAS loaded, so both are limited)
-    from threadpoolctl import threadpool_limits
-
     from ..core.parameters import ParameterError
     from .common import CliError, Output, check_plot_option, cli_message, to_jsonable
 
@@ -108,11 +104,13 @@ def _main(argv: list[str], prog: str) -> int:
     try:
         check_plot_option(args)  # before computing: a bad --plot must not cost a whole run
         with warnings.catch_warnings(record=True) as caught, \
-                threadpool_limits(limits=threads or None, user_api="blas"):
+                blas_threads(threads):
             warnings.simplefilter("always")
-            output: Output = args.handler(args)
-        for warning in caught:
-            print(f"{prog}: warning: {warning.message}", file=sys.stderr)
+            try:
+                output: Output = args.handler(args)
+            finally:  # also before the error line of a command that then failed
+                for warning in caught:
+                    print(warning_line(prog, warning.message), file=sys.stderr)
     except (ParameterError, CliError, OSError) as error:
         if args.debug:
             raise

@@ -1,5 +1,6 @@
 """The argument parser of every command line here (``tire-fmu``, ``build_fmu.py``, ``python -m
-vehicle_demo``), and how they end on Ctrl-C and on an output they cannot write.
+vehicle_demo``), how they end on Ctrl-C and on an output they cannot write, and how they show
+a warning: one line, ``PROG: warning: ...``, with no source line.
 
 Kept free of numpy and scipy, like :mod:`.commands`: ``tire-fmu --help`` imports only these.
 """
@@ -11,7 +12,9 @@ import difflib
 import errno
 import os
 import sys
+import warnings
 from collections.abc import Sequence
+from contextlib import contextmanager
 
 #: exit status after Ctrl-C (128 + SIGINT, what a shell reports for a process it stopped)
 INTERRUPTED = 130
@@ -107,3 +110,22 @@ def interrupted(prog: str) -> int:
     """The exit status, and its one line on stderr, after Ctrl-C."""
     print(f"{prog}: interrupted", file=sys.stderr)
     return INTERRUPTED
+
+
+def warning_line(prog: str, message) -> str:
+    """A warning as a command shows it: ``PROG: warning: MESSAGE`` on one line (a message of
+    several lines, a compiler's output in it, joined)."""
+    return f"{prog}: warning: {' '.join(str(message).split())}"
+
+
+@contextmanager
+def one_line_warnings(prog: str):
+    """Warnings shown on stderr as :func:`warning_line` has them instead of Python's file,
+    line number and source line (which tell a user of the command nothing); the filters as
+    they are, and Python's display back after."""
+    def show(message, category, filename, lineno, file=None, line=None):
+        print(warning_line(prog, message), file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield

@@ -10,6 +10,8 @@ Modules, in the order they build on each other:
 - :mod:`.model`: assembly at an operating point, static vertical stiffness
 - :mod:`.dispersion`, :mod:`.standing_waves`: undeformed rolling ring per order
 - :mod:`.modal`, :mod:`.complex_modal`: modal analysis and mode labels
+- :mod:`.blas_threads`: the BLAS threads the builds run on (one; threadpoolctl sets it where
+  it is installed, and without it nothing changes: the physics needs numpy and scipy only)
 
 The names below are imported from their modules on first use (PEP 562), not here: a user of
 one module (the FMU imports the contact simulator and what it builds on) does not pay for the

@@ -38,6 +38,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .blas_threads import blas_threads
 from .contact import ContactPatch, RoadWindows
 from .free_ring import FreeRingModel, RingModes, RingTruncation, ring_modes
 from .model import TireModel, build_model, check_resolved
@@ -130,6 +131,7 @@ class ContactModel:
                 "substep_s": self.substep_s}
 
 
+@blas_threads()  # small dense problems: see core.blas_threads
 def build_contact_model(tire: TireParameters | None = None, op: OperatingPoint | None = None,
                         truncation: RingTruncation | None = None,
                         settings: ContactSettings | None = None) -> ContactModel:

@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .blas_threads import blas_threads
 from .contact import (
     ContactPatch,
     FootprintError,
@@ -295,6 +296,7 @@ def footprint_for_deflection(model: TireModel, deflection_m: float) -> ContactPa
                                         model.speed_m_s)
 
 
+@blas_threads()  # small dense problems: see core.blas_threads
 def build_model(tire: TireParameters | None = None, op: OperatingPoint | None = None) -> TireModel:
     """Assemble the tire at an operating point.
 

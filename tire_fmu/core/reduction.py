@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 
+from .blas_threads import blas_threads
 from .contact import RoadWindows
 from .free_ring import F_MAX_LIMIT_HZ
 from .io_model import OUTPUTS, PHYSICAL_INPUTS, InputOutputModel, build_io_model, physical_input
@@ -489,6 +490,7 @@ def static_outputs(model: TireModel) -> dict[str, float]:
     return model.patch.static_outputs()
 
 
+@blas_threads()  # small dense problems: see core.blas_threads
 def reduce(model: TireModel, settings: ReductionSettings | None = None,
            report: bool | str = True) -> ReducedModel:
     """Reduce the tire at its operating point.

@@ -1,15 +1,21 @@
-"""Build ``TireModal.fmu``: pythonfmu's builder, then the model description it leaves short.
+"""Build ``TireModal.fmu`` and ``TireInPlane.fmu``: pythonfmu's builder, then the model
+description it leaves short.
 
-The slave is copied under a versioned module name, because every pythonfmu FMU in a process
-shares ``sys.modules``: two FMUs whose slave modules are both called ``slave`` would run the
-first one's code. The ``tire_fmu`` package (``__init__.py`` and ``core/``) goes into
-``resources/``, which pythonfmu puts first on ``sys.path``, with a ``requirements.txt`` for
-the host's Python (pythonfmu embeds the host's interpreter and installs nothing).
+Every pythonfmu FMU in a process shares ``sys.modules``, and Python imports a name once per
+process. So each FMU carries the package it runs (``__init__.py``, ``core/``, the variable
+table, its slave, the compiled kernels' ctypes) under a name of its own, in ``resources/``
+(which pythonfmu puts first on ``sys.path``): ``tire_fmu_<model>_<version>_<hash>``, the hash
+of the files it carries, their absolute ``tire_fmu`` imports rewritten to that name
+(:func:`bundle_name`, :func:`rename_imports`). Two FMUs, of one version or two, and a host
+that imports ``tire_fmu`` itself, then never run each other's code, in whichever order they
+are loaded; the slave module pythonfmu loads is a two-line module of the same name that
+imports the slave class from the package. ``requirements.txt`` lists what the host's Python
+needs (pythonfmu embeds the host's interpreter and installs nothing).
 
-pythonfmu 0.7 writes no units, no ``UnitDefinitions`` and no ``ModelStructure/
-InitialUnknowns``; :func:`complete_model_description` adds them, and the build fails unless
-``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does all of
-this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
+pythonfmu 0.7 writes no units, no ``UnitDefinitions``, no ``ModelStructure/InitialUnknowns``
+and no output dependencies; :func:`complete_model_description` adds them, and the build fails
+unless ``fmpy.validation.validate_fmu`` then reports no problem. :func:`build_pythonfmu` does
+all of this for any pythonfmu slave (the quarter car of ``vehicle_demo`` uses it too).
 
 The Linux binary pythonfmu ships is its generic C++ wrapper, which crashes on a folder path
 with an escaped character, cannot return fmi2Error for a slave, reports every refused step as
@@ -27,7 +33,10 @@ each publish a whole FMU. The last entry of a completed FMU is its build record
 
 from __future__ import annotations
 
+import ast
+import hashlib
 import json
+import os
 import re
 import shutil
 import subprocess
@@ -42,16 +51,48 @@ from xml.etree import ElementTree
 import tire_fmu
 
 from ..publish import published_file
-from .interface import BAKED_PARAMETERS_FILE, CAPABILITIES, fmu_variables, unit_definitions
+from .interface import (
+    BAKED_PARAMETERS_FILE,
+    CAPABILITIES,
+    fmu_variables,
+    model_structure,
+    output_dependencies,
+    unit_definitions,
+)
 
 MODEL_IDENTIFIER = "TireModal"
-SLAVE_MODULE = "tire_fmu_modal_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
+INPLANE_MODEL_IDENTIFIER = "TireInPlane"
 #: What the slave imports besides the shipped package (pyproject's runtime dependencies,
-#: used when the package metadata is not installed).
-FALLBACK_REQUIREMENTS = ("numpy>=1.24", "scipy>=1.10")
+#: used when the package metadata is not installed): threadpoolctl limits BLAS's threads
+#: while the model is built (without it the FMU runs, on BLAS's default threads, and says so).
+FALLBACK_REQUIREMENTS = ("numpy>=1.24", "scipy>=1.10", "threadpoolctl>=3.1")
 
 _PACKAGE_ROOT = Path(tire_fmu.__file__).parent
-_SLAVE_SOURCE = Path(__file__).with_name("slave.py")
+#: Each FMU's slave: (its module in tire_fmu.fmu, its class, the fmu/ modules it needs).
+SLAVES = {
+    MODEL_IDENTIFIER: ("slave", "TireModal", ("slave.py",)),
+    # its FMI layer is TireModal's
+    INPLANE_MODEL_IDENTIFIER: ("inplane_slave", "TireInPlane", ("slave.py", "inplane_slave.py")),
+}
+#: The compiled kernels' ctypes (the radial step's and the in-plane step's), which every FMU
+#: carries, and the fmu/ modules besides the slaves: the table and wording both FMUs share.
+_NATIVE_MODULES = ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py",
+                   "inplane_ring.py", "inplane_critical.py")
+_FMU_MODULES = ("__init__.py", "interface.py", "spec.py")
+#: The slave module pythonfmu loads: the class from the FMU's own package. pythonfmu 0.7's
+#: wrapper runs the module's code again at every fmi2Instantiate, in the module's namespace,
+#: and then releases a reference to that namespace which it never took (findClass's
+#: Py_DECREF of PyModule_GetDict's borrowed dict). A slave module full of functions hides it
+#: (each run leaks their copies, each holding the namespace); this one makes one function per
+#: run, kept, or the second instance would free the namespace under the module.
+_SLAVE_SHIM = '''"""{model}'s slave module: {cls} from the package this FMU carries
+({package}/), under a name of its own, so that no other FMU's copy and not the host's
+tire_fmu runs in its place. The last line holds the reference to this namespace that
+pythonfmu's wrapper releases after running this code at each fmi2Instantiate."""
+from {package}.fmu.{module} import {cls}  # noqa: F401
+
+globals().setdefault("_held_by_each_instantiation", []).append(lambda: None)
+'''
 
 #: The FMU's linux64 binary: pythonfmu_guard.c, in front of pythonfmu's wrapper, shipped as
 GUARD_SOURCE = "pythonfmu_guard.c"
@@ -86,46 +127,46 @@ def build_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
     ``validate`` runs ``fmpy.validation.validate_fmu`` when fmpy is installed and raises
     :class:`FmuBuildError` listing any problem.
     """
-    with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
-        project = _stage_project(Path(staging) / "project")
-        if tire is not None:
-            baked = Path(staging) / "project" / BAKED_PARAMETERS_FILE
-            baked.write_text(json.dumps(tire.as_dict(), indent=1) + "\n")
-            project.append(baked)
-        return build_pythonfmu(
-            _SLAVE_SOURCE, fmu_destination(out, MODEL_IDENTIFIER), SLAVE_MODULE,
-            project_files=project, capabilities=CAPABILITIES,
-            units={v.name: v.unit for v in fmu_variables() if v.unit}, validate=validate,
-            real_starts=None if tire is None else tire.as_dict(), kernel=True)
-
-
-INPLANE_MODEL_IDENTIFIER = "TireInPlane"
-INPLANE_SLAVE_MODULE = "tire_fmu_inplane_slave_" + re.sub(r"\W", "_", tire_fmu.__version__)
-_INPLANE_SLAVE_SOURCE = Path(__file__).with_name("inplane_slave.py")
+    return _build_tire_fmu(MODEL_IDENTIFIER, fmu_variables(), out, validate,
+                           None if tire is None else tire.as_dict())
 
 
 def build_inplane_fmu(out: str | Path = ".", validate: bool = True, tire=None) -> Path:
     """Write ``TireInPlane.fmu`` (the in-plane tire: Fx, Fz and My, the wheel's rotation,
     friction) to ``out``, as :func:`build_fmu` writes TireModal.fmu. Its slave is
     :class:`~tire_fmu.fmu.inplane_slave.TireInPlane`, whose FMI layer is TireModal's, so the
-    package staged into its resources carries ``fmu/slave.py`` too. ``tire`` (an
+    package it carries holds ``fmu/slave.py`` too. ``tire`` (an
     :class:`~tire_fmu.core.inplane.InPlaneTire`) gives the parameters' start values, radial
     and tangential (default: GL073A with the shipped tangential estimates)."""
     from .interface import inplane_fmu_variables
 
+    starts = None
+    if tire is not None:
+        starts = {**tire.tire.as_dict(), **tire.tangential.as_dict()}
+    return _build_tire_fmu(INPLANE_MODEL_IDENTIFIER, inplane_fmu_variables(), out, validate,
+                           starts)
+
+
+def _build_tire_fmu(model_identifier: str, table, out, validate: bool,
+                    starts: dict[str, float] | None) -> Path:
+    """One of the tire's pythonfmu FMUs: its package under its own name, the slave module
+    that loads its slave from there, the start values ``starts`` baked in."""
+    module, cls, _ = SLAVES[model_identifier]
     with tempfile.TemporaryDirectory(prefix="tire_fmu_build_") as staging:
-        project = _stage_project(Path(staging) / "project", with_slave=True)
-        starts = None
-        if tire is not None:
-            starts = {**tire.tire.as_dict(), **tire.tangential.as_dict()}
-            baked = Path(staging) / "project" / BAKED_PARAMETERS_FILE
+        staging = Path(staging)
+        package, project = stage_package(staging / "project", model_identifier)
+        if starts is not None:
+            baked = staging / "project" / BAKED_PARAMETERS_FILE
             baked.write_text(json.dumps(starts, indent=1) + "\n")
             project.append(baked)
+        shim = staging / "slave.py"
+        shim.write_text(_SLAVE_SHIM.format(model=model_identifier, cls=cls, package=package,
+                                           module=module))
         return build_pythonfmu(
-            _INPLANE_SLAVE_SOURCE, fmu_destination(out, INPLANE_MODEL_IDENTIFIER),
-            INPLANE_SLAVE_MODULE, project_files=project, capabilities=CAPABILITIES,
-            units={v.name: v.unit for v in inplane_fmu_variables() if v.unit},
-            validate=validate, real_starts=starts, kernel=True)
+            shim, fmu_destination(out, model_identifier), f"{package}_slave",
+            project_files=project, capabilities=CAPABILITIES,
+            units={v.name: v.unit for v in table if v.unit}, validate=validate,
+            real_starts=starts, kernel=True, dependencies=output_dependencies(table))
 
 
 def fmu_destination(out: str | Path, model_identifier: str) -> Path:
@@ -139,15 +180,19 @@ def fmu_destination(out: str | Path, model_identifier: str) -> Path:
 def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                     project_files=(), capabilities: dict, units: dict[str, str],
                     validate: bool = True, real_starts: dict[str, float] | None = None,
-                    kernel: bool = False) -> Path:
+                    kernel: bool = False,
+                    dependencies: dict[str, tuple[str, ...]] | None = None) -> Path:
     """Build a pythonfmu FMU from ``slave_source`` and complete its model description.
 
     The slave is built under ``module_name``: every pythonfmu FMU in a process shares
     ``sys.modules``, and two slave modules with one name would run the first one's code.
-    ``units`` maps variable names to the units written into the model description (pythonfmu
-    0.7 writes none); ``capabilities`` are the flags the slave really supports;
-    ``real_starts`` are Real start values to write exactly (pythonfmu rounds to 16 digits);
-    ``kernel`` ships the compiled step kernel for every platform a compiler is found for.
+    ``project_files`` go into ``resources/`` beside it, and the build imports the slave from
+    beside them, as the FMU will. ``units`` maps variable names to the units written into the
+    model description (pythonfmu 0.7 writes none); ``capabilities`` are the flags the slave
+    really supports; ``real_starts`` are Real start values to write exactly (pythonfmu rounds
+    to 16 digits); ``kernel`` ships the compiled step kernel for every platform a compiler is
+    found for; ``dependencies`` gives, for an output, the inputs it depends on directly (an
+    output not in it depends on every input, FMI's default).
     """
     try:
         from pythonfmu.builder import FmuBuilder
@@ -158,16 +203,22 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
     dest.parent.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="pythonfmu_build_") as staging:
         staging = Path(staging)
-        script = staging / f"{module_name}.py"
+        # the slave and what it imports side by side, as in the FMU's resources/
+        resources_folder = staging / "resources"
+        resources_folder.mkdir()
+        script = resources_folder / f"{module_name}.py"
         shutil.copyfile(slave_source, script)
+        staged = []
+        for item in map(Path, project_files):
+            staged.append(resources_folder / item.name)
+            (shutil.copytree if item.is_dir() else shutil.copyfile)(item, staged[-1])
         try:
             # pythonfmu's own FMU stays private: it lacks the completed model description and
             # the guard, and only the finished, validated FMU may appear at ``dest``
             built = Path(FmuBuilder.build_FMU(script, dest=staging / "pythonfmu" / dest.name,
-                                              project_files=list(project_files),
-                                              **capabilities))
+                                              project_files=staged, **capabilities))
         finally:
-            _forget_build_imports(script)
+            _forget_build_imports(resources_folder)
         try:
             guard = compile_guard(staging / "guard")
         except FmuBuildError as error:
@@ -177,10 +228,10 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
                           f"the guard (fmi2Error statuses, the exit fix), see docs/fmu.md",
                           GuardMissingWarning, stacklevel=2)
             guard = None
-        kernels = compile_kernels(staging / "kernel") if kernel else {}
+        kernels = compile_kernels(staging / "kernel", dest.name) if kernel else {}
         with published_file(dest) as partial:
             complete_fmu(built, capabilities, units, real_starts, guard, target=partial,
-                         kernels=kernels)
+                         kernels=kernels, dependencies=dependencies)
             if validate:
                 problems = validation_problems(partial)
                 if problems:
@@ -188,27 +239,72 @@ def build_pythonfmu(slave_source: Path, dest: Path, module_name: str, *,
     return dest
 
 
-def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
-    """The package the slave imports (no CLI, plots or caches) and the host requirements;
-    ``with_slave`` adds the radial slave, whose FMI layer the in-plane slave extends."""
-    package = folder / "tire_fmu"
-    (package / "core").mkdir(parents=True)
-    (package / "fmu").mkdir()
-    (package / "native").mkdir()
-    shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
-    for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
-        shutil.copyfile(source, package / "core" / source.name)
-    names = ("__init__.py", "interface.py", "spec.py") + (("slave.py",) if with_slave else ())
-    for name in names:  # the table and wording it uses
-        shutil.copyfile(_PACKAGE_ROOT / "fmu" / name, package / "fmu" / name)
-    # the compiled kernels' ctypes (the radial step's and the in-plane step's)
-    for name in ("__init__.py", "kernel.py", "contract.py", "inplane_kernel.py", "inplane_ring.py",
-                 "inplane_critical.py"):
-        shutil.copyfile(_PACKAGE_ROOT / "native" / name, package / "native" / name)
+def stage_package(folder: Path, model_identifier: str,
+                  package_root: Path = _PACKAGE_ROOT) -> tuple[str, list[Path]]:
+    """The package ``model_identifier``'s slave imports, from ``package_root``, in
+    ``folder`` under :func:`bundle_name` (no CLI, plots or caches; its imports of
+    ``tire_fmu`` renamed), and the host's requirements: (its name, [its folder, the
+    requirements file])."""
+    _, _, slaves = SLAVES[model_identifier]
+    files = [Path("__init__.py"), *(Path("core", source.name) for source in
+                                    sorted((package_root / "core").glob("*.py")))]
+    files += [Path("fmu", name) for name in sorted(_FMU_MODULES + slaves)]
+    files += [Path("native", name) for name in _NATIVE_MODULES]
+    sources = {path: (package_root / path).read_bytes() for path in files}
+    name = bundle_name(model_identifier, sources)
+    for path, source in sources.items():
+        target = folder / name / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(rename_imports(source.decode("utf-8"), name, path), encoding="utf-8")
     requirements = folder / "requirements.txt"
-    requirements.write_text("# Python packages the host's interpreter needs for TireModal.fmu\n"
-                            + "\n".join(runtime_requirements()) + "\n")
-    return [package, requirements]
+    requirements.write_text(f"# Python packages the host's interpreter needs for "
+                            f"{model_identifier}.fmu\n" + "\n".join(runtime_requirements()) + "\n")
+    return name, [folder / name, requirements]
+
+
+def bundle_name(model_identifier: str, sources: dict[Path, bytes]) -> str:
+    """The name an FMU's package goes by: ``tire_fmu_<model>_<version>_<hash>``, the hash of
+    the model and the files (their paths and bytes), so that FMUs built from different code
+    never share a module, and an FMU built again from the same code keeps its name."""
+    digest = hashlib.sha256(model_identifier.encode() + b"\0")
+    for path, source in sorted(sources.items()):
+        digest.update(path.as_posix().encode() + b"\0" + source + b"\0")
+    version = re.sub(r"\W", "_", tire_fmu.__version__)
+    return f"tire_fmu_{model_identifier.lower()}_{version}_{digest.hexdigest()[:12]}"
+
+
+#: ``import tire_fmu`` and ``from tire_fmu[.x] import``, at the start of a line
+_IMPORT = re.compile(r"^(?P<indent>[ \t]*)(?:from[ \t]+tire_fmu(?P<sub>(?:\.\w+)*)[ \t]+import\b"
+                     r"|import[ \t]+tire_fmu(?=[ \t]*(?:#.*)?$))", re.MULTILINE)
+
+
+def rename_imports(source: str, package: str, path: Path | str = "<source>") -> str:
+    """``source`` with its absolute imports of ``tire_fmu`` made imports of ``package``
+    (``import tire_fmu`` keeps the name: ``import <package> as tire_fmu``). FmuBuildError if
+    anything else would still name the package absolutely (another form of import, or a
+    dotted name in a string, as importlib and importlib.resources take it): that code would
+    run the host's tire_fmu, or none."""
+    def renamed(match: re.Match) -> str:
+        if match.group("sub") is not None:
+            return f"{match['indent']}from {package}{match['sub']} import"
+        return f"{match['indent']}import {package} as tire_fmu"
+
+    text = _IMPORT.sub(renamed, source)
+    left = []
+    for node in ast.walk(ast.parse(text, filename=str(path))):
+        if isinstance(node, ast.ImportFrom) and node.level == 0:
+            names = [node.module or ""]
+        elif isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            names = [node.value] if re.fullmatch(r"tire_fmu(\.\w+)+", node.value) else []
+        else:
+            continue
+        left += [f"line {node.lineno}" for n in names if n.split(".")[0] == "tire_fmu"]
+    if left:
+        raise FmuBuildError(f"{path}: names the package tire_fmu absolutely where the build "
+                            f"cannot rename it ({', '.join(left)}): import it relatively")
+    return text
 
 
 def runtime_requirements() -> list[str]:
@@ -221,12 +317,16 @@ def runtime_requirements() -> list[str]:
     return plain or list(FALLBACK_REQUIREMENTS)
 
 
-def _forget_build_imports(script: Path) -> None:
-    # pythonfmu's builder imports the slave from the staging folder and leaves that folder on
-    # sys.path; the folder is about to disappear, so take both back out.
-    sys.modules.pop(script.stem, None)
-    while str(script.parent) in sys.path:
-        sys.path.remove(str(script.parent))
+def _forget_build_imports(folder: Path) -> None:
+    # pythonfmu's builder imports the slave (and what it imports from beside it) from the
+    # staging folder and leaves that folder on sys.path; the folder is about to disappear,
+    # and an FMU of the same package loaded later must import its own: take them back out.
+    inside = str(folder) + os.sep
+    for name, module in list(sys.modules.items()):
+        if (getattr(module, "__file__", None) or "").startswith(inside):
+            del sys.modules[name]
+    while str(folder) in sys.path:
+        sys.path.remove(str(folder))
 
 
 # -- the model description -----------------------------------------------------------------
@@ -257,10 +357,11 @@ def compile_guard(folder: Path) -> Path:
     return library
 
 
-def compile_kernels(folder: Path) -> dict[str, Path]:
+def compile_kernels(folder: Path, fmu_name: str = "TireModal.fmu") -> dict[str, Path]:
     """The step kernel (native/c/kernel.c and what it needs) compiled for every platform
     this machine has a compiler for: {platform: library}. A platform without one is named in
-    a KernelMissingWarning (the FMU runs there with the numpy reference kernel)."""
+    a KernelMissingWarning (the FMU ``fmu_name`` runs there with the numpy reference kernel),
+    which says what to install."""
     from ..native.kernel import PLATFORMS, KernelUnavailable, compile_kernel
 
     built = {}
@@ -268,16 +369,17 @@ def compile_kernels(folder: Path) -> dict[str, Path]:
         try:
             built[platform] = compile_kernel(folder / platform / name, platform)
         except KernelUnavailable as error:
-            warnings.warn(f"{error}: on {platform} TireModal.fmu steps with the numpy "
-                          "reference kernel (the same outputs, slower)", KernelMissingWarning,
-                          stacklevel=3)
+            warnings.warn(f"{error}, then build again: without it {fmu_name} steps on "
+                          f"{platform} with the numpy reference kernel (the same outputs, "
+                          "slower)", KernelMissingWarning, stacklevel=3)
     return built
 
 
 def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
                  real_starts: dict[str, float] | None = None, guard: Path | None = None,
                  target: str | Path | None = None,
-                 kernels: dict[str, Path] | None = None) -> None:
+                 kernels: dict[str, Path] | None = None,
+                 dependencies: dict[str, tuple[str, ...]] | None = None) -> None:
     """Rewrite the FMU's ``modelDescription.xml`` with :func:`complete_model_description`;
     with ``guard``, that library becomes the linux64 binary and pythonfmu's wrapper moves to
     ``binaries/linux64/pythonfmu-export.so``; ``kernels`` ({platform: library}) go into
@@ -287,7 +389,8 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
     kernels = kernels or {}
     if target is None:
         with published_file(fmu) as partial:
-            complete_fmu(fmu, capabilities, units, real_starts, guard, partial, kernels)
+            complete_fmu(fmu, capabilities, units, real_starts, guard, partial, kernels,
+                         dependencies)
         return
     with zipfile.ZipFile(fmu) as source, zipfile.ZipFile(target, "w",
                                                           zipfile.ZIP_DEFLATED) as archive:
@@ -296,7 +399,8 @@ def complete_fmu(fmu: str | Path, capabilities: dict, units: dict[str, str],
             if item.filename == BUILD_RECORD or "/__pycache__/" in item.filename:
                 continue  # of an earlier completion: written anew
             if item.filename == "modelDescription.xml":
-                data = complete_model_description(data, capabilities, units, real_starts)
+                data = complete_model_description(data, capabilities, units, real_starts,
+                                                  dependencies)
             elif guard is not None and re.fullmatch(r"binaries/linux64/[^/]+\.so",
                                                     item.filename):
                 wrapper = zipfile.ZipInfo(f"binaries/linux64/{WRAPPER_FILE}", item.date_time)
@@ -348,10 +452,11 @@ def build_record(fmu: str | Path) -> dict | None:
 
 
 def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, str],
-                               real_starts: dict[str, float] | None = None) -> bytes:
-    """Write the units and their definitions, the outputs and initial unknowns, exact Real
-    start values (``repr``, which reads back to the same double), and pin the capability
-    flags."""
+                               real_starts: dict[str, float] | None = None,
+                               dependencies: dict[str, tuple[str, ...]] | None = None) -> bytes:
+    """Write the units and their definitions, the outputs (with the inputs each depends on
+    directly, for those in ``dependencies``) and initial unknowns, exact Real start values
+    (``repr``, which reads back to the same double), and pin the capability flags."""
     root = ElementTree.fromstring(xml)
     co_simulation = root.find("CoSimulation")
     for name, value in capabilities.items():
@@ -368,18 +473,12 @@ def complete_model_description(xml: bytes, capabilities: dict, units: dict[str, 
         for old in root.findall("UnitDefinitions"):
             root.remove(old)
         root.insert(list(root).index(co_simulation) + 1, unit_definitions(used))
-    variables = root.find("ModelVariables").findall("ScalarVariable")
-    outputs = [i for i, v in enumerate(variables, 1) if v.get("causality") == "output"]
-    calculated = [i for i in outputs
-                  if variables[i - 1].get("initial", "calculated") in ("calculated", "approx")]
-    structure = root.find("ModelStructure")
-    for old in list(structure):
-        structure.remove(old)
-    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", calculated)):
-        if indices:
-            group = ElementTree.SubElement(structure, tag)
-            for index in indices:
-                ElementTree.SubElement(group, "Unknown", index=str(index))
+    variables = [(v.get("name"), v.get("causality", "local"), v.get("initial", "calculated"))
+                 for v in root.find("ModelVariables").findall("ScalarVariable")]
+    old = root.find("ModelStructure")
+    position = list(root).index(old)
+    root.remove(old)
+    root.insert(position, model_structure(variables, dependencies))
     ElementTree.indent(root, space="  ")
     return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
 

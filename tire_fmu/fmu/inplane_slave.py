@@ -21,6 +21,7 @@ import struct
 import time
 
 import tire_fmu
+from tire_fmu.core.blas_threads import blas_threads
 from tire_fmu.core.host_inputs import MIN_STEP_S
 from tire_fmu.core.inplane import TANGENTIAL_RANGES
 from tire_fmu.core.inplane_contact import STEPPER_STATE_HEAD, ContactSetError
@@ -57,6 +58,7 @@ class TireInPlane(TireModal):
                    "axle moment My from the rim's motion, the wheel torque and the road; "
                    "reduced step built at initialisation for the load and speed. Needs Python "
                    "with numpy and scipy.")
+    model_identifier = MODEL_IDENTIFIER
     _INPUTS, _OUTPUTS, _IN_CONTACT = INPLANE_INPUTS, INPLANE_OUTPUTS, INPLANE_IN_CONTACT
 
     @staticmethod
@@ -77,7 +79,10 @@ class TireInPlane(TireModal):
             wheel_free=bool(named["wheel_free"]), wheel_driven=bool(named["wheel_driven"]))
         library, why = self._kernel_library()
         self._kernel_note = why or "stepping with the compiled in-plane step"
-        return build_host_stepper(settings, "compiled" if library else "numpy", library), None, []
+        with blas_threads():  # the build's BLAS threads limited, the host's given back after
+            stepper = build_host_stepper(settings, "compiled" if library else "numpy", library)
+        self._say_if_blas_unlimited()
+        return stepper, None, []
 
     def _set_simulator(self, simulator, built_for) -> None:
         self._simulator, self._built_for = simulator, built_for

@@ -94,6 +94,9 @@ class FmuVariable:
     unit: str
     description: str
     export_option: str = ""  # parameters: the CLI option of `tire-fmu export` that sets it
+    #: outputs: the inputs whose values, set at a communication point, the output's next read
+    #: depends on directly (ModelStructure/Outputs' dependencies); None: every input
+    depends_on: tuple[str, ...] | None = None
 
     @property
     def variability(self) -> str:
@@ -102,7 +105,22 @@ class FmuVariable:
         return "discrete" if self.type == "Boolean" else "continuous"
 
 
+#: TireModal's direct feed-through (docs/fmu.md, "What a step does"): inputs set at a
+#: communication point reach the next read of the outputs through the contact's springs and
+#: dampers on the road, the sidewall on the rim and the static correction of the dropped modes,
+#: so every output may depend on every input, but the deflection, which is the rim's and the
+#: road's positions (and the state) alone.
+_RADIAL_FEED_THROUGH = {"deflection": ("rim_z", "road_z")}
+
+
 def _signals() -> list[FmuVariable]:
+    rows = _radial_signals()
+    inputs = tuple(v.name for v in rows if v.causality == "input")
+    return [replace(v, depends_on=_RADIAL_FEED_THROUGH.get(v.name, inputs))
+            if v.causality == "output" else v for v in rows]
+
+
+def _radial_signals() -> list[FmuVariable]:
     return [
         FmuVariable("rim_z", "Real", "input", 0.0, "m",
                     "rim vertical displacement from static equilibrium (z up)"),
@@ -226,6 +244,37 @@ OUTPUTS = slice(INPUTS.stop, INPUTS.stop + len(OUTPUT_NAMES))
 IN_CONTACT = OUTPUTS.stop
 
 
+def output_dependencies(table) -> dict[str, tuple[str, ...]]:
+    """{output: the inputs it depends on directly} for the outputs that declare them."""
+    return {v.name: v.depends_on for v in table
+            if v.causality == "output" and v.depends_on is not None}
+
+
+def model_structure(variables, dependencies: dict[str, tuple[str, ...]] | None = None
+                    ) -> ElementTree.Element:
+    """``<ModelStructure>`` of ``variables``, (name, causality, initial) in value-reference
+    order: the outputs, each with the indices of the inputs it depends on directly where
+    ``dependencies`` names them (without, FMI 2.0 reads every input), then the initial
+    unknowns (the outputs whose initial value is calculated)."""
+    variables = list(variables)
+    index = {name: i for i, (name, _, _) in enumerate(variables, 1)}
+    dependencies = dependencies or {}
+    outputs = [i for i, (_, causality, _) in enumerate(variables, 1) if causality == "output"]
+    calculated = [i for i in outputs if variables[i - 1][2] in ("calculated", "approx")]
+    structure = ElementTree.Element("ModelStructure")
+    for tag, indices in (("Outputs", outputs), ("InitialUnknowns", calculated)):
+        if not indices:
+            continue
+        group = ElementTree.SubElement(structure, tag)
+        for i in indices:
+            unknown = ElementTree.SubElement(group, "Unknown", index=str(i))
+            name = variables[i - 1][0]
+            if tag == "Outputs" and name in dependencies:
+                unknown.set("dependencies", " ".join(
+                    str(k) for k in sorted(index[n] for n in dependencies[name])))
+    return structure
+
+
 def unit_definitions(units) -> ElementTree.Element:
     """<UnitDefinitions> for the units the variables use, with their SI base units."""
     definitions = ElementTree.Element("UnitDefinitions")
@@ -337,8 +386,10 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         table.append(FmuVariable(name, "Real", "parameter", getattr(defaults, name),
                                  unit, f"tangential tire data ({name}); allowed [{low:g}, "
                                  f"{high:g}] {unit}".rstrip(), f"--tire {name}=VALUE"))
-    # no `tire-fmu export` builds this FMU: its parameters have no export option
-    table = [replace(v, export_option="") for v in table]
+    # no `tire-fmu export` builds this FMU: its parameters have no export option. No output
+    # feeds through: each is the last step's, whatever the inputs set since
+    table = [replace(v, export_option="", depends_on=() if v.causality == "output" else None)
+             for v in table]
     if parameter_values:
         table = [replace(v, start=parameter_values.get(v.name, v.start))
                  if v.causality == "parameter" else v for v in table]

@@ -41,6 +41,7 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
 import tire_fmu
 from tire_fmu.core import clock, kernel_numpy
+from tire_fmu.core.blas_threads import blas_threads, unavailable
 from tire_fmu.core.contact_dynamics import (
     MAX_DISPLACEMENT_M,
     MAX_VELOCITY_M_S,
@@ -106,6 +107,8 @@ def fmi_message(text: str) -> str:
 class TireModal(Fmi2Slave):
     """In-plane modal ring tire (GL073A defaults): rim and road motion in, rim force out."""
 
+    #: the name the FMU's messages give it (a subclass is another FMU, with its own)
+    model_identifier = MODEL_IDENTIFIER
     author = "tire_fmu contributors"
     description = ("Open in-plane modal ring tire (0-300 Hz): reduced modal model built at "
                    "initialisation for the load and speed; inputs are deviations from static "
@@ -138,6 +141,7 @@ class TireModal(Fmi2Slave):
         self._checked_h = math.nan  # the last step size found good for this simulator
         self._contact_warning_armed = True  # the zone-edge warning, logged once per episode
         self._contact_logged = True  # the in_contact the last lift-off event was logged for
+        self._said_blas_unlimited = False  # the warning that BLAS threads cannot be limited
         # Inputs set since the outputs were last computed: the next read recomputes the
         # forces at the current point with them (see ContactSimulator.outputs_with).
         self._stale = False
@@ -152,9 +156,14 @@ class TireModal(Fmi2Slave):
         return fmu_variables(parameter_values=parameter_values)
 
     def _register(self, vr: int, v: FmuVariable) -> None:
+        # the getter closes over the values list, not over self: a getter holding self would
+        # be a reference cycle (self.vars -> variable -> getter -> self), and a freed instance
+        # would then wait for the cycle collector, with its whole model, instead of going at
+        # fmi2FreeInstance (the list is never rebound, only assigned into)
+        values = self._values
         kwargs = dict(causality=Fmi2Causality[v.causality], description=v.description,
                       variability=Fmi2Variability[v.variability],
-                      getter=lambda: self._values[vr], setter=lambda value: None)
+                      getter=lambda: values[vr], setter=lambda value: None)
         if v.causality == "parameter":
             kwargs.update(initial=Fmi2Initial.exact)
         elif v.causality == "output":  # computed: no start value, listed as initial unknowns
@@ -337,7 +346,9 @@ class TireModal(Fmi2Slave):
         except ParameterError as error:
             problems += error.details
         settings = ContactSettings(law="linear" if named["linear_contact"] else "unilateral")
-        with warnings.catch_warnings(record=True) as caught:
+        # the build's BLAS threads limited (numpy's only: this build never loads scipy), the
+        # host's given back after
+        with warnings.catch_warnings(record=True) as caught, blas_threads(load_scipy=False):
             warnings.simplefilter("always")
             try:  # the load and speed checks need the assembled model: build it if we can
                 tire, op = validate(tire_values, op_values)
@@ -346,12 +357,20 @@ class TireModal(Fmi2Slave):
                 problems += error.details
             if problems:
                 raise ParameterError(problems)
-        library, why = self._kernel_library()
-        simulator = ContactSimulator(contact, start_time=self._start_time,
-                                     backend="compiled" if library else "numpy",
-                                     library=library)
+            library, why = self._kernel_library()
+            simulator = ContactSimulator(contact, start_time=self._start_time,
+                                         backend="compiled" if library else "numpy",
+                                         library=library)
+        self._say_if_blas_unlimited()
         self._kernel_note = why or "stepping with the compiled kernel"
         return simulator, contact, [fmu_message(str(w.message)) for w in caught]
+
+    def _say_if_blas_unlimited(self) -> None:
+        """Warn once (per instance) when the build could not limit BLAS's threads."""
+        why = unavailable()
+        if why and not self._said_blas_unlimited:
+            self._said_blas_unlimited = True
+            self.log(why, Fmi2Status.warning)
 
     def _kernel_library(self) -> tuple:
         """The compiled step kernel this FMU carries for the platform it runs on (loaded
@@ -456,7 +475,7 @@ class TireModal(Fmi2Slave):
 
     def get_string(self, vrs):
         if self._allowed("fmi2GetString") and vrs:
-            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
+            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
         return ["" for _ in vrs]
 
     def _get(self, call, vrs, kind, convert, fallback):
@@ -474,7 +493,8 @@ class TireModal(Fmi2Slave):
 
     def _reference_problem(self, vr, kind: str) -> str | None:
         if not (isinstance(vr, int) and 0 <= vr < len(self._table)):
-            return MESSAGES["REFERENCE_MISSING"] % (vr, MODEL_IDENTIFIER, len(self._table))
+            return MESSAGES["REFERENCE_MISSING"] % (vr, self.model_identifier,
+                                                 len(self._table))
         v = self._table[vr]
         if v.type != kind:
             return MESSAGES["REFERENCE_TYPE"] % (vr, v.name, v.type, v.type, v.type)
@@ -499,7 +519,7 @@ class TireModal(Fmi2Slave):
 
     def set_string(self, vrs, values):
         if self._allowed("fmi2SetString") and vrs:
-            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % MODEL_IDENTIFIER)
+            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
 
     def _set(self, call, vrs, values, kind) -> None:
         """Set every value or, if one is refused, none."""

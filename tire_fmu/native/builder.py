@@ -41,6 +41,8 @@ from ..fmu.interface import (
     FmuVariable,
     fmu_variables,
     inplane_fmu_variables,
+    model_structure,
+    output_dependencies,
     unit_definitions,
 )
 from ..fmu.spec import LOG_CATEGORIES, c_header
@@ -333,12 +335,8 @@ def model_description(table, guid: str, model_identifier: str,
             typed.set("start", _xml_value(value))
         if v.unit:
             typed.set("unit", v.unit)
-    structure = ElementTree.SubElement(root, "ModelStructure")
-    outputs = [i for i, v in enumerate(table, 1) if v.causality == "output"]
-    for tag in ("Outputs", "InitialUnknowns"):
-        group = ElementTree.SubElement(structure, tag)
-        for index in outputs:
-            ElementTree.SubElement(group, "Unknown", index=str(index))
+    root.append(model_structure(((v.name, v.causality, "calculated") for v in table),
+                                output_dependencies(table)))
     ElementTree.indent(root, space="  ")
     return ElementTree.tostring(root, encoding="UTF-8", xml_declaration=True)
 

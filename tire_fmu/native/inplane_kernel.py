@@ -10,6 +10,7 @@ an FMU carries).
 from __future__ import annotations
 
 import ctypes
+import weakref
 
 import numpy as np
 
@@ -71,7 +72,10 @@ class InPlaneKernel:
     def __init__(self, sim, library=None):
         self.lib = load_library() if library is None else library
         _declare(self.lib)
-        self.sim = sim
+        # the simulator owns this kernel: a strong reference back would make the pair a
+        # cycle, left with all its matrices for the cycle collector when an FMU instance
+        # holding them is freed
+        self._sim = weakref.ref(sim)
         ny, p = sim._ny, sim._zone.n_points
         self._work = np.zeros(self.lib.inplane_work_doubles(ny, p))
         self._iwork = np.zeros(self.lib.inplane_work_ints(p), dtype=np.int32)
@@ -80,8 +84,13 @@ class InPlaneKernel:
         self._buffers = None
         self._windows = None
 
+    @property
+    def sim(self):
+        """The simulator this kernel steps."""
+        return self._sim()
+
     def _data(self) -> _Step:
-        sim = self.sim
+        sim = self._sim()
         # the road's speed moves s0 every step (a new array of the same length): copied into
         # a buffer C reads; the rest moves with the spin, when the step is rebuilt
         key = (id(sim._a0_inv), id(sim._kg), id(sim._carry))
@@ -110,12 +119,13 @@ class InPlaneKernel:
         """The next StepState, or (status, None): 1 the sets did not settle, 2 a singular
         point solve."""
         data = self._data()
+        sim = self._sim()
         # the tread's arrays follow the spin in place; its value and the ring's offset do not
-        data.spin, data.dspin = self.sim._spin_now, self.sim._ring_offset(state.yd)
-        data.dshare = self.sim._share_offset(state.yd)
-        data.carry_shift = self.sim._carry_shift
-        if self.sim._driven:
-            data.psi_new = self.sim._driven_psi(state.y, state.yd)
+        data.spin, data.dspin = sim._spin_now, sim._ring_offset(state.yd)
+        data.dshare = sim._share_offset(state.yd)
+        data.carry_shift = sim._carry_shift
+        if sim._driven:
+            data.psi_new = sim._driven_psi(state.y, state.yd)
         if self._buffers is None:
             ins, outs, in_struct, out_struct, extra = self._make_buffers(data.ny, data.np)
             height_buffer, rate_buffer, rims = extra
@@ -142,7 +152,8 @@ class InPlaneKernel:
     def window_reads(self, road, distance_m: float, speed_m_s: float):
         """HostRoad.window_reads over the simulator's windows moved by ``distance_m``, in C
         (the same arithmetic)."""
-        sim, p = self.sim, self.sim._zone.n_points
+        sim = self._sim()
+        p = sim._zone.n_points
         if self._windows is None:
             self._windows = (_doubles(sim._x_lo), _doubles(sim._x_hi), np.zeros(p), np.zeros(p))
             self._window_addresses = tuple(a.ctypes.data for a in self._windows)

@@ -58,7 +58,7 @@ def _c_folder() -> Path:
     """The package's C (importlib.resources: the builder's c_folder, without importing it)."""
     from importlib import resources
 
-    return Path(str(resources.files("tire_fmu.native") / "c"))
+    return Path(str(resources.files(__package__) / "c"))  # the package under any name
 
 
 def sources_digest() -> str:
