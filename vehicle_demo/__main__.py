@@ -209,6 +209,7 @@ def main(argv=None) -> int:
 def _main(argv: list[str]) -> int:
     from tire_fmu.core.inplane_contact import ContactSetError
     from tire_fmu.core.parameters import ParameterError
+    from tire_fmu.file_checks import FileContentError
 
     from .braking import BrakingError
     from .cosim import CoSimError
@@ -218,8 +219,8 @@ def _main(argv: list[str]) -> int:
     from .sweep import SweepError
 
     user_errors = (DemoError, SweepError, RoadError, QuarterCarError, CoSimError,
-                   BrakingError, ContactSetError, ParameterError, FileNotFoundError,
-                   PermissionError)
+                   BrakingError, ContactSetError, ParameterError, FileContentError,
+                   FileNotFoundError, PermissionError)
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     try:
         if argv[:1] == ["sweep"]:
