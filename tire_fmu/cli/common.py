@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
 from collections.abc import Callable, Collection, Sequence
@@ -85,10 +86,25 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+class OutputPath(type(Path())):
+    """A path an output option names, remembering whether the text named a folder (a
+    trailing separator, which Path drops: ``--out x.npz/`` is a folder named x.npz, not the
+    file x.npz)."""
+
+    names_folder = False
+
+
+def output_path(text: str) -> OutputPath:
+    """argparse type of every output option (:func:`output_file` reads it)."""
+    path = OutputPath(text)
+    path.names_folder = len(text) > 1 and text.endswith(("/", os.sep))
+    return path
+
+
 def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
     if plot:
-        parser.add_argument("--plot", metavar="FILE", type=Path,
+        parser.add_argument("--plot", metavar="FILE", type=output_path,
                             help="write a figure (format from the extension: .png, .pdf, .svg)")
 
 
@@ -243,6 +259,8 @@ def check_plot_option(args: argparse.Namespace) -> None:
     path = getattr(args, "plot", None)
     if path is None:
         return
+    if getattr(path, "names_folder", False):
+        raise CliError(f"--plot = {str(path) + os.sep!r} names a folder: give a file name")
     formats = figure_formats()
     suffix = path.suffix.lower().lstrip(".")
     if suffix not in formats:
@@ -269,10 +287,18 @@ def output_file(option: str, path: Path, suffix: str, default_name: str | None =
     existing folder, or, given ``default_name``, a folder to hold that file: an existing one,
     or a path without an extension (created with its parents by :func:`make_folder` when the
     file is written)."""
+    folder_named = getattr(path, "names_folder", False)
     path = Path(path)
-    if default_name is not None and (path.is_dir() or (path.suffix == "" and not path.exists())):
+    if default_name is not None and (path.is_dir() or folder_named or (
+            path.suffix == "" and not path.exists())):
+        if path.exists() and not path.is_dir():
+            raise CliError(f"{option} = {str(path) + os.sep!r}: {str(path)!r} is a file, not "
+                           "a folder")
         _check_ancestors(option, path)
         return path / default_name
+    if folder_named:
+        raise CliError(f"{option} = {str(path) + os.sep!r} names a folder (it ends in "
+                       f"{os.sep}): give a file name ending in {suffix}")
     if path.is_dir():
         raise CliError(f"{option} = {str(path)!r} is a folder: give a file name ending "
                        f"in {suffix}")

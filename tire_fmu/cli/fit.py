@@ -16,6 +16,8 @@ from .common import (
     add_tire_options,
     checked_tire,
     elements_problem,
+    output_file,
+    output_path,
     plot_with,
     positive_problem,
     range_problem,
@@ -91,7 +93,7 @@ def register(subparsers) -> None:
     p.add_argument("--determined-within", metavar="X", type=float, default=0.05,
                    help="flag a parameter whose interval reaches further than this relative "
                    "distance from its value (default 0.05)")
-    p.add_argument("--out", metavar="FILE.toml", type=Path,
+    p.add_argument("--out", metavar="FILE.toml", type=output_path,
                    help="write the fitted tire as a tire file (read it with --tire-file)")
     p.add_argument("--name", default="", help="name written into the tire file")
     p.add_argument("--description", default=None,
@@ -125,8 +127,11 @@ def run_fit(args: argparse.Namespace) -> Output:
         positive_problem("--determined-within", args.determined_within, ""),
         positive_problem("--static-weight", args.static_weight, ""),
     ]
-    if args.out is not None and not args.out.parent.exists():
-        problems.append(f"--out {args.out}: folder {args.out.parent} does not exist")
+    if args.out is not None:
+        try:
+            args.out = output_file("--out", args.out, ".toml")
+        except CliError as error:  # reported with the others
+            problems.append(str(error))
     targets = _inplane_targets(args, problems)
     for name in (args.free_tangential or "").split(","):
         if name.strip() and name.strip() not in FITTABLE:

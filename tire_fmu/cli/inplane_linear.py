@@ -5,7 +5,6 @@ its report, and the model written as .npz or .mat)."""
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from ..core.parameters import DEFAULT_LOAD_N
 from .commands import command_help
@@ -20,6 +19,7 @@ from .common import (
     frequency_grid,
     load_default_text,
     output_file,
+    output_path,
     plot_with,
     raise_problems,
     range_problem,
@@ -75,7 +75,7 @@ def register(subparsers) -> None:
         "under each contact point, whose windows of road the file gives as delays behind the "
         "contact zone's front.",
     )
-    p.add_argument("--out", metavar="FILE", type=Path,
+    p.add_argument("--out", metavar="FILE", type=output_path,
                    help="write the reduced model (.npz or .mat)")
     p.add_argument("--full", action="store_true",
                    help="with --out: write the full linear model, not the reduced one")

@@ -25,6 +25,7 @@ from .common import (
     model_from_args,
     operating_point_values,
     output_file,
+    output_path,
     parse_tire_overrides,
     plot_with,
     raise_problems,
@@ -161,7 +162,7 @@ def register(subparsers) -> None:
         "builds its model at initialisation; the options become its parameters' start values "
         "(docs/native.md).",
     )
-    p.add_argument("out", metavar="OUT", type=Path,
+    p.add_argument("out", metavar="OUT", type=output_path,
                    help="file to write (.npz, .mat or .fmu; with --format fmu also a folder "
                    "to hold TireModalNative.fmu, created if missing)")
     p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
