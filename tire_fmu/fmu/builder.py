@@ -196,6 +196,8 @@ def _stage_project(folder: Path, with_slave: bool = False) -> list[Path]:
     (package / "fmu").mkdir()
     (package / "native").mkdir()
     shutil.copyfile(_PACKAGE_ROOT / "__init__.py", package / "__init__.py")
+    # how the slave checks a file it reads (resources/tire_parameters.json)
+    shutil.copyfile(_PACKAGE_ROOT / "file_checks.py", package / "file_checks.py")
     for source in sorted((_PACKAGE_ROOT / "core").glob("*.py")):
         shutil.copyfile(source, package / "core" / source.name)
     names = ("__init__.py", "interface.py", "spec.py") + (("slave.py",) if with_slave else ())
