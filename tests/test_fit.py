@@ -226,7 +226,8 @@ def test_bad_tables_name_the_row_and_column():
     with pytest.raises(MeasurementError) as caught:
         parse_modes(text, "m.csv")
     problems = caught.value.problems
-    assert "row 2 (line 4), column 'order': '1.5' must be an integer order n >= 0" in problems
+    assert ("row 2 (line 4), column 'order': '1.5' must be an integer order n in [0, 800] "
+            "(the highest any mesh resolves)") in problems
     assert any(p.startswith("row 3 (line 5), column 'branch'") for p in problems)
     assert any(p.startswith("row 4 (line 6), column 'frequency_hz': 'fast'") for p in problems)
     assert any(p.startswith("row 5 (line 7), column 'weight': '-2'") for p in problems)

@@ -22,14 +22,20 @@ import math
 from pathlib import Path
 
 from .core.fit import MeasuredMode
+from .core.parameters import MAX_ELEMENTS
+from .file_checks import FileContentError, read_text
 
 REQUIRED_COLUMNS = ("order", "branch", "frequency_hz")
 OPTIONAL_COLUMNS = ("weight", "damping_ratio")
 BRANCH_NAMES = {"in": "in", "in-phase": "in", "in_phase": "in",
                 "out": "out", "out-of-phase": "out", "out_of_phase": "out"}
+#: The largest table read (bytes): one line per mode, a few hundred modes at most.
+MAX_TABLE_BYTES = 1 << 20
+#: The highest order a table may give: the highest any mesh resolves (N / 2 at the finest N).
+MAX_ORDER = MAX_ELEMENTS // 2
 
 
-class MeasurementError(ValueError):
+class MeasurementError(FileContentError):
     """A table of measured modes that cannot be used; ``problems`` lists every one."""
 
     def __init__(self, source: str, problems: list[str]):
@@ -42,9 +48,9 @@ def read_modes(path: str | Path) -> list[MeasuredMode]:
     """The measured modes of a CSV file (see the module docstring for the format)."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as error:
-        raise MeasurementError(str(path), [f"cannot be read: {error}"]) from error
+        text = read_text(path, MAX_TABLE_BYTES, "a table of measured modes")
+    except FileContentError as error:  # the message names the file already
+        raise MeasurementError(str(path), [str(error).removeprefix(f"{path}: ")]) from error
     return parse_modes(text, str(path))
 
 
@@ -54,7 +60,10 @@ def parse_modes(text: str, source: str = "table") -> list[MeasuredMode]:
     if not lines:
         raise MeasurementError(source, ["no header and no rows (expected columns "
                                         f"{', '.join(REQUIRED_COLUMNS + OPTIONAL_COLUMNS)})"])
-    rows = list(csv.reader(io.StringIO("\n".join(line for _, line in lines))))
+    try:
+        rows = list(csv.reader(io.StringIO("\n".join(line for _, line in lines))))
+    except csv.Error as error:  # a field beyond csv's limit, a NUL byte
+        raise MeasurementError(source, [f"not a CSV table ({error})"]) from error
     header = [cell.strip().lower() for cell in rows[0]]
     problems = []
     known = REQUIRED_COLUMNS + OPTIONAL_COLUMNS
@@ -129,8 +138,9 @@ def _integer(text: str, where: str, problems: list[str]) -> int | None:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not math.isfinite(value) or value < 0 or not value.is_integer():
-        problems.append(f"{where}: {text!r} must be an integer order n >= 0")
+    if not (math.isfinite(value) and value.is_integer() and 0 <= value <= MAX_ORDER):
+        problems.append(f"{where}: {text!r} must be an integer order n in [0, {MAX_ORDER}] "
+                        "(the highest any mesh resolves)")
         return None
     return int(value)
 

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .publish import save_figure
+
 
 def _pyplot():
     import matplotlib
@@ -63,10 +65,7 @@ def plot_mode_shapes(result, path: Path, max_modes: int = 12, scale: float = 0.2
         fontsize=11,
     )
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, plt, path, dpi=120)
 
 
 # --------------------------------------------------------------------------------------------
@@ -91,9 +90,11 @@ def _order_colourbar(plt, fig, ax, top: int) -> None:
     bar.set_label("order |n|")
 
 
-def _save(fig, plt, path) -> Path:
+def _save(fig, plt, path, dpi: int = 130) -> Path:
+    """Write the figure (its format from the extension), published whole: a figure that fails
+    part-way leaves the previous file."""
     path = Path(path)
-    fig.savefig(path, dpi=130)
+    save_figure(fig, path, dpi=dpi)
     plt.close(fig)
     return path
 
@@ -362,10 +363,7 @@ def plot_bode(responses, path: Path, title: str = "") -> Path:
     axes[-1].set_xlabel("frequency [Hz]")
     fig.suptitle(title or f"{reference.input} -> {reference.output}", fontsize=10)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, plt, path, dpi=120)
 
 
 def plot_fit(result, path: Path) -> Path:
@@ -399,10 +397,7 @@ def plot_fit(result, path: Path) -> Path:
     top.set_title(f"Fit of {', '.join(result.free)} ({model}, {result.criterion}); "
                   f"rms residual {100 * result.residual_rms:.2g} %", fontsize=10)
     fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, plt, path, dpi=120)
 
 
 def plot_footprint(model, patch, path: Path) -> Path:
@@ -604,9 +599,7 @@ def plot_inplane_modes(result, path: Path, max_modes: int = 12, scale: float = 0
     fig.suptitle(f"In-plane modes ({rim}, N = {ring.n_elements}; red: material points)",
                  fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, plt, path, dpi=120)
 
 
 def plot_inplane_cleat(run, load_n: float, window, path: Path) -> Path:
@@ -636,6 +629,4 @@ def plot_inplane_cleat(run, load_n: float, window, path: Path) -> Path:
     bottom.legend()
     bottom.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return _save(fig, plt, path, dpi=120)

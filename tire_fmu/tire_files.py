@@ -35,8 +35,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from .core.inplane import TANGENTIAL_RANGES, TangentialParameters
+from .core.inplane import TANGENTIAL_RANGES, TangentialParameters, tangential_problems
 from .core.parameters import TIRE_FIELDS, TireParameters, render, tire_problems
+from .file_checks import FileContentError, read_text
+from .publish import published_file
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -51,9 +53,11 @@ METADATA_TABLES = ("fit",)
 TANGENTIAL_TABLES = ("tangential", "tangential_units")
 DIMENSIONLESS = ("", "1")
 _SHIPPED = ("data", "tires")
+#: The largest tire file read (bytes): a tire file is a few kilobytes of TOML.
+MAX_TIRE_FILE_BYTES = 1 << 20
 
 
-class TireFileError(ValueError):
+class TireFileError(FileContentError):
     """A tire file that cannot be read or written; the message names the file and key."""
 
 
@@ -103,19 +107,21 @@ def resolve_tire_file(spec: str | Path) -> Path:
 def read_tire_file(spec: str | Path, warn: bool = True) -> TireFile:
     """Read a tire file (a path, or the name of a shipped one); every problem at once."""
     path = resolve_tire_file(spec)
+    text = read_text(path, MAX_TIRE_FILE_BYTES, "a tire file", TireFileError)
     try:
-        # utf-8-sig: a byte-order mark, as some Windows editors write, is not part of the text
-        document = tomllib.loads(path.read_text(encoding="utf-8-sig"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
+        document = tomllib.loads(text)
+    except ValueError as error:  # TOMLDecodeError, and integers of more than 4300 digits
         raise TireFileError(f"{path}: not valid TOML: {error}") from error
     except RecursionError as error:  # tomllib parses nested arrays and tables recursively
         raise TireFileError(f"{path}: not a tire file: arrays or tables nested too deeply "
                             "to read (a tire file nests at most a few levels)") from error
-    except OSError as error:
-        raise TireFileError(f"{path}: cannot be read: {error}") from error
     values, problems = _parameters(document)
     tangential, more = _tangential_table(document)
     problems += more
+    if tangential is not None and not more:  # its ranges, as the in-plane tire checks them
+        radius = values.get("R", TireParameters().R)
+        problems += [render(problem) for problem in
+                     tangential_problems(TangentialParameters(**tangential), radius)]
     if problems:
         raise TireFileError(f"{path}: " + "; ".join(problems))
     defaulted = tuple(f.name for f in fields(TireParameters) if f.name not in values)
@@ -188,6 +194,12 @@ def _numbers_with_units(table: dict, units: dict, names: tuple[str, str],
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             problems.append(f"{table_name}.{name} = {value!r}: must be a number in {allowed}")
             continue
+        try:
+            number = float(value)
+        except OverflowError:  # an integer beyond every double
+            problems.append(f"{table_name}.{name} = an integer of {value.bit_length()} bits: "
+                            f"must be a number in {allowed}")
+            continue
         unit = units.get(name)
         shown = f'"{expected}"' if expected else '"1"'
         if unit is None:
@@ -196,7 +208,7 @@ def _numbers_with_units(table: dict, units: dict, names: tuple[str, str],
         elif not _same_unit(unit, expected):
             problems.append(f"{units_name}.{name} = {unit!r}: {table_name}.{name} must be "
                             f"given in {shown} (units are checked, not converted)")
-        values[name] = float(value)
+        values[name] = number
     for name in sorted(set(units) - set(table)):
         problems.append(f"{units_name}.{name}: no {table_name}.{name} to go with it")
     return values, problems
@@ -258,7 +270,8 @@ def write_tire_file(path: str | Path, tire: TireParameters, name: str = "",
     if not same:
         raise TireFileError(f"{path}: the text written does not read back to the tire")
     try:
-        path.write_text(text, encoding="utf-8")
+        with published_file(path) as partial:
+            partial.write_text(text, encoding="utf-8")
     except OSError as error:
         raise TireFileError(f"{path}: cannot be written: {error}") from error
     return path

@@ -28,6 +28,8 @@ from tire_fmu.cli.parsing import (  # noqa: E402
 )
 
 PROG = "vehicle_demo"
+#: The sweep's figure, beside its table in --out.
+SWEEP_FIGURE = "sweep_resonances.png"
 
 
 def _demo_parser() -> argparse.ArgumentParser:
@@ -178,19 +180,28 @@ def _demo(argv) -> int:
 
 def _sweep(argv) -> int:
     from .demo import ensure_fmus
+    from .outputs import check_output_folder, run_folder
     from .plots import plot_sweep
-    from .sweep import SweepSettings, full_factorial, run_sweep, save_table
+    from .sweep import SweepError, SweepSettings, full_factorial, run_sweep, save_table
 
     args = _sweep_parser().parse_args(argv)
     factors = _parse_factors(args.factor)
-    fmus = ensure_fmus(args.out / "fmus", args.rebuild, log=say)
-    result = run_sweep(full_factorial(factors), fmus, SweepSettings(n_elements=args.n_elements),
-                       scheduler=args.scheduler,
-                       address=args.address, n_workers=args.workers,
-                       progress=not args.no_progress)
-    table = save_table(result, args.out / args.table)
-    figure = plot_sweep(result.table, next(iter(factors)), args.out / "sweep_resonances.png",
-                        title=f"Resonances over the sweep ({result.scheduler})")
+    out = args.out
+    # one run's FMUs, table and figure, replacing the previous run's whole (any table name)
+    earlier_tables = [p.name for p in out.glob("*") if p.suffix in (".csv", ".parquet")]
+    check_output_folder(out, "--out", ("fmus", SWEEP_FIGURE, Path(args.table).parts[0],
+                                       *earlier_tables), SweepError)
+    with run_folder(out, "--out", SweepError, carry=("fmus",)) as work:
+        fmus = ensure_fmus(work / "fmus", args.rebuild,
+                           log=lambda text: say(str(text).replace(str(work), str(out))))
+        result = run_sweep(full_factorial(factors), fmus,
+                           SweepSettings(n_elements=args.n_elements), scheduler=args.scheduler,
+                           address=args.address, n_workers=args.workers,
+                           progress=not args.no_progress)
+        table = out / save_table(result, work / args.table).relative_to(work)
+        figure = out / plot_sweep(result.table, next(iter(factors)), work / SWEEP_FIGURE,
+                                  title=f"Resonances over the sweep ({result.scheduler})"
+                                  ).relative_to(work)
     shown = [*result.factors, "status", "body_bounce_hz", "wheel_hop_hz", "tire_mode_hz",
              "ref_body_bounce_hz", "ref_wheel_hop_hz", "contact_lost_fraction"]
     say(result.table[shown].to_string(index=False, float_format=lambda v: f"{v:.4g}"))
@@ -216,6 +227,7 @@ def main(argv=None) -> int:
 def _main(argv: list[str]) -> int:
     from tire_fmu.core.inplane_contact import ContactSetError
     from tire_fmu.core.parameters import ParameterError
+    from tire_fmu.file_checks import FileContentError
 
     from .braking import BrakingError
     from .cosim import CoSimError
@@ -225,8 +237,8 @@ def _main(argv: list[str]) -> int:
     from .sweep import SweepError
 
     user_errors = (DemoError, SweepError, RoadError, QuarterCarError, CoSimError,
-                   BrakingError, ContactSetError, ParameterError, FileNotFoundError,
-                   PermissionError)
+                   BrakingError, ContactSetError, ParameterError, FileContentError,
+                   FileNotFoundError, PermissionError)
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     try:
         if argv[:1] == ["sweep"]:

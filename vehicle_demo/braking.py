@@ -33,6 +33,8 @@ import numpy as np
 
 from tire_fmu.core.parameters import DEFAULT_LOAD_N
 
+from .outputs import check_output_folder, run_folder
+
 #: Standard gravity (m/s²): the vehicle's mass from the load its wheel carries.
 GRAVITY_M_S2 = 9.80665
 #: Road before the rough profile begins and before the cleat (m ahead of the contact centre):
@@ -354,7 +356,28 @@ def _fmu_cleat_test(fmu_path, sim, settings, duration_s, bar):
 
 def run_braking(settings: BrakingSettings | None = None, log=print,
                 names: dict[str, str] | None = None) -> BrakingSummary:
-    """The braking runs and the cleat test; figures and ``summary.json`` into ``out_dir``."""
+    """The braking runs and the cleat test; figures and ``summary.json`` into ``out_dir``, one
+    run's set replacing the previous one's whole (:mod:`vehicle_demo.outputs`)."""
+    settings = settings or BrakingSettings()
+    found = settings.problems(names)
+    if found:
+        raise BrakingError("; ".join(found))
+    started = time.perf_counter()
+    out = Path(settings.out_dir)
+    option = (names or {}).get("out_dir", "out_dir")
+    check_output_folder(out, option, OUTPUTS, BrakingError)
+    with run_folder(out, option, BrakingError) as work:
+        return _run_braking(settings, work, out, started,
+                            lambda text: log(str(text).replace(str(work), str(out))))
+
+
+#: What a run writes into OUT (a run replaces OUT whole: vehicle_demo.outputs)
+OUTPUTS = ("braking.png", "cleat_test.png", "summary.json", "fmus")
+
+
+def _run_braking(settings: BrakingSettings, out: Path, final: Path, started: float,
+                 log) -> BrakingSummary:
+    """The runs, every file written into ``out`` (which becomes ``final``)."""
     from scipy.signal import periodogram
 
     from tire_fmu.core.inplane import InPlaneTire
@@ -365,12 +388,6 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     from .plots import plot_braking
     from .progress import advance, step_bar
 
-    settings = settings or BrakingSettings()
-    found = settings.problems(names)
-    if found:
-        raise BrakingError("; ".join(found))
-    started = time.perf_counter()
-    out = Path(settings.out_dir)
     model = settings.tire or InPlaneTire()
     # on the reduced tire the runs step, as TireInPlane.fmu solves it: rim_Fz starts at the load
     deflection = deflection_for_load(model, settings.load_n, settings.n_elements,
@@ -426,7 +443,8 @@ def run_braking(settings: BrakingSettings | None = None, log=print,
     figures = (plot_braking(runs, steady.slip_ratio, out / "braking.png"),
                plot_inplane_cleat(test, settings.load_n, on, out / "cleat_test.png"))
     summary = BrakingSummary(tuple(runs), steady.slip_ratio, steady.rim_fx_n, settled,
-                             cleat_test, figures, time.perf_counter() - started)
+                             cleat_test, tuple(final / path.name for path in figures),
+                             time.perf_counter() - started)
     data = {"settings": {k: (str(v) if isinstance(v, Path) else v)
                          for k, v in asdict(settings).items() if k != "tire"},
             **summary.to_dict()}

@@ -19,8 +19,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
-import shutil
 import time
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -28,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .cosim import FmuPaths, QuarterCarCoSimulation
+from .outputs import check_output_folder, run_folder
 from .progress import step_bar
 from .quarter_car import QuarterCarParameters
 from .road import cleat, iso8608_road, pothole
@@ -156,8 +155,6 @@ def ensure_fmus(folder: Path, rebuild: bool = False, log=print) -> FmuPaths:
     return paths
 
 
-
-
 @dataclass(frozen=True)
 class DemoSummary:
     """What the demo measured (also written as CSV)."""
@@ -189,64 +186,20 @@ def run_demo(settings: DemoSettings | None = None, log=print,
     fails or is interrupted leaves OUT as the previous run left it. OUT must be new, or hold
     only what a run writes (:data:`OUTPUTS`): it is replaced whole.
     """
-    from tire_fmu.publish import private_folder, publish_folder
-
     settings = settings or DemoSettings()
     started = time.perf_counter()
     check_settings(settings, names)
     out = Path(settings.out_dir)
     option = (names or {}).get("out_dir", "out_dir")
-    _check_output_folder(out, option)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        work = private_folder(out)
-    except OSError as error:
-        raise DemoError(f"{option} = {str(out)!r}: cannot write there: "
-                        f"{error.strerror or error}") from error
-    try:
-        _carry_fmus(out / FMU_FOLDER, work / FMU_FOLDER)
+    check_output_folder(out, option, OUTPUTS, DemoError)
+    with run_folder(out, option, DemoError, carry=(FMU_FOLDER,)) as work:
         summary = _run(settings, work, started,
                        lambda text: log(str(text).replace(str(work), str(out))))
-        publish_folder(work, out)
-    except OSError as error:
-        if error.filename is None or not Path(error.filename).is_relative_to(work):
-            raise
-        written = out / Path(error.filename).relative_to(work)
-        raise DemoError(f"{option} = {str(out)!r}: cannot write {str(written)!r}: "
-                        f"{error.strerror or error}") from error
-    finally:
-        shutil.rmtree(work, ignore_errors=True)  # gone already once published
 
     def moved(paths):
         return [out / Path(p).relative_to(work) for p in paths]
 
     return replace(summary, figures=moved(summary.figures), tables=moved(summary.tables))
-
-
-def _check_output_folder(out: Path, option: str) -> None:
-    if not out.exists():
-        return
-    if not out.is_dir():
-        raise DemoError(f"{option} = {str(out)!r} is a file: give a folder")
-    foreign = sorted(p.name for p in out.iterdir() if p.name not in OUTPUTS)
-    if foreign:
-        shown = ", ".join(foreign[:5]) + (", ..." if len(foreign) > 5 else "")
-        raise DemoError(f"{option} = {str(out)!r} holds files a demo run does not write "
-                        f"({shown}); a run replaces its folder whole: give a new folder, or "
-                        "one an earlier run wrote")
-
-
-def _carry_fmus(previous: Path, folder: Path) -> None:
-    """The previous run's FMUs into the new run's folder (hard links where the file system
-    has them; copies keep their times), for :func:`ensure_fmus` to reuse when up to date."""
-    folder.mkdir()
-    if not previous.is_dir():
-        return
-    for path in previous.glob("*.fmu"):
-        try:
-            os.link(path, folder / path.name)
-        except OSError:
-            shutil.copy2(path, folder / path.name)
 
 
 def _run(settings: DemoSettings, out: Path, started: float, log) -> DemoSummary:

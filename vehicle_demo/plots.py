@@ -30,9 +30,12 @@ def _pyplot():
 
 
 def _save(fig, path) -> Path:
+    """Write the figure, published whole (tire_fmu.publish.save_figure)."""
+    from tire_fmu.publish import save_figure
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    save_figure(fig, path, dpi=110, bbox_inches="tight")
     _pyplot().close(fig)
     return path
 

@@ -397,18 +397,21 @@ def local_cluster(n_workers: int = 2, local_directory: str | Path | None = None)
 
 def save_table(result: SweepResult, path: str | Path) -> Path:
     """Write the table as CSV or, for a ``.parquet`` path, Parquet (needs pyarrow)."""
+    from tire_fmu.publish import published_file
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if path.suffix == ".parquet":
-        try:
-            result.table.to_parquet(path, index=False)
-        except ImportError as error:
-            raise SweepError(f"writing {path.name} needs a Parquet engine (pip install "
-                             "pyarrow); or write .csv") from error
-    elif path.suffix == ".csv":
-        result.table.to_csv(path, index=False)
-    else:
+    if path.suffix not in (".csv", ".parquet"):
         raise SweepError(f"{path.name}: the table is written as .csv or .parquet")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with published_file(path) as partial:
+        if path.suffix == ".parquet":
+            try:
+                result.table.to_parquet(partial, index=False)
+            except ImportError as error:
+                raise SweepError(f"writing {path.name} needs a Parquet engine (pip install "
+                                 "pyarrow); or write .csv") from error
+        else:
+            result.table.to_csv(partial, index=False)
     return path
 
 

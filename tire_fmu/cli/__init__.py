@@ -2,10 +2,10 @@
 
 Each command group lives in its own module with a ``register(subparsers)`` function; handlers
 take the parsed arguments and return a :class:`Output` (text for people, a dict for ``--json``).
-Errors the user can fix (a bad command line or value, an output that cannot be written,
-stdout included) end the program with a one-line message and exit status 2; an unexpected one
-with one line and status 1; Ctrl-C with one line and 130; a reader that stopped early (``|
-head``) silently with 141 (:mod:`.parsing`).
+Errors the user can fix (a bad command line or value, a file that cannot be read or used, an
+output that cannot be written, stdout included) end the program with a one-line message and
+exit status 2; an unexpected one with one line and status 1; Ctrl-C with one line and 130; a
+reader that stopped early (``| head``) silently with 141 (:mod:`.parsing`).
 
 Only the module of the command given is imported (:mod:`.commands` lists the others with
 their help lines), so ``tire-fmu --help`` answers without loading numpy or scipy. Commands run
@@ -98,6 +98,7 @@ def _main(argv: list[str], prog: str) -> int:
     import json
 
     from ..core.parameters import ParameterError
+    from ..file_checks import FileContentError
     from .common import CliError, Output, check_plot_option, cli_message, to_jsonable
 
     threads = _default_blas_threads() if args.blas_threads is None else args.blas_threads
@@ -111,7 +112,7 @@ def _main(argv: list[str], prog: str) -> int:
             finally:  # also before the error line of a command that then failed
                 for warning in caught:
                     print(warning_line(prog, warning.message), file=sys.stderr)
-    except (ParameterError, CliError, OSError) as error:
+    except (ParameterError, CliError, FileContentError, OSError) as error:
         if args.debug:
             raise
         message = (cli_message(error, _command_options(parser, args.command))

@@ -77,6 +77,7 @@ def register(subparsers) -> None:
 def run_cleat(args: argparse.Namespace) -> Output:
     from ..core.obstacles import MAX_OBSTACLE_LENGTH_M, MAX_OBSTACLE_SIZE_M, Obstacle
     from ..core.parameters import MAX_POINT_SPACING_M, MIN_POINT_SPACING_M
+    from ..core.standing_waves import MAX_SCANNED_SPEED_M_S
     from ..core.studies import CLEAT_TABLE_HEADER, cleat_convergence, cleat_table
 
     counts, problem = element_list(args.elements_list, DEFAULT_ELEMENT_LIST)
@@ -84,12 +85,12 @@ def run_cleat(args: argparse.Namespace) -> Output:
         problem,
         range_problem("--height", args.height, 1e-4, MAX_OBSTACLE_SIZE_M, "m"),
         range_problem("--length", args.length, 1e-4, MAX_OBSTACLE_LENGTH_M, "m"),
-        positive_problem("--speed", args.speed, "m/s"),
+        positive_problem("--speed", args.speed, "m/s", MAX_SCANNED_SPEED_M_S),
         range_problem("--step", args.step, 1e-7, 1e-3, "s"),
         range_problem("--point-spacing", args.point_spacing, MIN_POINT_SPACING_M,
                       MAX_POINT_SPACING_M, "m"),
-    ]
-    problems.append(range_problem("--load", args.load, 0.0, 1e7, "N"))
+        range_problem("--load", args.load, 0.0, 1e7, "N"),
+    ]  # --zone-length: the core's zone check, as the FMU's contact_zone_length
     tire = checked_tire(args, problems)
     obstacle = Obstacle(-args.height if args.pothole else args.height, args.length, args.shape)
     with progress_bar("meshes") as progress:

@@ -4,21 +4,25 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import re
 import sys
 from collections.abc import Callable, Collection, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..core import TIRE_FIELDS, TireParameters, build_model, validate
+from ..core.inplane_host import HOST_FIELDS
 from ..core.parameters import (
+    ELEMENTS_REASON,
     MAX_ELEMENTS,
     MAX_PATCH_FRACTION,
     MIN_ELEMENTS,
+    FieldSpec,
     ParameterError,
     render,
     tire_problems,
@@ -53,7 +57,12 @@ def cli_message(error: ParameterError, options: Collection[str]) -> str:
 
 
 class CliError(Exception):
-    """A problem with the command line the user can fix; printed as one line."""
+    """A problem with the command line the user can fix; printed as one line. ``problems``:
+    each problem it holds (:func:`raise_problems` puts several in one)."""
+
+    def __init__(self, message: str, problems: Sequence[str] | None = None):
+        super().__init__(message)
+        self.problems = list(problems) if problems is not None else [message]
 
 
 @dataclass
@@ -85,10 +94,25 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+class OutputPath(type(Path())):
+    """A path an output option names, remembering whether the text named a folder (a
+    trailing separator, which Path drops: ``--out x.npz/`` is a folder named x.npz, not the
+    file x.npz)."""
+
+    names_folder = False
+
+
+def output_path(text: str) -> OutputPath:
+    """argparse type of every output option (:func:`output_file` reads it)."""
+    path = OutputPath(text)
+    path.names_folder = len(text) > 1 and text.endswith(("/", os.sep))
+    return path
+
+
 def add_output_options(parser: argparse.ArgumentParser, plot: bool = True) -> None:
     parser.add_argument("--json", action="store_true", help="print machine-readable JSON")
     if plot:
-        parser.add_argument("--plot", metavar="FILE", type=Path,
+        parser.add_argument("--plot", metavar="FILE", type=output_path,
                             help="write a figure (format from the extension: .png, .pdf, .svg)")
 
 
@@ -200,12 +224,14 @@ def operating_point_values(args: argparse.Namespace, undeformed_default: bool) -
     return values
 
 
-def model_from_args(args: argparse.Namespace, undeformed_default: bool = True):
-    """Tire data and operating point from the options, every problem reported at once."""
-    tire_values = parse_tire_overrides(args)
-    op_values = operating_point_values(args, undeformed_default)
-    tire, op = validate(tire_values, op_values)
-    return build_model(tire, op)
+def validated_args(args: argparse.Namespace, undeformed_default: bool = True):
+    """(tire, operating point) from the options, every problem with them at once."""
+    return validate(parse_tire_overrides(args), operating_point_values(args, undeformed_default))
+
+
+def model_from_args(args: argparse.Namespace, undeformed_default: bool = True, checked=None):
+    """The model of the options (``checked``: their :func:`validated_args` already)."""
+    return build_model(*(checked or validated_args(args, undeformed_default)))
 
 
 def write_plot(args: argparse.Namespace, output: Output, draw: Callable[[Path], Path]) -> None:
@@ -243,6 +269,8 @@ def check_plot_option(args: argparse.Namespace) -> None:
     path = getattr(args, "plot", None)
     if path is None:
         return
+    if getattr(path, "names_folder", False):
+        raise CliError(f"--plot = {str(path) + os.sep!r} names a folder: give a file name")
     formats = figure_formats()
     suffix = path.suffix.lower().lstrip(".")
     if suffix not in formats:
@@ -269,10 +297,18 @@ def output_file(option: str, path: Path, suffix: str, default_name: str | None =
     existing folder, or, given ``default_name``, a folder to hold that file: an existing one,
     or a path without an extension (created with its parents by :func:`make_folder` when the
     file is written)."""
+    folder_named = getattr(path, "names_folder", False)
     path = Path(path)
-    if default_name is not None and (path.is_dir() or (path.suffix == "" and not path.exists())):
+    if default_name is not None and (path.is_dir() or folder_named or (
+            path.suffix == "" and not path.exists())):
+        if path.exists() and not path.is_dir():
+            raise CliError(f"{option} = {str(path) + os.sep!r}: {str(path)!r} is a file, not "
+                           "a folder")
         _check_ancestors(option, path)
         return path / default_name
+    if folder_named:
+        raise CliError(f"{option} = {str(path) + os.sep!r} names a folder (it ends in "
+                       f"{os.sep}): give a file name ending in {suffix}")
     if path.is_dir():
         raise CliError(f"{option} = {str(path)!r} is a folder: give a file name ending "
                        f"in {suffix}")
@@ -325,27 +361,57 @@ def _cell(value: Any) -> str:
 
 
 def range_problem(option: str, value: Any, low: float, high: float, unit: str = "",
-                  integer: bool = False) -> str | None:
-    """Message naming the option, its value and the closed range [low, high], or None."""
-    kind = "an integer" if integer else "a number"
-    text_unit = f" {unit}" if unit else ""
-    if value is None or not np.isfinite(value) or not low <= value <= high:
-        return f"{option} = {value!r}{text_unit}: must be {kind} in [{low:g}, {high:g}]{text_unit}"
-    return None
+                  integer: bool = False, low_inclusive: bool = True,
+                  reason: str = "") -> str | None:
+    """The option's problem as the FMUs' parameters find theirs (:class:`FieldSpec`: a
+    finite number, an integer if asked, in [low, high] or (low, high]) and words it
+    (:func:`render`), or None."""
+    problem = FieldSpec(option, unit, reason, low, high, low_inclusive, integer).problem(
+        _number(value))
+    return None if problem is None else render(problem)
+
+
+def field_problem(option: str, value: Any, spec: FieldSpec, reason: str | None = None
+                  ) -> str | None:
+    """The option's problem against a setting's own range (``spec``: the FMU's parameter it
+    sets, :data:`~tire_fmu.core.inplane_host.HOST_FIELDS`, :data:`TIRE_FIELDS`), or None."""
+    problem = replace(spec, name=option, description=spec.description if reason is None
+                      else reason).problem(_number(value))
+    return None if problem is None else render(problem)
+
+
+def _number(value: Any) -> Any:
+    """What FieldSpec.problem reads: True is no number on a command line (float makes it 1)."""
+    return repr(value) if isinstance(value, bool) else value
+
+
+#: The highest frequency any command computes or lists (Hz): the in-plane FMU's f_max limit,
+#: 300 times the band the model is made for.
+MAX_FREQUENCY_HZ = HOST_FIELDS["f_max_hz"].high
+
+
+def frequency_problem(option: str, value: Any) -> str | None:
+    """A frequency limit in (0, MAX_FREQUENCY_HZ] Hz."""
+    return range_problem(option, value, 0.0, MAX_FREQUENCY_HZ, "Hz", low_inclusive=False)
+
+
+def frequency_grid_problems(args: argparse.Namespace) -> list[str | None]:
+    """What is wrong with --min-frequency, --max-frequency and --points."""
+    low, high = args.min_frequency, args.max_frequency
+    return [
+        range_problem("--min-frequency", low, 1e-3, MAX_FREQUENCY_HZ, "Hz"),
+        range_problem("--max-frequency", high, 1e-3, MAX_FREQUENCY_HZ, "Hz"),
+        range_problem("--points", args.points, 2, 100_000, integer=True),
+        None if high > low else
+        f"--max-frequency = {high:g} Hz: must be above --min-frequency = {low:g} Hz",
+    ]
 
 
 def frequency_grid(args: argparse.Namespace) -> np.ndarray:
     """The log-spaced frequencies (Hz) of --min-frequency, --max-frequency and --points, every
     problem with them at once."""
-    low, high = args.min_frequency, args.max_frequency
-    raise_problems([
-        range_problem("--min-frequency", low, 1e-3, 1e5, "Hz"),
-        range_problem("--max-frequency", high, 1e-3, 1e5, "Hz"),
-        range_problem("--points", args.points, 2, 100_000, integer=True),
-        None if high > low else
-        f"--max-frequency = {high:g} Hz: must be above --min-frequency = {low:g} Hz",
-    ])
-    return np.geomspace(low, high, args.points)
+    raise_problems(frequency_grid_problems(args))
+    return np.geomspace(args.min_frequency, args.max_frequency, args.points)
 
 
 def response_table(responses, marks_hz=(1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 300.0)) -> str:
@@ -359,14 +425,46 @@ def response_table(responses, marks_hz=(1.0, 10.0, 50.0, 100.0, 150.0, 200.0, 30
     return table(rows, ["f [Hz]"] + [f"|H| {r.label} [{r.unit}]" for r in responses])
 
 
-def positive_problem(option: str, value: Any, unit: str) -> str | None:
-    if value is None or not np.isfinite(value) or not value > 0:
-        return f"{option} = {value!r} {unit}: must be a finite number > 0 {unit}"
-    return None
+def positive_problem(option: str, value: Any, unit: str, high: float) -> str | None:
+    """A number in (0, high]."""
+    return range_problem(option, value, 0.0, high, unit, low_inclusive=False)
 
 
 def elements_problem(value: int, option: str = "--elements") -> str | None:
-    return range_problem(option, value, MIN_ELEMENTS, MAX_ELEMENTS, integer=True)
+    """A mesh, worded as the core's n_elements."""
+    return range_problem(option, value, MIN_ELEMENTS, MAX_ELEMENTS, integer=True,
+                         reason=ELEMENTS_REASON)
+
+
+def order_problem(option: str, value: Any, elements: Any, low: int = 1,
+                  most: int | None = None) -> str | None:
+    """The highest order a command lists: an integer from ``low`` up to what the mesh
+    resolves (N / 2; MAX_ELEMENTS / 2 while --elements itself is wrong, so that one mistake
+    is not reported twice), at most ``most``."""
+    valid = elements_problem(elements) is None
+    high = int(elements) // 2 if valid else MAX_ELEMENTS // 2
+    return range_problem(option, value, low, min(high, most or high), integer=True,
+                         reason=f"orders up to N/2 = {high} on this mesh" if valid else "")
+
+
+def checked_together(*steps: Callable[[], Any]) -> list[Any]:
+    """The results of ``steps`` (callables that check options and build from them), once
+    every one has run: the problems they raise (CliError, ParameterError in the command's
+    words) are raised together in one line instead of one group at a time."""
+    results, errors = [], []
+    for step in steps:
+        try:
+            results.append(step())
+        except (CliError, ParameterError) as error:
+            errors.append(error)
+            results.append(None)
+    if len(errors) == 1:  # as it is (--debug shows where it came from)
+        raise errors[0]
+    raise_problems([problem for error in errors for problem in (
+        error.problems if isinstance(error, CliError) else
+        [cli_message(ParameterError([detail]), CLI_NAMES.values())
+         for detail in error.details])])
+    return results
 
 
 def raise_problems(problems: Sequence[str | None]) -> None:
@@ -374,7 +472,7 @@ def raise_problems(problems: Sequence[str | None]) -> None:
     if len(found) == 1:
         raise CliError(found[0])
     if found:
-        raise CliError(f"{len(found)} problems: " + "; ".join(found))
+        raise CliError(f"{len(found)} problems: " + "; ".join(found), found)
 
 
 def patch_length_problem(option: str, value: float, tire: TireParameters,

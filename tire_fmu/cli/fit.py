@@ -4,18 +4,25 @@ from __future__ import annotations
 
 import argparse
 import math
+from dataclasses import replace
 from pathlib import Path
 
 from ..core.fit import CRITERIA, FitError, StaticMeasurement, fit_tire
 from ..core.fit_inplane import FITTABLE
-from ..core.parameters import DEFAULT_LOAD_N
+from ..core.inplane_host import HOST_FIELDS
+from ..core.parameters import DEFAULT_LOAD_N, MAX_PATCH_FRACTION, TIRE_FIELDS, FieldSpec
 from .common import (
+    MAX_FREQUENCY_HZ,
     CliError,
     Output,
     add_output_options,
     add_tire_options,
     checked_tire,
     elements_problem,
+    field_problem,
+    order_problem,
+    output_file,
+    output_path,
     plot_with,
     positive_problem,
     range_problem,
@@ -91,7 +98,7 @@ def register(subparsers) -> None:
     p.add_argument("--determined-within", metavar="X", type=float, default=0.05,
                    help="flag a parameter whose interval reaches further than this relative "
                    "distance from its value (default 0.05)")
-    p.add_argument("--out", metavar="FILE.toml", type=Path,
+    p.add_argument("--out", metavar="FILE.toml", type=output_path,
                    help="write the fitted tire as a tire file (read it with --tire-file)")
     p.add_argument("--name", default="", help="name written into the tire file")
     p.add_argument("--description", default=None,
@@ -114,6 +121,26 @@ def _static(args) -> StaticMeasurement | None:
                              n_elements=args.static_elements)
 
 
+def _measured_problems(args: argparse.Namespace) -> list[str | None]:
+    """The measured values given as numbers: each a finite number in its range (the loads and
+    speed as the in-plane FMU's, the rest up to what the tire data allow)."""
+    given = [
+        ("--load", args.load, HOST_FIELDS["load_n"]),
+        ("--slip-load", args.slip_load, HOST_FIELDS["load_n"]),
+        ("--slip-speed", args.slip_speed, replace(HOST_FIELDS["speed_m_s"], low_inclusive=False)),
+        ("--vertical-stiffness", args.vertical_stiffness,
+         FieldSpec("", "N/m", "", 0.0, TIRE_FIELDS["k_r1"].high)),
+        ("--footprint-length", args.footprint_length,
+         FieldSpec("", "m", "", 0.0, MAX_PATCH_FRACTION * 2 * math.pi * TIRE_FIELDS["R"].high)),
+        ("--rotational-free", args.rotational_free,
+         FieldSpec("", "Hz", "", 0.0, MAX_FREQUENCY_HZ)),
+        ("--slip-stiffness", args.slip_stiffness,
+         FieldSpec("", "N", "", 0.0, TIRE_FIELDS["k_r1"].high)),
+    ]
+    return [field_problem(option, value, spec, "") for option, value, spec in given
+            if value is not None]
+
+
 def run_fit(args: argparse.Namespace) -> Output:
     from ..measurements import MeasurementError, read_modes
 
@@ -122,11 +149,15 @@ def run_fit(args: argparse.Namespace) -> Output:
         elements_problem(args.static_elements, "--static-elements"),
         elements_problem(args.inplane_elements, "--inplane-elements"),
         range_problem("--confidence", args.confidence, 0.5, 0.9999),
-        positive_problem("--determined-within", args.determined_within, ""),
-        positive_problem("--static-weight", args.static_weight, ""),
+        positive_problem("--determined-within", args.determined_within, "", 1.0),
+        positive_problem("--static-weight", args.static_weight, "", 1e6),
+        *_measured_problems(args),
     ]
-    if args.out is not None and not args.out.parent.exists():
-        problems.append(f"--out {args.out}: folder {args.out.parent} does not exist")
+    if args.out is not None:
+        try:
+            args.out = output_file("--out", args.out, ".toml")
+        except CliError as error:  # reported with the others
+            problems.append(str(error))
     targets = _inplane_targets(args, problems)
     for name in (args.free_tangential or "").split(","):
         if name.strip() and name.strip() not in FITTABLE:
@@ -187,10 +218,17 @@ def _inplane_targets(args, problems: list) -> list:
     for item in args.tangential_mode:
         order, sep, hz = item.partition("=")
         try:
-            targets.append(InPlaneTarget("tangential", float(hz), order=int(order)))
+            order_n, hz_value = int(order), float(hz)
         except ValueError:
             problems.append(f"--tangential-mode {item!r}: expected N=HZ, N an integer order "
                             "and HZ a frequency in Hz")
+            continue
+        found = [order_problem(f"--tangential-mode {item!r}: N", order_n, None, low=0),
+                 field_problem(f"--tangential-mode {item!r}: HZ", hz_value,
+                               FieldSpec("", "Hz", "", 0.0, MAX_FREQUENCY_HZ), "")]
+        problems += [problem for problem in found if problem]
+        if not any(found):
+            targets.append(InPlaneTarget("tangential", hz_value, order=order_n))
     if args.rotational_free is not None:
         targets.append(InPlaneTarget("rotational_free", args.rotational_free))
     if args.slip_stiffness is not None:

@@ -15,6 +15,7 @@ from .common import (
     checked_tire,
     make_folder,
     output_file,
+    output_path,
     writing,
 )
 
@@ -30,7 +31,7 @@ def register(subparsers) -> None:
         "--tire-file / --tire (default GL073A). A host needs Python with numpy and scipy "
         "(pythonfmu embeds the host's Python).",
     )
-    p.add_argument("out", metavar="OUT", type=Path,
+    p.add_argument("out", metavar="OUT", type=output_path,
                    help="file to write (ending in .fmu), or a folder for TireModal.fmu (a name "
                    "without an extension: created if missing)")
     add_tire_options(p)  # the tire the FMU's parameters start from

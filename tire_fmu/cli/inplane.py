@@ -5,7 +5,9 @@ modes of the tire with its rim held or free; ground-frame frequencies per order 
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
+from ..core.inplane_host import HOST_FIELDS
 from ..core.parameters import DEFAULT_LOAD_N
 from .commands import command_help
 from .common import (
@@ -16,9 +18,11 @@ from .common import (
     add_tire_options,
     checked_tire,
     elements_problem,
+    field_problem,
+    frequency_problem,
     load_default_text,
+    order_problem,
     plot_with,
-    positive_problem,
     raise_problems,
     range_problem,
     table,
@@ -50,6 +54,32 @@ def add_ring_options(parser, points_when: str) -> None:
     parser.add_argument("--tangential", metavar="NAME=VALUE", action="append", default=[],
                         help="override a tangential parameter of the tire file (repeatable). "
                         f"Names: {names}")
+
+
+def ring_problems(args: argparse.Namespace) -> list[str | None]:
+    """--elements and --point-spacing of add_ring_options."""
+    return [elements_problem(args.elements),
+            range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m")]
+
+
+def load_problem(load_n) -> str | None:
+    """--load of an in-plane command: the in-plane FMU's load, or 0 for the undeformed tire."""
+    return field_problem("--load", load_n, replace(HOST_FIELDS["load_n"], low_inclusive=True),
+                         "0 N: the undeformed tire")
+
+
+def footprint_deflection(model, load_n: float, n_elements: int, **options) -> float:
+    """The deflection for the load (deflection_for_load); a footprint it cannot find is the
+    load's problem in the in-plane FMU's words."""
+    from ..core.inplane_contact import ContactSetError, deflection_for_load
+    from ..core.inplane_host import footprint_problem
+    from ..core.parameters import ParameterError
+
+    try:
+        return deflection_for_load(model, load_n, n_elements, **options)
+    except ContactSetError as error:
+        raise ParameterError([footprint_problem(load_n, model.tire.k_cw, n_elements)]
+                             ) from error
 
 
 def register_modes(subparsers) -> None:
@@ -127,12 +157,13 @@ def run_inplane_speed_sweep(args: argparse.Namespace) -> Output:
     from ..core.inplane_modes import critical_speed as inplane_critical_speed
     from ..core.inplane_modes import speed_sweep
 
-    raise_problems([elements_problem(args.elements),
-                    positive_problem("--max-frequency", args.max_frequency, "Hz"),
+    raise_problems([*ring_problems(args),
+                    frequency_problem("--max-frequency", args.max_frequency),
                     None if args.max_speed is None else
-                    range_problem("--max-speed", args.max_speed, 0.1, 150.0, "m/s"),
+                    range_problem("--max-speed", args.max_speed, 0.1,
+                                  HOST_FIELDS["speed_m_s"].high, "m/s"),
                     range_problem("--speeds", args.speeds, 2, 400, integer=True),
-                    range_problem("--nmax", args.nmax, 0, args.elements // 2, integer=True)])
+                    order_problem("--nmax", args.nmax, args.elements)])
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
@@ -200,24 +231,24 @@ def run_inplane_cleat(args: argparse.Namespace) -> Output:
     from scipy.signal import periodogram
 
     from ..core.inplane import InPlaneTire
-    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load
+    from ..core.inplane_contact import InPlaneSimulator
     from ..core.obstacles import cleat
 
     size, length = args.max_obstacle
     raise_problems([
-        elements_problem(args.elements),
+        *ring_problems(args),
         range_problem("--speed", args.speed, 0.5, 60.0, "m/s"),
-        range_problem("--load", args.load, 0.0, 1e6, "N"),
+        load_problem(args.load),
         range_problem("--height", args.height, 1e-4, size, "m"),
         range_problem("--length", args.length, 1e-4, length, "m"),
-        range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m"),
-        range_problem("--f-max", args.f_max, 0.0, 1e5, "Hz"),
-        range_problem("--step", args.step, 1e-6, 1e-3, "s"),
+        None if args.f_max == 0 else field_problem("--f-max", args.f_max,
+                                                   HOST_FIELDS["f_max_hz"], "0: every DOF"),
+        field_problem("--step", args.step, HOST_FIELDS["step_s"]),
     ])
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
-    deflection = 0.0 if args.load == 0 else deflection_for_load(
+    deflection = 0.0 if args.load == 0 else footprint_deflection(
         model, args.load, args.elements, point_spacing_m=args.point_spacing)
     ahead = 0.4  # m of road before the cleat: past the zone's front, rolling settled
     sim = InPlaneSimulator(model, args.elements, args.speed, deflection, step_s=args.step,
@@ -287,10 +318,14 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
     from ..core.inplane_modes import critical_speed as inplane_critical_speed
     from ..core.inplane_modes import speed_sweep, tire_modes
 
-    raise_problems([elements_problem(args.elements),
-                    positive_problem("--max-frequency", args.max_frequency, "Hz"),
-                    range_problem("--speed", args.speed, 0.0, 150.0, "m/s"),
-                    range_problem("--nmax", args.nmax, 0, args.elements // 2, integer=True)])
+    raise_problems([*ring_problems(args),
+                    frequency_problem("--max-frequency", args.max_frequency),
+                    field_problem("--speed", args.speed, HOST_FIELDS["speed_m_s"]),
+                    None if args.load is None else load_problem(args.load),
+                    range_problem("--torque", args.torque, -2e4, 2e4, "N m"),
+                    # the orders are listed at --speed only: the mesh bounds them there
+                    order_problem("--nmax", args.nmax,
+                                  args.elements if args.speed > 0 else None)])
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file),
@@ -339,18 +374,16 @@ def run_inplane_modes(args: argparse.Namespace) -> Output:
 
 
 def _loaded(args: argparse.Namespace, model) -> Output:
-    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load, loaded_modes
+    from ..core.inplane_contact import InPlaneSimulator, loaded_modes
 
-    raise_problems([range_problem("--load", args.load, 0.0, 1e6, "N"),
-                    range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m")])
     wheel = "free" if args.rim_free else "held"
     if args.torque != 0.0 and not (args.speed > 0 and args.rim_free):
         raise CliError("--torque: only with --load, --speed and --rim-free (a held wheel's "
                        "torque is what holds it)")
     if args.speed > 0:
         return _rolling(args, model, wheel)
-    deflection = deflection_for_load(model, args.load, args.elements,
-                                     point_spacing_m=args.point_spacing)
+    deflection = footprint_deflection(model, args.load, args.elements,
+                                      point_spacing_m=args.point_spacing)
     sim = InPlaneSimulator(model, args.elements, 0.0, deflection, wheel=wheel,
                            point_spacing_m=args.point_spacing)
     result = loaded_modes(sim, f_max_hz=args.max_frequency)
@@ -367,12 +400,11 @@ def _loaded(args: argparse.Namespace, model) -> Output:
 
 
 def _rolling(args: argparse.Namespace, model, wheel: str) -> Output:
-    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load, steady_rolling
+    from ..core.inplane_contact import InPlaneSimulator, steady_rolling
     from ..core.inplane_rolling_modes import rolling_modes
 
-    raise_problems([range_problem("--torque", args.torque, -2e4, 2e4, "N m")])
-    deflection = deflection_for_load(model, args.load, args.elements,
-                                     point_spacing_m=args.point_spacing)
+    deflection = footprint_deflection(model, args.load, args.elements,
+                                      point_spacing_m=args.point_spacing)
     sim = InPlaneSimulator(model, args.elements, args.speed, deflection, wheel=wheel,
                            point_spacing_m=args.point_spacing)
     steady = steady_rolling(sim, args.torque)

@@ -5,21 +5,24 @@ its report, and the model written as .npz or .mat)."""
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
+from ..core.inplane_host import HOST_FIELDS
 from ..core.parameters import DEFAULT_LOAD_N
 from .commands import command_help
 from .common import (
     LOAD_ZERO,
+    MAX_FREQUENCY_HZ,
     CliError,
     Output,
     add_output_options,
     add_tire_options,
     checked_tire,
-    elements_problem,
+    field_problem,
     frequency_grid,
+    frequency_grid_problems,
     load_default_text,
     output_file,
+    output_path,
     plot_with,
     raise_problems,
     range_problem,
@@ -28,7 +31,14 @@ from .common import (
     write_plot,
     writing,
 )
-from .inplane import DEFAULT_TIRE_FILE, _tangential, add_ring_options
+from .inplane import (
+    DEFAULT_TIRE_FILE,
+    _tangential,
+    add_ring_options,
+    footprint_deflection,
+    load_problem,
+    ring_problems,
+)
 
 INPUTS = ("torque", "rim_x", "rim_z", "road")
 OUTPUTS = ("rim_Fx", "rim_Fz", "rim_My", "wheel_rate")
@@ -75,7 +85,7 @@ def register(subparsers) -> None:
         "under each contact point, whose windows of road the file gives as delays behind the "
         "contact zone's front.",
     )
-    p.add_argument("--out", metavar="FILE", type=Path,
+    p.add_argument("--out", metavar="FILE", type=output_path,
                    help="write the reduced model (.npz or .mat)")
     p.add_argument("--full", action="store_true",
                    help="with --out: write the full linear model, not the reduced one")
@@ -121,39 +131,51 @@ def _add_reduction_options(p: argparse.ArgumentParser) -> None:
                    f"{defaults.band_hz[0]:g},{defaults.band_hz[1]:g})")
 
 
-def _settings(args: argparse.Namespace):
-    from ..core.inplane_io import InPlaneReductionSettings
-
-    band = InPlaneReductionSettings().band_hz
-    if args.band is not None:
-        try:
-            band = tuple(float(x) for x in args.band.split(","))
-        except ValueError:
-            band = ()
-        if len(band) != 2 or not 0 < band[0] < band[1] <= 1e5:
-            raise CliError(f"--band = {args.band!r}: must be LOW,HIGH in Hz with "
-                           "0 < LOW < HIGH <= 1e5, e.g. 0.5,300")
-    raise_problems([
+def _settings_problems(args: argparse.Namespace) -> list[str | None]:
+    """--band, --target-error and --n-states."""
+    return [
+        None if args.band is None or _band(args.band) is not None else
+        f"--band = {args.band!r}: must be LOW,HIGH in Hz with 0 < LOW < HIGH <= "
+        f"{MAX_FREQUENCY_HZ:g}, e.g. 0.5,300",
         range_problem("--target-error", args.target_error, 1e-6, 1.0),
         None if args.n_states is None else
         range_problem("--n-states", args.n_states, 1, 10_000, integer=True),
-    ])
+    ]
+
+
+def _band(text: str) -> tuple[float, float] | None:
+    try:
+        band = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        return None
+    return band if len(band) == 2 and 0 < band[0] < band[1] <= MAX_FREQUENCY_HZ else None
+
+
+def _settings(args: argparse.Namespace):
+    """The reduction's settings (checked by :func:`_settings_problems`)."""
+    from ..core.inplane_io import InPlaneReductionSettings
+
+    band = InPlaneReductionSettings().band_hz if args.band is None else _band(args.band)
     return InPlaneReductionSettings(args.target_error, band, n_states=args.n_states)
+
+
+def _operating_problems(args: argparse.Namespace) -> list[str | None]:
+    """The operating point's options and the ring's."""
+    return [
+        *ring_problems(args),
+        load_problem(args.load),
+        range_problem("--speed", args.speed, 0.0, 60.0, "m/s"),
+        range_problem("--torque", args.torque, -2e4, 2e4, "N m"),
+        None if args.ring_f_max == 0 else field_problem(
+            "--ring-f-max", args.ring_f_max, HOST_FIELDS["f_max_hz"], "0: every DOF"),
+    ]
 
 
 def _linear_model(args: argparse.Namespace):
     from ..core.inplane import InPlaneTire
-    from ..core.inplane_contact import InPlaneSimulator, deflection_for_load
+    from ..core.inplane_contact import InPlaneSimulator
     from ..core.inplane_io import linear_model
 
-    raise_problems([
-        elements_problem(args.elements),
-        range_problem("--load", args.load, 0.0, 1e6, "N"),
-        range_problem("--speed", args.speed, 0.0, 60.0, "m/s"),
-        range_problem("--torque", args.torque, -2e4, 2e4, "N m"),
-        range_problem("--point-spacing", args.point_spacing, 1e-3, 0.05, "m"),
-        range_problem("--ring-f-max", args.ring_f_max, 0.0, 1e5, "Hz"),
-    ])
     if args.torque != 0.0 and (args.wheel != "free" or args.speed == 0.0):
         raise CliError("--torque: only for a free wheel rolling (--speed > 0): a held wheel's "
                        "torque is what holds it, and at rest a torque has no steady state")
@@ -163,7 +185,7 @@ def _linear_model(args: argparse.Namespace):
     if args.tire_file is None:
         args.tire_file = DEFAULT_TIRE_FILE
     model = InPlaneTire(checked_tire(args), _tangential(args.tangential, args.tire_file))
-    deflection = 0.0 if args.load == 0.0 else deflection_for_load(
+    deflection = 0.0 if args.load == 0.0 else footprint_deflection(
         model, args.load, args.elements, point_spacing_m=args.point_spacing)
     sim = InPlaneSimulator(model, args.elements, args.speed, deflection, wheel=args.wheel,
                            point_spacing_m=args.point_spacing, f_max_hz=args.ring_f_max or None)
@@ -187,6 +209,8 @@ def run_inplane_frf(args: argparse.Namespace) -> Output:
     from ..core.frequency_response import FrequencyResponse
     from ..core.inplane_io import INPUT_UNITS, OUTPUT_UNITS, reduce_linear_model
 
+    raise_problems(frequency_grid_problems(args) + _settings_problems(args)
+                   + _operating_problems(args))
     freqs = frequency_grid(args)
     low, high = freqs[0], freqs[-1]
     settings = _settings(args)
@@ -230,15 +254,17 @@ def run_inplane_reduce(args: argparse.Namespace) -> Output:
     from ..core.inplane_io import reduce_linear_model
     from ..model_files import save_inplane_mat, save_inplane_npz
 
+    problems = _settings_problems(args) + _operating_problems(args)
     out = None
     if args.out is not None:
         suffix = args.out.suffix.lower()
-        if suffix not in (".npz", ".mat"):
-            raise CliError(f"--out = {str(args.out)!r}: must be a file name ending in .npz "
-                           "or .mat")
-        out = output_file("--out", args.out, suffix)
+        try:
+            out = output_file("--out", args.out, suffix if suffix == ".mat" else ".npz")
+        except CliError as error:
+            problems.append(str(error).replace("ending in .npz", "ending in .npz or .mat"))
     elif args.full:
-        raise CliError("--full: only with --out (it chooses the model written)")
+        problems.append("--full: only with --out (it chooses the model written)")
+    raise_problems(problems)
     settings = _settings(args)
     linear, operating = _linear_model(args)
     reduced = reduce_linear_model(linear, settings)

@@ -11,11 +11,14 @@ import argparse
 import difflib
 import errno
 import os
+import re
 import sys
 import warnings
 from collections.abc import Sequence
 from contextlib import contextmanager
 
+_NEGATIVE_NUMBER = re.compile(r"^-(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf|infinity|nan)$",
+                              re.IGNORECASE)
 #: exit status after Ctrl-C (128 + SIGINT, what a shell reports for a process it stopped)
 INTERRUPTED = 130
 #: exit status when stdout's reader went away (128 + SIGPIPE, as for a C tool)
@@ -30,6 +33,9 @@ class Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
+        # a negative number in any float spelling is a value (argparse's own pattern knows
+        # -5 and -0.5, not -1e-3): --load -1e-300 reaches the check of --load's range
+        self._negative_number_matcher = _NEGATIVE_NUMBER
 
     def error(self, message: str):  # noqa: D401 - argparse's signature
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")

@@ -20,16 +20,19 @@ from .common import (
     add_output_options,
     add_speed_options,
     add_tire_options,
+    checked_together,
     frequency_grid,
     make_folder,
     model_from_args,
     operating_point_values,
     output_file,
+    output_path,
     parse_tire_overrides,
     plot_with,
     raise_problems,
     response_table,
     table,
+    validated_args,
     write_plot,
     writing,
 )
@@ -87,6 +90,11 @@ def settings_from_args(args: argparse.Namespace) -> ReductionSettings:
                         f"--target-error {args.threshold:g}")
     settings = None
     try:
+        band = _band(args.band)
+    except CliError as error:
+        problems.append(str(error))
+        band = _DEFAULTS.error_band_hz
+    try:
         settings = ReductionSettings(
             method=args.method,
             f_max_hz=args.f_max,
@@ -94,7 +102,7 @@ def settings_from_args(args: argparse.Namespace) -> ReductionSettings:
             static_correction=not args.no_static_correction,
             n_states=args.n_states,
             target_error=args.target_error,
-            error_band_hz=_band(args.band),
+            error_band_hz=band,
         )
     except ParameterError as error:
         problems += error.render(CLI_NAMES, CLI_UNSET)
@@ -161,7 +169,7 @@ def register(subparsers) -> None:
         "builds its model at initialisation; the options become its parameters' start values "
         "(docs/native.md).",
     )
-    p.add_argument("out", metavar="OUT", type=Path,
+    p.add_argument("out", metavar="OUT", type=output_path,
                    help="file to write (.npz, .mat or .fmu; with --format fmu also a folder "
                    "to hold TireModalNative.fmu, created if missing)")
     p.add_argument("--format", choices=EXPORT_FORMATS, default=None,
@@ -186,10 +194,11 @@ def register(subparsers) -> None:
 
 
 def run_frf(args: argparse.Namespace) -> Output:
-    freqs = frequency_grid(args)
+    freqs, settings, checked = checked_together(
+        lambda: frequency_grid(args), lambda: settings_from_args(args),
+        lambda: validated_args(args, undeformed_default=False))
     low, high = freqs[0], freqs[-1]
-    settings = settings_from_args(args)
-    model = model_from_args(args, undeformed_default=False)
+    model = model_from_args(args, checked=checked)
     output_name = args.output
     responses = [full_frequency_response(model, args.input, output_name, freqs)]
     reduced = None
@@ -227,8 +236,9 @@ def _report_text(reduced, model) -> str:
 
 
 def run_reduce(args: argparse.Namespace) -> Output:
-    settings = settings_from_args(args)
-    model = model_from_args(args, undeformed_default=False)
+    settings, checked = checked_together(
+        lambda: settings_from_args(args), lambda: validated_args(args, undeformed_default=False))
+    model = model_from_args(args, checked=checked)
     reduced = reduce(model, settings, report="exact" if args.exact_report else True)
     return Output(text=_report_text(reduced, model), data=reduced.summary())
 
@@ -249,8 +259,9 @@ def run_export(args: argparse.Namespace) -> Output:
     out = output_file("OUT", args.out, f".{fmt}")
     if args.zone_length is not None or args.linear_contact or args.platform:
         raise CliError("--zone-length, --linear-contact and --platform apply to --format fmu")
-    settings = settings_from_args(args)
-    model = model_from_args(args, undeformed_default=False)
+    settings, checked = checked_together(
+        lambda: settings_from_args(args), lambda: validated_args(args, undeformed_default=False))
+    model = model_from_args(args, checked=checked)
     reduced = reduce(model, settings)
     with writing("OUT", out):
         path = (save_npz if fmt == "npz" else save_mat)(reduced, out)

@@ -19,16 +19,19 @@ from .common import (
     add_speed_options,
     add_tire_options,
     checked_tire,
+    checked_together,
     element_list,
     elements_problem,
+    frequency_problem,
     model_from_args,
+    order_problem,
     patch_length_problem,
     plot_with,
-    positive_problem,
     progress_bar,
     raise_problems,
     range_problem,
     table,
+    validated_args,
     write_plot,
 )
 
@@ -131,8 +134,10 @@ DEFAULT_ELEMENT_LIST = "20,40,60,80,100,150,200,300,400"
 
 
 def run_modes(args: argparse.Namespace) -> Output:
-    raise_problems([positive_problem("--max-frequency", args.max_frequency, "Hz")])
-    model = model_from_args(args, undeformed_default=True)
+    _, checked = checked_together(
+        lambda: raise_problems([frequency_problem("--max-frequency", args.max_frequency)]),
+        lambda: validated_args(args, undeformed_default=True))
+    model = model_from_args(args, checked=checked)
     result = modal_analysis(model, f_max_hz=args.max_frequency)
     rolling = model.speed_m_s > 0
     header = ["#", "f [Hz]", "order", "phase", "symmetry" if not rolling else "direction",
@@ -154,7 +159,7 @@ def run_modes(args: argparse.Namespace) -> Output:
 
 
 def run_analytic(args: argparse.Namespace) -> Output:
-    tire = checked_tire(args, [range_problem("--nmax", args.nmax, 0, 10_000, integer=True)])
+    tire = checked_tire(args, [order_problem("--nmax", args.nmax, None, low=0)])
     result = analytic_modes(tire, np.arange(args.nmax + 1))
     rows = [[n, f_in, f_out] for n, f_in, f_out in
             zip(result.orders, result.in_phase_hz, result.out_of_phase_hz)]
@@ -165,13 +170,13 @@ def run_analytic(args: argparse.Namespace) -> Output:
 def run_patch(args: argparse.Namespace) -> Output:
     from ..core.model import footprint_for_deflection
 
-    problems = []
-    if args.deflection is not None:
-        problems.append(range_problem("--deflection", args.deflection, 0.0, 0.5, unit="m"))
-    raise_problems(problems)
     if args.deflection is not None:
         args.load = 0.0  # the zone and its compliance, then the path at that deflection
-    model = model_from_args(args, undeformed_default=False)
+    _, checked = checked_together(
+        lambda: raise_problems([None if args.deflection is None else range_problem(
+            "--deflection", args.deflection, 0.0, 0.5, unit="m")]),
+        lambda: validated_args(args, undeformed_default=False))
+    model = model_from_args(args, checked=checked)
     patch = model.patch
     if args.deflection is not None:
         patch = footprint_for_deflection(model, args.deflection)

@@ -17,6 +17,7 @@ from .common import (
     add_tire_options,
     checked_tire,
     elements_problem,
+    frequency_problem,
     patch_length_problem,
     plot_with,
     positive_problem,
@@ -104,7 +105,7 @@ def _common_problems(args: argparse.Namespace, nmax_high: int) -> list[str | Non
     return [
         elements_problem(args.elements),
         range_problem("--nmax", args.nmax, 1, nmax_high, integer=True),
-        positive_problem("--max-frequency", f_max_hz, "Hz"),
+        frequency_problem("--max-frequency", f_max_hz),
     ]
 
 
@@ -179,9 +180,8 @@ def run_speed_sweep(args: argparse.Namespace) -> Output:
     problems.append(range_problem("--steps", args.steps, 2, 500, integer=True))
     top = None
     if args.max_speed is not None:
-        problems.append(positive_problem("--max-speed", args.max_speed, "m/s")
-                        or range_problem("--max-speed", args.max_speed, 0.0,
-                                         MAX_SCANNED_SPEED_M_S, "m/s"))
+        problems.append(positive_problem("--max-speed", args.max_speed, "m/s",
+                                         MAX_SCANNED_SPEED_M_S))
         top = args.max_speed if problems[-1] is None else None
     tire = checked_tire(args, problems, lambda t: _rolling_checks(args, t, top))
     critical = critical_speed(tire, args.elements).speed_m_s

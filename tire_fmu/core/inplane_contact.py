@@ -1554,6 +1554,10 @@ def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100
     lo, hi = 0.005, 0.04
     f_lo, f_hi = load(lo), load(hi)
     for _ in range(40):
+        if f_hi == f_lo:  # (the C's INPLANE_STATIC_FLAT_SECANT) a load below what it resolves
+            raise ContactSetError(f"the static footprint's load is the same ({f_hi:g} N) at "
+                                  f"deflections {lo:g} m and {hi:g} m: the secant for "
+                                  f"load_n = {load_n:g} N has no next deflection")
         mid = hi - (f_hi - load_n) * (hi - lo) / (f_hi - f_lo)
         f_mid = load(mid)
         if abs(f_mid - load_n) < 1e-9 * load_n:

@@ -15,19 +15,28 @@ with the paper's lumped sidewall (``sidewall_max_order`` = 0) it falls as 1/N.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
-from .contact import DEFAULT_ZONE_LENGTH_M
+from .contact import DEFAULT_ZONE_LENGTH_M, zone_problems
+from .discretisation import Grid
 from .inplane import InPlaneTire, TangentialParameters, tangential_problems
-from .inplane_contact import InPlaneSimulator, InPlaneStepper, deflection_for_load
+from .inplane_contact import (
+    ContactSetError,
+    InPlaneSimulator,
+    InPlaneStepper,
+    deflection_for_load,
+)
 from .parameters import (
     DEFAULT_LOAD_N,
+    ELEMENTS_REASON,
     MAX_ELEMENTS,
     MIN_ELEMENTS,
+    FieldSpec,
     ParameterError,
     Problem,
     TireParameters,
     tire_problems,
+    value_text,
 )
 
 #: The simulator's step the host's steps are whole multiples of (s).
@@ -43,15 +52,26 @@ MAX_HOST_LOAD_N = 1.0e5
 CRITICAL_SPEED_FRACTION = 0.95
 #: The static deflection must stay below this fraction of the tread radius.
 MAX_DEFLECTION_FRACTION = 0.2
-#: The operating point's ranges (inclusive): (low, high, unit) by HostSettings field.
-HOST_RANGES = {
-    "load_n": (0.0, MAX_HOST_LOAD_N, "N"),
-    "speed_m_s": (0.0, 150.0, "m/s"),
-    "n_elements": (MIN_ELEMENTS, MAX_ELEMENTS, ""),
-    "f_max_hz": (1.0, 1e5, "Hz"),
-    "zone_length_m": (0.01, 2.0, "m"),
-    "point_spacing_m": (1e-4, 0.1, "m"),
-    "step_s": (1e-6, 1e-3, "s"),
+#: The operating point's ranges by HostSettings field, as the tire data's are
+#: (:class:`~.parameters.FieldSpec`: the range, whether its low end is allowed, integer or not,
+#: the reason a problem gives): both FMUs read them (spec.h's SPEC_INPLANE_FIELDS), and so does
+#: the command line where it takes the same settings. The load's low end is open: the tire is
+#: built pressed onto the road.
+HOST_FIELDS: dict[str, FieldSpec] = {
+    spec.name: spec
+    for spec in (
+        FieldSpec("load_n", "N", "static vertical load the footprint is built for", 0.0,
+                  MAX_HOST_LOAD_N),
+        FieldSpec("speed_m_s", "m/s", "forward speed the reduced step is built at", 0.0, 150.0,
+                  True),
+        FieldSpec("n_elements", "", ELEMENTS_REASON, MIN_ELEMENTS, MAX_ELEMENTS, True, True),
+        FieldSpec("f_max_hz", "Hz", "highest natural frequency of the ring's modes kept", 1.0,
+                  1e5, True),
+        FieldSpec("zone_length_m", "m", "length of road under the contact points", 0.01, 2.0,
+                  True),
+        FieldSpec("point_spacing_m", "m", "spacing of the contact points", 1e-4, 0.1, True),
+        FieldSpec("step_s", "s", "the tire's own step", 1e-6, 1e-3, True),
+    )
 }
 
 
@@ -102,13 +122,24 @@ class HostModel:
                 "critical_speed_m_s": self.critical_speed_m_s}
 
 
-def _number_problem(name, value, unit, low, high, integer=False) -> Problem | None:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(
-        value) and low <= value <= high and (not integer or float(value).is_integer())
-    if ok:
-        return None
-    kind = "an integer" if integer else "a number"
-    return Problem(name, value, unit, f"{kind} in [{low:g}, {high:g}] {unit}".rstrip())
+#: What a load whose static footprint is not found must be, and why (printf, so that the
+#: native FMU, whose footprint solve refuses in the same cases, says the same: the load as a
+#: value, k_cw as a value with its unit, n_elements).
+FOOTPRINT_ALLOWED = "a load whose static footprint the model finds"
+FOOTPRINT_REASON = ("with k_cw = %s and n_elements = %d its contact set did not settle, or "
+                    "the load is too small for the footprint to resolve; another load, k_cw or "
+                    "n_elements may")
+
+
+def footprint_problem(load_n: float, k_cw: float, n_elements: int) -> Problem:
+    """The load's problem when the static footprint is not found (both FMUs' words)."""
+    return Problem("load_n", load_n, "N", FOOTPRINT_ALLOWED,
+                   FOOTPRINT_REASON % (value_text(k_cw, "N/m^2"), n_elements))
+
+
+def _number(value):
+    """A setting as FieldSpec.problem reads it: True is no number here (it is 1.0 to float)."""
+    return repr(value) if isinstance(value, bool) else value
 
 
 def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTire | None]:
@@ -126,14 +157,17 @@ def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTir
     radius = tire_values.get("R", TireParameters().R)
     problems += tangential_problems(tangential, radius if isinstance(radius, (int, float))
                                     else TireParameters().R)
-    for name, (low, high, unit) in HOST_RANGES.items():
-        problem = _number_problem(name, getattr(settings, name), unit, low, high,
-                                  integer=name == "n_elements")
-        if problem:
-            problems.append(problem)
-    if isinstance(settings.load_n, (int, float)) and settings.load_n == 0:
-        problems.append(Problem("load_n", settings.load_n, "N", "> 0 N",
-                                "the in-plane tire is built pressed onto the road"))
+    ranges = [HOST_FIELDS[name].problem(_number(getattr(settings, name)))
+              for name in HOST_FIELDS]
+    problems += [problem for problem in ranges if problem]
+    if not any(problems) and isinstance(radius, (int, float)):
+        # the contact zone on this mesh (its nodes, the points it makes), as the radial tire's
+        grid = Grid(int(settings.n_elements), float(radius))
+        problems += [replace(problem, field={"contact_zone_length_m": "zone_length_m",
+                                             "contact_point_spacing_m": "point_spacing_m"}
+                             .get(problem.field, problem.field))
+                     for problem in zone_problems(grid, settings.zone_length_m,
+                                                  settings.point_spacing_m)]
     tire = None
     if not problems:
         try:
@@ -191,21 +225,24 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
                 "the sidewall's highest free order sets it: lower sidewall_max_order")])
     options = {"zone_length_m": settings.zone_length_m,
                "point_spacing_m": settings.point_spacing_m}
-    # the footprint of the reduced tire the step runs (its static shapes make it the full
-    # tire's to a fraction of a per cent), so that rim_Fz starts at the load
-    deflection = deflection_for_load(tire, settings.load_n, n, f_max_hz=settings.f_max_hz,
-                                     **options)
-    most = MAX_DEFLECTION_FRACTION * tire.tire.R
-    if not 0.0 < deflection < most:
-        raise ParameterError([Problem("load_n", settings.load_n, "N",
-                                      f"a load the tire carries below {most:g} m of "
-                                      "deflection")])
-    sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
-                           wheel="driven" if settings.wheel_driven
-                           else "free" if settings.wheel_free else "held",
-                           f_max_hz=settings.f_max_hz, backend=backend, library=library,
-                           **options)
-    stepper = InPlaneStepper(sim, host_road=True)
+    try:
+        # the footprint of the reduced tire the step runs (its static shapes make it the full
+        # tire's to a fraction of a per cent), so that rim_Fz starts at the load
+        deflection = deflection_for_load(tire, settings.load_n, n, f_max_hz=settings.f_max_hz,
+                                         **options)
+        most = MAX_DEFLECTION_FRACTION * tire.tire.R
+        if not 0.0 < deflection < most:
+            raise ParameterError([Problem("load_n", settings.load_n, "N",
+                                          f"a load the tire carries below {most:g} m of "
+                                          "deflection")])
+        sim = InPlaneSimulator(tire, n, settings.speed_m_s, deflection, step_s=settings.step_s,
+                               wheel="driven" if settings.wheel_driven
+                               else "free" if settings.wheel_free else "held",
+                               f_max_hz=settings.f_max_hz, backend=backend, library=library,
+                               **options)
+        stepper = InPlaneStepper(sim, host_road=True)
+    except ContactSetError as error:  # the static footprint, at rest or at the speed
+        raise ParameterError([footprint_problem(settings.load_n, tire.tire.k_cw, n)]) from error
     contact = stepper.state.contact
     if contact.size and (contact[0] or contact[-1]):
         raise ParameterError([Problem(

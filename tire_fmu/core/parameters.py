@@ -156,7 +156,8 @@ class FieldSpec:
                            self.description)
         below = number < self.low if self.low_inclusive else number <= self.low
         if below or number > self.high:
-            return Problem(self.name, number, self.unit, f"in {self.range_text()}",
+            kind = "an integer in" if self.integer else "in"
+            return Problem(self.name, number, self.unit, f"{kind} {self.range_text()}",
                            self.description)
         if self.integer and number != math.floor(number):
             return Problem(self.name, number, self.unit, f"an integer in {self.range_text()}",

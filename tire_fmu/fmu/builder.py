@@ -246,8 +246,10 @@ def stage_package(folder: Path, model_identifier: str,
     ``tire_fmu`` renamed), and the host's requirements: (its name, [its folder, the
     requirements file])."""
     _, _, slaves = SLAVES[model_identifier]
-    files = [Path("__init__.py"), *(Path("core", source.name) for source in
-                                    sorted((package_root / "core").glob("*.py")))]
+    # how the slave checks a file it reads (resources/tire_parameters.json): file_checks
+    files = [Path("__init__.py"), Path("file_checks.py"),
+             *(Path("core", source.name) for source in
+               sorted((package_root / "core").glob("*.py")))]
     files += [Path("fmu", name) for name in sorted(_FMU_MODULES + slaves)]
     files += [Path("native", name) for name in _NATIVE_MODULES]
     sources = {path: (package_root / path).read_bytes() for path in files}

@@ -299,12 +299,11 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         DEFAULT_HOST_F_MAX_HZ,
         DEFAULT_HOST_POINT_SPACING_M,
         DEFAULT_HOST_STEP_S,
-        HOST_RANGES,
+        HOST_FIELDS,
     )
 
     def allowed(name):
-        low, high, unit = HOST_RANGES[name]
-        return f"allowed [{low:g}, {high:g}] {unit}".rstrip()
+        return f"allowed {HOST_FIELDS[name].range_text()}"
 
     radial = {v.name: v for v in _signals()}
     table = [radial[name] for name in ("rim_z", "rim_vz", "road_z", "road_vz")] + [
@@ -344,8 +343,8 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         FmuVariable("in_contact", "Boolean", "output", True, "",
                     "true while at least one contact point pushes on the road"),
         FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
-                    "static vertical load the footprint is built for; allowed (0, "
-                    f"{HOST_RANGES['load_n'][1]:g}] N", "--load"),
+                    f"static vertical load the footprint is built for; {allowed('load_n')}",
+                    "--load"),
         FmuVariable("speed", "Real", "parameter", 0.0, "m/s",
                     "forward speed the reduced step is built at (the road passes at speed + "
                     f"rim_vx); allowed [0, {CRITICAL_SPEED_FRACTION:g} of the mesh's critical "

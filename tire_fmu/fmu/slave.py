@@ -27,7 +27,6 @@ How failures surface (docs/fmu.md has the table):
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -53,6 +52,7 @@ from tire_fmu.core.contact_dynamics import (
 from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError, validate, value_text
 from tire_fmu.core.step_limits import MAX_TORQUE_N_M
+from tire_fmu.file_checks import FileContentError, load_json, read_text
 from tire_fmu.fmu.interface import (
     BAKED_PARAMETERS_FILE,
     FMU_NAMES,
@@ -755,7 +755,8 @@ def _model_guid(resources: str | None) -> str:
     if folder not in _GUIDS:
         guid = ""
         try:
-            with open(os.path.join(folder, "modelDescription.xml"), encoding="utf-8") as stream:
+            with open(os.path.join(folder, "modelDescription.xml"), encoding="utf-8",
+                      errors="replace") as stream:
                 found = re.search(r'\bguid="([^"]*)"', stream.read(4096))
             guid = found.group(1) if found else ""
         except OSError:
@@ -771,8 +772,19 @@ def _baked_parameter_values(resources: str | None) -> dict | None:
     path = os.path.join(resources, BAKED_PARAMETERS_FILE)
     if not os.path.isfile(path):
         return None
-    with open(path, encoding="utf-8") as stream:  # written by the builder: small, trusted
-        return {str(k): float(v) for k, v in json.load(stream).items()}
+    # written by the builder, yet a file like any other: checked before it is believed
+    text = read_text(path, MAX_BAKED_BYTES, "the FMU's baked parameter values")
+    values = load_json(text, path, "its JSON", MAX_BAKED_BYTES)
+    if not (isinstance(values, dict) and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in values.values())):
+        raise FileContentError(f"{path}: must be a JSON object of parameter names and finite "
+                               "numbers, as the FMU's builder writes it")
+    return {str(k): float(v) for k, v in values.items()}
+
+
+#: The largest resources/tire_parameters.json read (bytes): the builder writes about 2 kB.
+MAX_BAKED_BYTES = 1 << 16
 
 
 def _fmu_problems(error: ParameterError) -> list[str]:

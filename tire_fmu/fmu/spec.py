@@ -202,6 +202,9 @@ MESSAGES: dict[str, str] = {
     "POINTS_REASON": contact.POINTS_REASON,
     "LOAD_RANGE": "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N "
                   "(deflection %.3g mm) %s",
+    # the in-plane FMU's static footprint not found (the load, k_cw as a value, n_elements)
+    "INPLANE_FOOTPRINT_ALLOWED": inplane_host.FOOTPRINT_ALLOWED,
+    "INPLANE_FOOTPRINT_REASON": inplane_host.FOOTPRINT_REASON,
     "LOAD_REASON_ZONE": "its footprint reaches the end of the contact zone (raise "
                         "contact_zone_length)",
     "LOAD_REASON_LENGTH": "its footprint reaches %.4g m, beyond which the linear ring is not "
@@ -548,6 +551,13 @@ def _variable_row(v: FmuVariable) -> str:
             f"{_c_number(start)}, {_c_string(v.unit)}}},")
 
 
+def _field_row(f: parameters.FieldSpec, name: str) -> str:
+    """A SpecField row: a FieldSpec under the FMU's name for it."""
+    return (f"    {{{_c_string(name)}, {_c_string(f.unit)}, {_c_string(f.description)}, "
+            f"{_c_string(f.range_text())}, {_c_number(float(f.low))}, {_c_number(float(f.high))}, "
+            f"{int(f.low_inclusive)}, {int(f.integer)}}},")
+
+
 def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     """spec.h: this module as C (constants, variable table, tire fields, messages)."""
     variables = variables or fmu_variables()
@@ -597,15 +607,11 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
         f"#define SPEC_N_TIRE_FIELDS {len(parameters.TIRE_FIELDS)}",
         "static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {",
     ]
-    for f in parameters.TIRE_FIELDS.values():
-        lines.append(f"    {{{_c_string(f.name)}, {_c_string(f.unit)}, "
-                     f"{_c_string(f.description)}, {_c_string(f.range_text())}, "
-                     f"{_c_number(f.low)}, {_c_number(f.high)}, {int(f.low_inclusive)}, "
-                     f"{int(f.integer)}}},")
+    lines += [_field_row(f, f.name) for f in parameters.TIRE_FIELDS.values()]
     lines += ["};", "",
-              "/* the in-plane FMU's ranges (inclusive), in the order of the core's checks: "
-              "the tangential data (core/inplane.py's TANGENTIAL_RANGES), then the operating "
-              "point (core/inplane_host.py's HOST_RANGES, by FMU name) */",
+              "/* the in-plane FMU's ranges, in the order of the core's checks: the tangential "
+              "data (core/inplane.py's TANGENTIAL_RANGES, inclusive), then the operating point "
+              "(core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */",
               "typedef struct {", "    const char *name, *unit;", "    double low, high;",
               "    int integer;", "} SpecRange;", "",
               f"#define SPEC_N_TANGENTIAL_FIELDS {len(inplane.TANGENTIAL_RANGES)}",
@@ -613,12 +619,10 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     for name, (low, high, unit) in inplane.TANGENTIAL_RANGES.items():
         lines.append(f"    {{{_c_string(name)}, {_c_string(unit)}, {_c_number(float(low))}, "
                      f"{_c_number(float(high))}, 0}},")
-    lines += ["};", f"#define SPEC_N_INPLANE_RANGES {len(inplane_host.HOST_RANGES)}",
-              "static const SpecRange SPEC_INPLANE_RANGES[SPEC_N_INPLANE_RANGES] = {"]
-    for name, (low, high, unit) in inplane_host.HOST_RANGES.items():
-        fmu_name = inplane_host.FMU_NAMES[name]
-        lines.append(f"    {{{_c_string(fmu_name)}, {_c_string(unit)}, {_c_number(float(low))}, "
-                     f"{_c_number(float(high))}, {int(name == 'n_elements')}}},")
+    lines += ["};", f"#define SPEC_N_INPLANE_FIELDS {len(inplane_host.HOST_FIELDS)}",
+              "static const SpecField SPEC_INPLANE_FIELDS[SPEC_N_INPLANE_FIELDS] = {"]
+    lines += [_field_row(f, inplane_host.FMU_NAMES[f.name])
+              for f in inplane_host.HOST_FIELDS.values()]
     lines += ["};", ""]
     lines.append(f"#define SPEC_STATE_MAGIC {_c_string(STATE_MAGIC)}")
     lines.append(f"#define SPEC_STATE_VERSION {STATE_VERSION}")

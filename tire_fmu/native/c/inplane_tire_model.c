@@ -144,7 +144,7 @@ static double value_of(const double* values, const char* name)
     return vr < 0 ? NAN : values[vr];
 }
 
-/* "a number in [low, high] unit" (the core's f"{kind} in [{low:g}, {high:g}] {unit}") */
+/* "a number in [low, high] unit" (core/inplane.py's tangential_problems) */
 static void range_words(const SpecRange* r, char* out, size_t size)
 {
     snprintf(out, size, "%s in [%g, %g]%s%s", r->integer ? "an integer" : "a number", r->low,
@@ -157,9 +157,21 @@ static int outside(const SpecRange* r, double value)
              (!r->integer || value == floor(value)));
 }
 
+/* the load's problem when the static footprint is not found (inplane_host.footprint_problem:
+ * the secant or the contact set of inplane_static.c refused, at rest or at the speed) */
+static void footprint_problem(const double* values, Problems* p)
+{
+    char allowed[256], reason[512], k_cw[64];
+    value_text(values[SPEC_VR_K_CW], "N/m^2", k_cw, sizeof k_cw);
+    snprintf(allowed, sizeof allowed, "%s", SPEC_MSG_INPLANE_FOOTPRINT_ALLOWED);
+    snprintf(reason, sizeof reason, SPEC_MSG_INPLANE_FOOTPRINT_REASON, k_cw,
+             (int)values[SPEC_VR_N_ELEMENTS]);
+    add_problem(p, "load", values[SPEC_VR_LOAD], "N", allowed, reason);
+}
+
 /* settings_problems of core/inplane_host.py: the tire data (parameters.tire_problems), the
- * tangential data (inplane.tangential_problems), the operating point (HOST_RANGES), the load
- * above zero and, with none of those, what InPlaneTire refuses */
+ * tangential data (inplane.tangential_problems), the operating point (HOST_FIELDS), with
+ * none of those the contact zone on the mesh, and then what InPlaneTire refuses */
 static void data_problems(const double* values, Problems* p)
 {
     char allowed[160];
@@ -179,17 +191,14 @@ static void data_problems(const double* values, Problems* p)
         add_problem(p, "rim_radius_m", values[SPEC_VR_RIM_RADIUS_M], "m", allowed,
                     "the sidewall spans from the rim to the tread");
     }
-    for (field = 0; field < SPEC_N_INPLANE_RANGES; field++) {
-        const SpecRange* r = &SPEC_INPLANE_RANGES[field];
-        double value = value_of(values, r->name);
-        if (outside(r, value)) {
-            range_words(r, allowed, sizeof allowed);
-            add_problem(p, r->name, value, r->unit, allowed, "");
-        }
-    }
-    if (values[SPEC_VR_LOAD] == 0.0) {
-        add_problem(p, "load", 0.0, "N", "> 0 N",
-                    "the in-plane tire is built pressed onto the road");
+    field_problems(SPEC_INPLANE_FIELDS, SPEC_N_INPLANE_FIELDS, values, p);
+    if (p->count == 0) {
+        /* the contact zone on this mesh, as the radial FMU's (contact.zone_problems) */
+        int n = (int)values[SPEC_VR_N_ELEMENTS], per_node;
+        double length = values[SPEC_VR_CONTACT_ZONE_LENGTH];
+        if (!zone_length_problem(radius, n, length, p))
+            point_count_problem(radius, n, zone_half_count(radius, n, length),
+                                values[SPEC_VR_CONTACT_POINT_SPACING], &per_node, p);
     }
     if (p->count == 0 && values[SPEC_VR_SIDEWALL_SHEAR] > 0.0) {
         add_problem(p, "sidewall_shear", values[SPEC_VR_SIDEWALL_SHEAR], "N",
@@ -607,7 +616,7 @@ static int windows(Model* model, const InPlaneRingData* data, const double* valu
 
 /* InPlaneStepper.__init__: the static state at the step's spin (frictionless, the tread's
  * elements relaxed), its contact forces and the acceleration they give */
-static int start_state(Model* model, Problems* p)
+static int start_state(Model* model, const double* values, Problems* p)
 {
     const Memory* mem = &model->host.mem;
     int ny = model->ny, nr = model->nr, P = model->np, i, j, status;
@@ -645,7 +654,7 @@ static int start_state(Model* model, Problems* p)
     status = inplane_static_state(&data, model->m.deflection_m, s->y, s->contact, NULL, NULL,
                                   work, iwork, why, sizeof why);
     if (status != INPLANE_STATIC_OK) {
-        PROBLEM(p, "the static state at the speed: %s", why);
+        footprint_problem(values, p);
         failed = 1;
         goto done;
     }
@@ -714,7 +723,9 @@ static int build(Model* model, const double* values, Problems* p)
     in.step_s = values[SPEC_VR_STEP_SIZE];
     status = inplane_model_build(&in, &model->m, &model->host.mem, why, sizeof why);
     if (status != INPLANE_MODEL_OK) {
-        if (status == INPLANE_MODEL_NO_MEMORY)
+        if (status == INPLANE_MODEL_STATIC)
+            footprint_problem(values, p);
+        else if (status == INPLANE_MODEL_NO_MEMORY)
             PROBLEM(p, "out of memory while building the model (N = %d): %.900s", in.n_elements,
                     why);
         else
@@ -759,7 +770,7 @@ static int build(Model* model, const double* values, Problems* p)
     /* InPlaneStepper: the step at the nominal spin (the one call built it there) */
     model->spin_now = model->m.build.spin_now;
     set_speed(model, model->speed);
-    if (start_state(model, p)) return MODEL_ERROR;
+    if (start_state(model, values, p)) return MODEL_ERROR;
     if (model->np > 0 && (model->now.contact[0] || model->now.contact[model->np - 1])) {
         snprintf(allowed, sizeof allowed, "longer than the footprint at %g N", in.load_n);
         add_problem(p, "contact_zone_length", values[SPEC_VR_CONTACT_ZONE_LENGTH], "m",

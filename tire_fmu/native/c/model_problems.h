@@ -7,6 +7,8 @@
 
 #include <stdio.h>
 
+#include "spec.h"
+
 #define MAX_PROBLEMS 48
 #define PROBLEM_SIZE 1024
 
@@ -31,8 +33,25 @@ int variable_index(const char* name);
 void add_problem(Problems* p, const char* name, double value, const char* unit,
                  const char* allowed, const char* reason);
 
+/* FieldSpec.problem for each of n fields (a table of spec.h: SPEC_TIRE_FIELDS,
+ * SPEC_INPLANE_FIELDS), values by value reference: every one out of its range; returns how
+ * many */
+int field_problems(const SpecField* fields, int n, const double* values, Problems* p);
+
 /* parameters.tire_problems: every tire field out of its range (SPEC_TIRE_FIELDS, in the
  * core's order) and, with none, the sidewall's pressure law; returns how many */
 int tire_field_problems(const double* values, Problems* p);
+
+/* contact.zone_problems: the contact zone's length on this mesh (in (0, 2R tan 60deg], at
+ * least one node either side of the centre), named contact_zone_length; 1 with the problem
+ * added, else 0 */
+int zone_length_problem(double radius, int n_elements, double length, Problems* p);
+
+/* contact.point_spacing_problems: the contact points the spacing makes on this mesh and zone
+ * (carry nodes either side of the centre), named contact_point_spacing; 1 with the problem
+ * added when more than SPEC_MAX_CONTACT_POINTS, else 0 with the points per node in
+ * *per_node */
+int point_count_problem(double radius, int n_elements, int carry, double spacing,
+                        int* per_node, Problems* p);
 
 #endif

@@ -198,7 +198,7 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
     {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1, 0},
 };
 
-/* the in-plane FMU's ranges (inclusive), in the order of the core's checks: the tangential data (core/inplane.py's TANGENTIAL_RANGES), then the operating point (core/inplane_host.py's HOST_RANGES, by FMU name) */
+/* the in-plane FMU's ranges, in the order of the core's checks: the tangential data (core/inplane.py's TANGENTIAL_RANGES, inclusive), then the operating point (core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */
 typedef struct {
     const char *name, *unit;
     double low, high;
@@ -217,15 +217,15 @@ static const SpecRange SPEC_TANGENTIAL_FIELDS[SPEC_N_TANGENTIAL_FIELDS] = {
     {"friction_coefficient", "", 0.0, 3.0, 0},
     {"loss_factor", "", 0.0, 1.0, 0},
 };
-#define SPEC_N_INPLANE_RANGES 7
-static const SpecRange SPEC_INPLANE_RANGES[SPEC_N_INPLANE_RANGES] = {
-    {"load", "N", 0.0, 100000.0, 0},
-    {"speed", "m/s", 0.0, 150.0, 0},
-    {"n_elements", "", 8.0, 1600.0, 1},
-    {"f_max", "Hz", 1.0, 100000.0, 0},
-    {"contact_zone_length", "m", 0.01, 2.0, 0},
-    {"contact_point_spacing", "m", 0.0001, 0.1, 0},
-    {"step_size", "s", 1e-06, 0.001, 0},
+#define SPEC_N_INPLANE_FIELDS 7
+static const SpecField SPEC_INPLANE_FIELDS[SPEC_N_INPLANE_FIELDS] = {
+    {"load", "N", "static vertical load the footprint is built for", "(0, 100000] N", 0.0, 100000.0, 0, 0},
+    {"speed", "m/s", "forward speed the reduced step is built at", "[0, 150] m/s", 0.0, 150.0, 1, 0},
+    {"n_elements", "", "the 5-point bending stencil needs at least 8 nodes around the ring; meshes above 1600 cost too much time and memory to build", "[8, 1600]", 8.0, 1600.0, 1, 1},
+    {"f_max", "Hz", "highest natural frequency of the ring's modes kept", "[1, 100000] Hz", 1.0, 100000.0, 1, 0},
+    {"contact_zone_length", "m", "length of road under the contact points", "[0.01, 2] m", 0.01, 2.0, 1, 0},
+    {"contact_point_spacing", "m", "spacing of the contact points", "[0.0001, 0.1] m", 0.0001, 0.1, 1, 0},
+    {"step_size", "s", "the tire's own step", "[1e-06, 0.001] s", 1e-06, 0.001, 1, 0},
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
@@ -406,6 +406,8 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_POINTS_ALLOWED "at least %.4g m with this mesh and contact zone"
 #define SPEC_MSG_POINTS_REASON "%d points on each of its %d carrying nodes make %d contact points, more than the %d the contact solve takes"
 #define SPEC_MSG_LOAD_RANGE "load = %s: must be in [0, %.6g] N for this tire and mesh; at %.6g N (deflection %.3g mm) %s"
+#define SPEC_MSG_INPLANE_FOOTPRINT_ALLOWED "a load whose static footprint the model finds"
+#define SPEC_MSG_INPLANE_FOOTPRINT_REASON "with k_cw = %s and n_elements = %d its contact set did not settle, or the load is too small for the footprint to resolve; another load, k_cw or n_elements may"
 #define SPEC_MSG_LOAD_REASON_ZONE "its footprint reaches the end of the contact zone (raise contact_zone_length)"
 #define SPEC_MSG_LOAD_REASON_LENGTH "its footprint reaches %.4g m, beyond which the linear ring is not credible"
 #define SPEC_MSG_RESOLVED_ALLOWED "%s here, or beta smaller: the model's eigenvalues span %s (fastest over slowest) and may span at most %g"

@@ -359,47 +359,6 @@ static int contact_problem(const Tire* t, const Ring* ring, const Zone* zone, in
     return 1;
 }
 
-/* the zone length on this mesh (contact.zone_problems); 0 when usable */
-static int zone_problem(double radius, int n_elements, double length, Problems* p)
-{
-    double limit = 2 * radius * tan(SPEC_MAX_ZONE_HALF_ANGLE), dtheta = 2.0 * PI / n_elements;
-    char text[64];
-    value_text(length, "m", text, sizeof text);
-    if (!(isfinite(length) && 0 < length && length <= limit)) {
-        PROBLEM(p, SPEC_MSG_ZONE_RANGE, text, limit);
-        return 1;
-    }
-    if (atan(0.5 * length / radius) < dtheta) {
-        PROBLEM(p, SPEC_MSG_ZONE_TOO_SHORT, text, 2 * radius * tan(dtheta), n_elements);
-        return 1;
-    }
-    return 0;
-}
-
-/* the contact points the spacing makes on this mesh and zone (contact.point_spacing_problems);
- * 0 when at most SPEC_MAX_CONTACT_POINTS, with the points per node in *per_node */
-static int points_problem(double radius, int n_elements, int carry, double spacing,
-                          int* per_node, Problems* p)
-{
-    double arc = radius * (2.0 * PI / n_elements), points;
-    int carrying = 2 * carry + 1, most;
-    char allowed[128], reason[256];
-    *per_node = points_per_node(arc, spacing);
-    points = (double)carrying * *per_node;
-    if (points <= SPEC_MAX_CONTACT_POINTS) return 0;
-    most = SPEC_MAX_CONTACT_POINTS / carrying;
-    if (most < 1) most = 1;
-    most -= 1 - most % 2;  /* odd */
-    {   /* the smallest spacing allowed, rounded up to 4 digits (as printed, it holds) */
-        double smallest = arc / (most > 1 ? most : 1), step = pow(10.0, floor(log10(smallest)) - 3);
-        snprintf(allowed, sizeof allowed, SPEC_MSG_POINTS_ALLOWED, ceil(smallest / step) * step);
-    }
-    snprintf(reason, sizeof reason, SPEC_MSG_POINTS_REASON, *per_node, carrying, (int)points,
-             SPEC_MAX_CONTACT_POINTS);
-    add_problem(p, "contact_point_spacing", spacing, "m", allowed, reason);
-    return 1;
-}
-
 /* -- initialisation ------------------------------------------------------------------------- */
 
 static int build(Model* model, const double* values, Problems* p, char* warning)
@@ -428,9 +387,11 @@ static int build(Model* model, const double* values, Problems* p, char* warning)
         snprintf(warning, MESSAGE_SIZE, SPEC_MSG_NEAR_CRITICAL, speed,
                  100 * speed / model->critical, model->critical, n);
     }
-    if (zone_problem(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH], p)) return MODEL_ERROR;
+    if (zone_length_problem(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH], p))
+        return MODEL_ERROR;
     half = zone_half_count(tire->R, n, values[SPEC_VR_CONTACT_ZONE_LENGTH]);
-    if (points_problem(tire->R, n, half, values[SPEC_VR_CONTACT_POINT_SPACING], &per_node, p)) {
+    if (point_count_problem(tire->R, n, half, values[SPEC_VR_CONTACT_POINT_SPACING], &per_node,
+                            p)) {
         return MODEL_ERROR;
     }
     spin = speed / tire->R;
