@@ -1101,7 +1101,12 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
                   "test_a_speed_above_the_critical_fraction_is_refused",
               "INPLANE_MIN_STEP_S": "test_a_step_off_the_tire_grid_is_taken_alike_...",
               "INPLANE_STATE_BASIS_TOLERANCE":
-                  "test_a_state_of_another_basis_continues_or_is_refused (both runtimes)"}
+                  "test_a_state_of_another_basis_continues_or_is_refused (both runtimes)",
+              # in test_inplane_limits.py, against both in-plane FMUs
+              "INPLANE_MAX_FORCE_LOADS": "test_a_rim_jump_the_tire_cannot_carry_is_refused",
+              "INPLANE_MAX_ROAD_SAMPLES": "test_a_forged_state_is_refused_at_its_set_...",
+              "INPLANE_STATE_DEFORMATION_FRACTION":
+                  "test_a_forged_state_is_refused_at_its_set_..."}
     # the rest are numerical rules of the model, not limits of a call
     rules = {"SAME_POINT_EPS", "LAG_SLACK", "MAX_SUBSTEP_S", "SUBSTEP_SLACK", "SERIES_LIMIT",
              "KERNEL_CACHE_SIZE", "ACTIVE_SET_PER_NODE", "ACTIVE_SET_EXTRA", "PGS_SWEEPS",

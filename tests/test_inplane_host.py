@@ -258,7 +258,8 @@ def test_the_ring_follows_the_spin_between_rebuilds(monkeypatch, backend, case):
         monkeypatch.setattr(ic, "RING_REBUILD_FRACTION", ring)
         if not correct:
             monkeypatch.setattr(ic.InPlaneSimulator, "_ring_offset", lambda self, yd: 0.0)
-            monkeypatch.setattr(ic.InPlaneSimulator, "_share_offset", lambda self, yd: 0.0)
+            monkeypatch.setattr(ic.InPlaneSimulator, "_share_offset",
+                                lambda self, yd, rim=None: 0.0)
         stepper = build_host_stepper(settings, backend=backend).stepper
         builds = []
         original = stepper.sim._set_ring_spin

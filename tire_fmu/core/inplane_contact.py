@@ -62,6 +62,7 @@ from .host_inputs import MIN_STEP_S, input_path, rate_changes, substeps
 from .inplane import InPlaneRing, InPlaneTire, hysteresis_share, quadratic_in_spin
 from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
+from .step_limits import MAX_HISTORY_SAMPLES
 
 #: The arithmetic a step runs on: the C of native/c/inplane_step.c, numpy's (the readable
 #: reference), or the C when it can be had.
@@ -81,8 +82,36 @@ SPIN_REBUILD_FRACTION = 2e-3
 RING_REBUILD_FRACTION = 5e-2
 
 
-class ContactSetError(RuntimeError):
+class StepRefused(RuntimeError):
+    """A step the tire will not take: its state is to be rolled back (nothing changed)."""
+
+
+class ContactSetError(StepRefused):
     """The step's contact and stick sets did not settle."""
+
+
+class RunningLimitError(StepRefused):
+    """The step took the tire outside the range it was built and verified for."""
+
+
+#: The most a tire's force on the rim may reach, in loads, before a step is refused: a cleat
+#: or a pothole at speed reaches a few loads; beyond this the inputs drive the tire outside
+#: what the model represents (the footprint off its zone, the ring far off its linear range).
+MAX_FORCE_LOADS = 20.0
+#: How the running limits refuse a step (t since the start, the value, the limit ...): the
+#: same words in both runtimes (spec.MESSAGES).
+SPIN_LIMIT_TEMPLATE = (
+    "step at t = %.6g s: the wheel's spin reached %.6g rad/s, beyond the %.6g rad/s the tire "
+    "was built and verified for (%g of the critical speed %.6g m/s of this mesh, over R): "
+    "less wheel_torque or wheel_rate; a tied sidewall or fewer elements raise the critical "
+    "speed")
+SPEED_LIMIT_TEMPLATE = (
+    "step at t = %.6g s: the road's speed under the axle reached %.6g m/s (speed + rim_vx), "
+    "beyond the %.6g m/s the tire was built and verified for (%g of the critical speed "
+    "%.6g m/s of this mesh)")
+FORCE_LIMIT_TEMPLATE = (
+    "step at t = %.6g s: the tire's force on the rim reached %.6g N, beyond %g times the load "
+    "(%.6g N): the inputs drive the tire outside what the model represents")
 
 
 def sets_settled(old, new) -> bool:
@@ -479,9 +508,18 @@ class InPlaneSimulator:
             return 0.0
         return hysteresis_share(spin_rad_s, self.model.tire.R)
 
-    def _share_offset(self, yd: np.ndarray) -> float:
-        """The hysteretic share at the wheel's spin less the one the ring was built at."""
-        return self._share(self.spin_total_rad_s(yd)) - self._ring_share
+    def _road_share(self, rim=None) -> float:
+        """The hysteretic loss's share at the road's speed under the axle (the road's speed,
+        plus the rim's own fore-aft speed ``rim[1]``). It follows the road, which a host moves
+        smoothly, not the wheel's spin: a share that follows the spin makes the loss a switch
+        on the spin's sign at rest, which a braked wheel held there rings on (a limit cycle of
+        ±20 kN at 0.05); rolling, the two differ by the slip only."""
+        speed = self._speed_now + (float(rim[1]) if rim is not None else 0.0)
+        return self._share(speed / self.model.tire.R)
+
+    def _share_offset(self, yd: np.ndarray, rim=None) -> float:
+        """The hysteretic share at the road's speed less the one the ring was built at."""
+        return self._road_share(rim) - self._ring_share
 
     def spin_total_rad_s(self, yd: np.ndarray) -> float:
         """The wheel's spin (rad/s): the reference plus a free wheel's offset ψ̇."""
@@ -666,7 +704,7 @@ class InPlaneSimulator:
         r = 2.0 / h * y + yd
         b0 = (self._m @ (4.0 / h**2 * y + 4.0 / h * yd + ydd) + self._c @ (2.0 / h * y + yd)
               + self._f_ext(time, torque, rim))
-        offset, share = self._ring_offset(yd), self._share_offset(yd)
+        offset, share = self._ring_offset(yd), self._share_offset(yd, rim)
         if offset or share:
             b0 += self._spin_correction(y, yd, ydd, offset, share)
         pen_const = self._pen0 + height * self._sec
@@ -772,12 +810,12 @@ class InPlaneSimulator:
         f_n[on], f_x[on] = forces[:m], forces[m:]
         return f_n, f_x
 
-    def _follow_spin(self, yd: np.ndarray, speed: float) -> np.ndarray:
+    def _follow_spin(self, yd: np.ndarray, speed: float, ring: bool = True) -> np.ndarray:
         """The step at the road's new speed: s0 always; the tread's terms when the wheel's
         spin has moved by :data:`SPIN_REBUILD_FRACTION` (a free wheel's offset ψ̇ is then
         measured from the new spin); the ring's step when it has moved by
         :data:`RING_REBUILD_FRACTION` from the ring's (up to that the step adds the
-        difference's terms explicitly)."""
+        difference's terms explicitly), unless ``ring`` is false."""
         spin = speed / self.model.tire.R if not self._free_spin else self._spin_now + yd[-1]
         scale = max(abs(self._spin_now), 1.0)
         if not self._free_spin and spin != self._spin_now:  # a held wheel's spin is V/R
@@ -788,7 +826,7 @@ class InPlaneSimulator:
             self._set_tread_spin(spin, speed)
         else:
             self._set_speed(speed)
-        if abs(spin - self._ring_spin) > RING_REBUILD_FRACTION * scale:
+        if ring and abs(spin - self._ring_spin) > RING_REBUILD_FRACTION * scale:
             self._set_ring_spin(spin)
             self._set_tread_spin(self._spin_now, self._speed_now)
         return yd
@@ -828,7 +866,7 @@ class InPlaneSimulator:
         # rows [k0 c0 m; k1 c1 0; k2 0 0; kh 0 0] on [y, ẏ, ÿ], by [1, Ω, Ω², s(Ω)]
         motion = np.concatenate([y, yd, np.zeros_like(y) if ydd is None else ydd])
         f = (self._rim_stack() @ motion).reshape(4, 3).T @ np.array([1.0, o, o * o,
-                                                                      self._share(o)])
+                                                                      self._road_share(rim)])
         if rim is not None:
             f += self._rim_rows["m_translation"] @ rim[[2, 5]]
         return -f
@@ -902,6 +940,16 @@ class InPlaneStepper:
     FMU takes them (extended over the step as the rim is, kept along the road as it passes,
     :class:`~.obstacles.HostRoad`). At rest (``sim.speed_m_s`` = 0) the road does not pass,
     and the host's road moves under every point at once, a shaker plate."""
+
+    #: The running limits (set by inplane_host.build_host_stepper; none for a stepper built
+    #: directly): the wheel's spin (rad/s) and the road's speed under the axle (m/s), a
+    #: fraction of the mesh's critical speed, and the force on the rim (N), MAX_FORCE_LOADS.
+    spin_limit_rad_s = math.inf
+    speed_limit_m_s = math.inf
+    force_limit_n = math.inf
+    #: what the limits' messages cite: the critical speed (m/s) and the load (N)
+    critical_speed_m_s = math.nan
+    load_n = math.nan
 
     def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0, host_road: bool = False):
         """Start from the static state, with ``torque_n_m`` on the wheel at t = 0."""
@@ -985,7 +1033,9 @@ class InPlaneStepper:
             time = start_s + tau
             rim_old, rim = rim, np.array([*x_path(tau), *z_path(tau)])
             if sim._free_spin:
-                self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s)
+                # the ring's step (an inverse) rebuilt at most once a communication step, at
+                # its start: the work a step may take is bounded (step_work)
+                self.state.yd = sim._follow_spin(self.state.yd, sim.speed_m_s, ring=k == 1)
             if sim._driven:
                 spin = spin_start + (spin_end - spin_start) * (k / count)
                 sim._driven_rate = spin - sim._spin_now
@@ -1007,10 +1057,29 @@ class InPlaneStepper:
                 height, rate = sim.road(time, distance, sim._speed_now + rim[1])
             self.state = sim._step(self.state, time, torque_n_m, rim_old, rim,
                                    height - rim[3], rate - rim[4])
+            self._check_running(time, sim.spin_total_rad_s(self.state.yd),
+                                sim._speed_now + rim[1])
         self._rim = rim
         self.elapsed_s, self._carry_s = clock.advance(self.elapsed_s, self._carry_s, count * h)
         self._given, self._rate_given, self._h_given = given, float(wheel_rate_rad_s), step_s
-        return self.outputs()
+        out = self.outputs()
+        force = max(abs(out.rim_fz_n), abs(out.rim_fx_n))
+        if not force <= self.force_limit_n:
+            raise RunningLimitError(FORCE_LIMIT_TEMPLATE % (self.elapsed_s, force,
+                                                            MAX_FORCE_LOADS, self.load_n))
+        return out
+
+    def _check_running(self, time_s: float, spin_rad_s: float, speed_m_s: float) -> None:
+        """The running limits after a step of the tire's: refused (RunningLimitError) where
+        the wheel's spin or the road's speed left the range the tire was built for."""
+        if not abs(spin_rad_s) <= self.spin_limit_rad_s:
+            raise RunningLimitError(SPIN_LIMIT_TEMPLATE % (
+                time_s, spin_rad_s, self.spin_limit_rad_s, _critical_fraction(),
+                self.critical_speed_m_s))
+        if not abs(speed_m_s) <= self.speed_limit_m_s:
+            raise RunningLimitError(SPEED_LIMIT_TEMPLATE % (
+                time_s, speed_m_s, self.speed_limit_m_s, _critical_fraction(),
+                self.critical_speed_m_s))
 
     def _take_rim_jump(self, given: np.ndarray) -> None:
         """The rim from where the last step's extension left it to the host's values now: its
@@ -1104,8 +1173,9 @@ class InPlaneStepper:
             return "its stepper part's road or step count does not fit this tire"
         if not 0 < ny <= n_dof:
             return f"its stepper part has {ny} coordinates for {n_dof} DOFs"
-        if samples > (len(data) - head) // 24:
-            return "its stepper part's road or step count does not fit this tire"
+        if samples > min((len(data) - head) // 24, MAX_ROAD_SAMPLES):
+            return (f"its road history holds {samples} samples; the tire keeps at most "
+                    f"{MAX_ROAD_SAMPLES} (one a step over the zone's reach)")
         doubles = STEPPER_SCALARS + 3 * ny + 2 * points + 3 * samples + 3 * n_dof
         if len(data) != head + 8 * doubles + 3 * points:
             return "its stepper part has the wrong size"
@@ -1120,8 +1190,10 @@ class InPlaneStepper:
         h_given, elapsed, length, h_accel = values[16], values[17], values[19], values[23]
         if speed != self.sim.speed_m_s:
             return f"its road speed {speed!r} m/s is not this tire's {self.sim.speed_m_s!r}"
+        most = (self.spin_limit_rad_s if math.isfinite(self.spin_limit_rad_s)
+                else STATE_SPIN_FACTOR * max(self.sim.spin_rad_s, 1.0))
         for value in (spin, ring_spin):
-            if not abs(value) <= STATE_SPIN_FACTOR * max(self.sim.spin_rad_s, 1.0):
+            if not abs(value) <= most:
                 return f"its wheel spin {value!r} rad/s is beyond what this tire can hold"
         if not (0.0 <= h_given and 0.0 <= h_accel and 0.0 <= elapsed
                 and MIN_STEP_S <= length <= self.sim.step_s):
@@ -1133,8 +1205,36 @@ class InPlaneStepper:
             s = values[road_at:road_at + 3 * samples:3]
             if not np.all(np.diff(s) > 0):
                 return "its road's samples are not in order along the road"
-        _, problem = self._state_coordinates(data)
-        return problem
+        coordinates, problem = self._state_coordinates(data)
+        if problem:
+            return problem
+        return self._state_meaning_problem(values, coordinates, ny, points)
+
+    def _state_meaning_problem(self, values, coordinates, ny: int, points: int) -> str | None:
+        """What a state of sound layout must mean to be this tire's: the tire's deformation
+        within what its zone and the road's reach allow, and the forces it gives (on the rim,
+        at each point) within the running limit (a forged coordinate of 1000 gave 5e16 N)."""
+        sim = self.sim
+        y, yd, ydd = coordinates
+        # the ring's DOFs relative to the rim (the wheel's turn, which grows as it rolls, out)
+        cols = y.size - 1 if sim._free_spin else y.size
+        deformation = np.abs(sim._to_abs[:-3, :cols] @ y[:cols]).max(initial=0.0)
+        if not deformation <= STATE_DEFORMATION_FRACTION * sim.model.tire.R:
+            return (f"its tire deforms by {deformation:.3g} m, beyond the "
+                    f"{STATE_DEFORMATION_FRACTION * sim.model.tire.R:.3g} m a state may hold "
+                    f"({STATE_DEFORMATION_FRACTION:g} of R)")
+        rim = values[6:12]
+        spin = values[12] + (yd[-1] if sim._free_spin else 0.0)
+        force = np.abs(sim.rim_force(y, yd, ydd, rim, spin_rad_s=spin)[:2]).max()
+        at = STEPPER_SCALARS + 3 * ny
+        e, f_n = values[at:at + points], values[at + points:at + 2 * points]
+        point = max(np.abs(f_n).max(initial=0.0), np.abs(sim._kx * e).max(initial=0.0))
+        limit = self.force_limit_n
+        if math.isfinite(limit) and not max(force, point) <= limit:
+            return (f"its forces reach {max(force, point):.4g} N (on the rim {force:.4g} N, at "
+                    f"a point {point:.4g} N), beyond {MAX_FORCE_LOADS:g} times the load "
+                    f"({self.load_n:.6g} N)")
+        return None
 
     def _state_coordinates(self, data: bytes) -> tuple[np.ndarray | None, str | None]:
         """(y, ẏ, ÿ) of a state whose layout is sound, in this simulator's coordinates: its own
@@ -1189,6 +1289,12 @@ STATE_SPIN_FACTOR = 10.0
 #: The stepper's state: magic, coordinates, points, road samples, the tire's steps taken, the
 #: tire's absolute DOFs and its basis' fingerprint (InPlaneSimulator.basis_fingerprint).
 STEPPER_STATE_HEAD = "<8sIIIqII"
+#: The most a state's tire may deform (any DOF from the rim, a fraction of R): the static
+#: deflection itself is at most inplane_host.MAX_DEFLECTION_FRACTION of R.
+STATE_DEFORMATION_FRACTION = 0.5
+#: The most road samples a state may hold: one a step of the tire's over the zone's reach
+#: (step_limits.MAX_HISTORY_SAMPLES, the radial tire's rule).
+MAX_ROAD_SAMPLES = MAX_HISTORY_SAMPLES
 #: How far (relative) a state's DOFs may lie outside the basis they are restored into: a basis
 #: of the same span reproduces them to rounding.
 STATE_BASIS_TOLERANCE = 1e-9
@@ -1198,6 +1304,39 @@ STEPPER_STATE_MAGIC = b"INPLANE3"
 #: the elapsed time and its Kahan carry, the tire's step length, the rates' last change (3)
 #: and the step it was made over.
 STEPPER_SCALARS = 24
+
+
+def step_work(ny: int, points: int) -> float:
+    """The work of one of the in-plane tire's own steps (step_limits' units, about one
+    multiply-add): the ring's dense products on its coordinates, the points' Jacobians and
+    responses over a few passes of the sets, the dense solve of the points in contact (a
+    third of them at the load)."""
+    return 8.0 * ny * ny + 24.0 * points * ny + math.floor(points**3 / 27.0) + 1000.0
+
+
+def rebuild_work(ny: int, points: int) -> float:
+    """The work of rebuilding the ring's step (its inverse and the points' responses): at most
+    twice a communication step (its length, its spin)."""
+    return float(ny) ** 3 + 4.0 * points * float(ny) ** 2
+
+
+def host_step_work(step_s: float, tire_step_s: float, ny: int, points: int,
+                   at_time_s: float = 0.0) -> tuple[int, float, int, float, bool]:
+    """What a host's step costs: (the tire's steps, their length, the work of each with the
+    rebuilds shared out, the longest host step within MAX_STEP_WORK, whether it exceeds it)."""
+    from .step_limits import MAX_STEP_WORK
+
+    count, length = substeps(step_s, tire_step_s, at_time_s)
+    each, rebuilds = step_work(ny, points), 2.0 * rebuild_work(ny, points)
+    per = min(each + math.ceil(rebuilds / count), 2147483647.0)
+    longest = max(math.floor((MAX_STEP_WORK - rebuilds) / each), 0.0) * tire_step_s
+    return count, length, int(per), longest, count * each + rebuilds > MAX_STEP_WORK
+
+
+def _critical_fraction() -> float:
+    from .inplane_host import CRITICAL_SPEED_FRACTION  # the host's rule (no import circle)
+
+    return CRITICAL_SPEED_FRACTION
 
 
 def _not_driven(sim: InPlaneSimulator, what: str) -> None:

@@ -14,22 +14,23 @@ with the paper's lumped sidewall (``sidewall_max_order`` = 0) it falls as 1/N.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, fields, replace
 
 from .contact import DEFAULT_ZONE_LENGTH_M, zone_problems
 from .discretisation import Grid
+from .host_inputs import substeps
 from .inplane import InPlaneTire, TangentialParameters, tangential_problems
 from .inplane_contact import (
+    MAX_FORCE_LOADS,
     ContactSetError,
     InPlaneSimulator,
     InPlaneStepper,
     deflection_for_load,
+    rebuild_work,
+    step_work,
 )
 from .parameters import (
     DEFAULT_LOAD_N,
-    ELEMENTS_REASON,
-    MAX_ELEMENTS,
     MIN_ELEMENTS,
     FieldSpec,
     ParameterError,
@@ -38,6 +39,7 @@ from .parameters import (
     tire_problems,
     value_text,
 )
+from .step_limits import MAX_STEP_WORK, WORK_INTERVAL_S
 
 #: The simulator's step the host's steps are whole multiples of (s).
 DEFAULT_HOST_STEP_S = 1e-4
@@ -57,6 +59,19 @@ MAX_DEFLECTION_FRACTION = 0.2
 #: the reason a problem gives): both FMUs read them (spec.h's SPEC_INPLANE_FIELDS), and so does
 #: the command line where it takes the same settings. The load's low end is open: the tire is
 #: built pressed onto the road.
+#: The finest mesh the in-plane FMUs build (its initialisation, dense in the ring's DOFs,
+#: grows as N³: benchmarks/bench_mesh_size.py --inplane measures it).
+MAX_HOST_ELEMENTS = 800
+HOST_ELEMENTS_REASON = (f"the 5-point bending stencil needs at least {MIN_ELEMENTS} nodes "
+                        f"around the ring; the in-plane tire's initialisation grows as N³, and "
+                        f"above {MAX_HOST_ELEMENTS} costs minutes and gigabytes")
+#: How a tire whose millisecond would take more work than a step may is refused (its words in
+#: both runtimes): the work, coordinates, contact points, steps of step_size, the limit.
+WORK_ALLOWED = ("a tire whose millisecond takes at most the %.4g units of work a step may "
+                "(this one: %.4g, for %d coordinates, %d contact points and %d steps of "
+                "step_size)")
+WORK_REASON = "fewer elements, a lower f_max, a wider contact_point_spacing or a longer step_size"
+
 HOST_FIELDS: dict[str, FieldSpec] = {
     spec.name: spec
     for spec in (
@@ -64,7 +79,8 @@ HOST_FIELDS: dict[str, FieldSpec] = {
                   MAX_HOST_LOAD_N),
         FieldSpec("speed_m_s", "m/s", "forward speed the reduced step is built at", 0.0, 150.0,
                   True),
-        FieldSpec("n_elements", "", ELEMENTS_REASON, MIN_ELEMENTS, MAX_ELEMENTS, True, True),
+        FieldSpec("n_elements", "", HOST_ELEMENTS_REASON, MIN_ELEMENTS, MAX_HOST_ELEMENTS,
+                  True, True),
         FieldSpec("f_max_hz", "Hz", "highest natural frequency of the ring's modes kept", 1.0,
                   1e5, True),
         FieldSpec("zone_length_m", "m", "length of road under the contact points", 0.01, 2.0,
@@ -129,6 +145,15 @@ FOOTPRINT_ALLOWED = "a load whose static footprint the model finds"
 FOOTPRINT_REASON = ("with k_cw = %s and n_elements = %d its contact set did not settle, or "
                     "the load is too small for the footprint to resolve; another load, k_cw or "
                     "n_elements may")
+
+
+def millisecond_work(stepper: InPlaneStepper) -> float:
+    """The work of a millisecond's step (WORK_INTERVAL_S) of this tire: a host must be able to
+    take one (host_step_work)."""
+    sim = stepper.sim
+    count = substeps(WORK_INTERVAL_S, sim.step_s)[0]
+    return count * step_work(sim._ny, sim._zone.n_points) + 2.0 * rebuild_work(
+        sim._ny, sim._zone.n_points)
 
 
 def footprint_problem(load_n: float, k_cw: float, n_elements: int) -> Problem:
@@ -211,9 +236,9 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
     if problems:
         raise ParameterError(problems)
     n = int(settings.n_elements)
-    critical = math.nan
+    # at rest too: the running tire's spin and road speed are held below it at every step
+    critical = _critical_speed(tire, n, backend, library)
     if settings.speed_m_s > 0:
-        critical = _critical_speed(tire, n, backend, library)
         if settings.speed_m_s > CRITICAL_SPEED_FRACTION * critical:
             raise ParameterError([Problem(
                 "speed_m_s", settings.speed_m_s, "m/s",
@@ -249,4 +274,14 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
             "zone_length_m", settings.zone_length_m, "m",
             f"longer than the footprint at {settings.load_n:g} N",
             "the static footprint reaches the end of the contact zone")])
+    millisecond = millisecond_work(stepper)
+    if millisecond > MAX_STEP_WORK:
+        sim = stepper.sim
+        count = substeps(WORK_INTERVAL_S, sim.step_s)[0]
+        raise ParameterError([Problem("n_elements", n, "", WORK_ALLOWED % (
+            MAX_STEP_WORK, millisecond, sim._ny, sim._zone.n_points, count), WORK_REASON)])
+    stepper.critical_speed_m_s, stepper.load_n = critical, settings.load_n
+    stepper.speed_limit_m_s = CRITICAL_SPEED_FRACTION * critical
+    stepper.spin_limit_rad_s = stepper.speed_limit_m_s / tire.tire.R
+    stepper.force_limit_n = MAX_FORCE_LOADS * settings.load_n
     return HostModel(stepper, deflection, critical, int(contact.sum()))

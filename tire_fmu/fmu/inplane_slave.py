@@ -24,9 +24,15 @@ import tire_fmu
 from tire_fmu.core.blas_threads import blas_threads
 from tire_fmu.core.host_inputs import MIN_STEP_S
 from tire_fmu.core.inplane import TANGENTIAL_RANGES
-from tire_fmu.core.inplane_contact import STEPPER_STATE_HEAD, ContactSetError
+from tire_fmu.core.inplane_contact import (
+    STEPPER_STATE_HEAD,
+    ContactSetError,
+    RunningLimitError,
+    host_step_work,
+)
 from tire_fmu.core.inplane_host import FMU_NAMES, HostSettings, build_host_stepper
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError
+from tire_fmu.core.step_limits import MAX_STEP_WORK
 from tire_fmu.fmu.interface import (
     INPLANE_IN_CONTACT,
     INPLANE_INPUTS,
@@ -135,6 +141,12 @@ class TireInPlane(TireModal):
             return self._refuse_step(current_time, step_size, MESSAGES["INPLANE_STEP_SHORT"] % (
                 repr(float(step_size)), MIN_STEP_S))
         stepper = self._simulator.stepper
+        sim = stepper.sim
+        count, length, per, longest, too_much = host_step_work(
+            step_size, sim.step_s, sim._ny, sim._zone.n_points, current_time)
+        if too_much:
+            return self._refuse_step(current_time, step_size, MESSAGES["LONG_STEP"] % (
+                repr(float(step_size)), count, length, per, MAX_STEP_WORK, longest))
         z, vz, road_z, road_vz, x, vx, torque, rate = self._values[self._INPUTS]
         before = stepper.checkpoint()
         try:
@@ -144,6 +156,9 @@ class TireInPlane(TireModal):
             stepper.rollback(before)
             return self._refuse_step(current_time, step_size, f"{error}; nothing changed "
                                      "(a shorter step_size settles the sets sooner)")
+        except RunningLimitError as error:
+            stepper.rollback(before)
+            return self._refuse_step(current_time, step_size, str(error))
         except Exception as error:  # an escaping exception would be fmi2Fatal
             stepper.rollback(before)
             self._fail(MESSAGES["STEP_FAILED"] % repr(float(current_time)), _cause(error))

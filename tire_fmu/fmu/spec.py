@@ -149,6 +149,9 @@ CONSTANTS: dict[str, float | int] = {
     "INPLANE_STATE_SPIN_FACTOR": inplane_contact.STATE_SPIN_FACTOR,
     "INPLANE_MIN_STEP_S": host_inputs.MIN_STEP_S,
     "INPLANE_STATE_BASIS_TOLERANCE": inplane_contact.STATE_BASIS_TOLERANCE,
+    "INPLANE_MAX_FORCE_LOADS": inplane_contact.MAX_FORCE_LOADS,
+    "INPLANE_STATE_DEFORMATION_FRACTION": inplane_contact.STATE_DEFORMATION_FRACTION,
+    "INPLANE_MAX_ROAD_SAMPLES": inplane_contact.MAX_ROAD_SAMPLES,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -265,6 +268,9 @@ MESSAGES: dict[str, str] = {
     "STEP_RANGE": "step size h = %s s: must be in (0, %g] s",
     "INPLANE_STEP_SHORT": "step size h = %s s: must be at least %g s, the in-plane tire's "
                           "shortest step",
+    "INPLANE_SPIN_LIMIT": inplane_contact.SPIN_LIMIT_TEMPLATE,
+    "INPLANE_SPEED_LIMIT": inplane_contact.SPEED_LIMIT_TEMPLATE,
+    "INPLANE_FORCE_LIMIT": inplane_contact.FORCE_LIMIT_TEMPLATE,
     "STEP_DELAY": "step size h = %s s: must be at least %.3g s at this speed: the road "
                   "reaches the contact zone's last node %.3g s after its front, and the FMU "
                   "keeps at most %d steps of its history",

@@ -122,7 +122,7 @@ class InPlaneKernel:
         sim = self._sim()
         # the tread's arrays follow the spin in place; its value and the ring's offset do not
         data.spin, data.dspin = sim._spin_now, sim._ring_offset(state.yd)
-        data.dshare = sim._share_offset(state.yd)
+        data.dshare = sim._share_offset(state.yd, rim)
         data.carry_shift = sim._carry_shift
         if sim._driven:
             data.psi_new = sim._driven_psi(state.y, state.yd)

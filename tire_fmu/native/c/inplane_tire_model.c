@@ -54,6 +54,8 @@ struct Model {
     InPlaneStep step; /* what inplane_step reads: pointers into m */
     int ny, np, nr, free_spin, driven, hysteretic;
     double h, radius, speed, critical;
+    /* the running limits (InPlaneStepper's): spin (rad/s), road speed (m/s), force (N) */
+    double spin_limit, speed_limit, force_limit, load;
     double* cos_theta;    /* np: the points' cos theta (for the slip's reference s0) */
     double *x_lo, *x_hi;  /* np: the road each point's arc covers (m, at the deflection) */
     double *height, *rate;
@@ -244,7 +246,7 @@ static int critical_problem(Model* model, const double* values, const InPlaneRin
     double speed = values[SPEC_VR_SPEED], spin, critical, *work;
     char why[512], allowed[256];
     model->critical = NAN;
-    if (!(speed > 0.0)) return 0;
+    /* at rest too: the running tire's spin and road speed are held below it at every step */
     work = (double*)mem_alloc(mem, inplane_critical_work_doubles(n, INPLANE_RING_TIED),
                               sizeof(double));
     if (work == NULL) {
@@ -259,7 +261,11 @@ static int critical_problem(Model* model, const double* values, const InPlaneRin
         return 1;
     }
     model->critical = critical;
-    if (speed > SPEC_INPLANE_CRITICAL_SPEED_FRACTION * critical) {
+    model->speed_limit = SPEC_INPLANE_CRITICAL_SPEED_FRACTION * critical;
+    model->spin_limit = model->speed_limit / values[SPEC_VR_R];
+    model->load = values[SPEC_VR_LOAD];
+    model->force_limit = SPEC_INPLANE_MAX_FORCE_LOADS * model->load;
+    if (speed > 0.0 && speed > SPEC_INPLANE_CRITICAL_SPEED_FRACTION * critical) {
         snprintf(allowed, sizeof allowed,
                  "at most %g of the mesh's critical speed %.4g m/s (n_elements = %d)",
                  SPEC_INPLANE_CRITICAL_SPEED_FRACTION, critical, n);
@@ -305,8 +311,9 @@ static int set_ring_spin(Model* model, double spin_rad_s)
                               model->build_work, model->build_iwork, NULL, 0);
 }
 
-/* _follow_spin for the free wheel (the only one whose spin moves in a stepper) */
-static int follow_spin(Model* model, double* yd)
+/* _follow_spin for the free wheel (the only one whose spin moves in a stepper); the ring's
+ * part only when ring is set */
+static int follow_spin(Model* model, double* yd, int ring)
 {
     double spin = model->spin_now + yd[model->ny - 1];
     double scale = fabs(model->spin_now) > 1.0 ? fabs(model->spin_now) : 1.0;
@@ -317,7 +324,8 @@ static int follow_spin(Model* model, double* yd)
     } else {
         set_speed(model, model->speed);
     }
-    if (status == 0 && fabs(spin - model->m.build.ring_spin) > SPEC_INPLANE_RING_REBUILD_FRACTION * scale) {
+    if (status == 0 && ring &&
+        fabs(spin - model->m.build.ring_spin) > SPEC_INPLANE_RING_REBUILD_FRACTION * scale) {
         status = set_ring_spin(model, spin);
         if (status == 0) status = set_tread_spin(model, model->spin_now, model->speed_now);
     }
@@ -446,7 +454,9 @@ static void rim_force(const Model* model, const double* y, const double* yd, con
                       double spin_now, const double* rim, double* f)
 {
     int ny = model->ny, i;
-    double o = spin_now + (model->free_spin ? yd[ny - 1] : 0.0), s = share(model, o);
+    /* the hysteretic share at the road's speed under the axle (_road_share) */
+    double o = spin_now + (model->free_spin ? yd[ny - 1] : 0.0),
+           s = share(model, (model->speed_now + rim[1]) / model->radius);
     const double* r = model->rim_rows;
     const double* mt = model->m.terms.rim_m_translation;
 #define ROW(g, i) (r + ((size_t)(g) * 3 + (i)) * ny)
@@ -1084,7 +1094,9 @@ int model_step(Model* model, double step_s, double* values)
             model->rim[i] = x[i];
             model->rim[3 + i] = z[i];
         }
-        if (model->free_spin && follow_spin(model, model->now.yd) != 0) {
+        /* the ring's step rebuilt at most once a communication step, at its start: the
+         * work a step may take is bounded (model_step_work) */
+        if (model->free_spin && follow_spin(model, model->now.yd, k == 1) != 0) {
             status = 3;
             break;
         }
@@ -1122,7 +1134,8 @@ int model_step(Model* model, double step_s, double* values)
                           (model->free_spin ? model->now.yd[model->ny - 1] : 0.0);
             model->step.spin = model->spin_now;
             model->step.dspin = spin - model->m.build.ring_spin;
-            model->step.dshare = share(model, spin) - model->m.build.ring_share;
+            model->step.dshare = share(model, (model->speed_now + model->rim[1]) / model->radius) -
+                                 model->m.build.ring_share;
             model->step.carry_shift = model->m.build.carry_shift;
         }
         status = inplane_step(&model->step, &model->now, &model->next, model->height,
@@ -1132,6 +1145,25 @@ int model_step(Model* model, double step_s, double* values)
         swap = model->now;
         model->now = model->next;
         model->next = swap;
+        {   /* _check_running: the spin and the road's speed within the built range */
+            double spin = model->spin_now +
+                          (model->free_spin ? model->now.yd[model->ny - 1] : 0.0);
+            double road = model->speed_now + model->rim[1];
+            if (!(fabs(spin) <= model->spin_limit)) {
+                snprintf(model->refusal, sizeof model->refusal, SPEC_MSG_INPLANE_SPIN_LIMIT,
+                         time, spin, model->spin_limit, SPEC_INPLANE_CRITICAL_SPEED_FRACTION,
+                         model->critical);
+                rollback(model);
+                return MODEL_DISCARD;
+            }
+            if (!(fabs(road) <= model->speed_limit)) {
+                snprintf(model->refusal, sizeof model->refusal, SPEC_MSG_INPLANE_SPEED_LIMIT,
+                         time, road, model->speed_limit, SPEC_INPLANE_CRITICAL_SPEED_FRACTION,
+                         model->critical);
+                rollback(model);
+                return MODEL_DISCARD;
+            }
+        }
     }
     if (status != 0) {
         snprintf(model->refusal, sizeof model->refusal,
@@ -1149,6 +1181,18 @@ int model_step(Model* model, double step_s, double* values)
         return MODEL_DISCARD;
     }
     clock_advance(model, (double)count * length);
+    {   /* the force on the rim within MAX_FORCE_LOADS loads */
+        double f[3], force;
+        rim_force(model, model->now.y, model->now.yd, model->now.ydd, model->spin_now,
+                  model->rim, f);
+        force = fmax(fabs(f[0]), fabs(f[1]));
+        if (!(force <= model->force_limit)) {
+            snprintf(model->refusal, sizeof model->refusal, SPEC_MSG_INPLANE_FORCE_LIMIT,
+                     model->elapsed, force, SPEC_INPLANE_MAX_FORCE_LOADS, model->load);
+            rollback(model);
+            return MODEL_DISCARD;
+        }
+    }
     model->rate_given = rate_given;
     model->h_given = step_s;
     show_outputs(model, values);
@@ -1184,18 +1228,21 @@ double model_min_step(const Model* model)
     return 0.0;
 }
 
-/* the in-plane step has no work rule of the radial kernel's: a host's step costs its count of
- * the tire's steps (substeps) */
+/* core/inplane_contact.py's host_step_work: a host's step costs its count of the tire's
+ * steps (step_work each) and at most two rebuilds of the ring's step (rebuild_work) */
 int model_step_work(const Model* model, double h, int* n_sub, double* substep, int* work,
                     double* longest)
 {
-    double length;
+    double length, ny = model->ny, p = model->np;
     long long count = substeps(h, model->h, model_time(model), &length);
+    double each = 8.0 * ny * ny + 24.0 * p * ny + floor(p * p * p / 27.0) + 1000.0;
+    double rebuilds = 2.0 * (ny * ny * ny + 4.0 * p * ny * ny);
+    double per = fmin(each + ceil(rebuilds / (double)count), 2147483647.0);
     *n_sub = count < 2147483647 ? (int)count : 2147483647;
     *substep = length;
-    *work = 1;
-    *longest = SPEC_MAX_STEP_S;
-    return 0;
+    *work = (int)per;
+    *longest = fmax(floor((SPEC_MAX_STEP_WORK - rebuilds) / each), 0.0) * model->h;
+    return (double)count * each + rebuilds > SPEC_MAX_STEP_WORK;
 }
 
 /* -- the model's part of an FMU state --------------------------------------------------------
@@ -1374,6 +1421,44 @@ done:
     return status;
 }
 
+/* InPlaneStepper._state_meaning_problem: the tire's deformation and the forces the state
+ * gives within what a state may hold; 2 with why, or 0 */
+static int meaning_problem(const Model* model, const unsigned char* doubles, const double* yyy,
+                           size_t ny_state, size_t np, char* why, size_t why_size)
+{
+    int ny = model->ny, cols = model->free_spin ? ny - 1 : ny, i;
+    size_t rows = n_abs(model) - 3, k, at;
+    const double *y = yyy, *yd = yyy + ny, *ydd = yyy + 2 * (size_t)ny;
+    const double* a = model->m.terms.to_abs;
+    double deformation = 0.0, rim[6], f[3], force, point = 0.0, most;
+    for (k = 0; k < rows; k++) {
+        double v = fabs(dot(a + k * (size_t)ny, y, cols));
+        if (v > deformation) deformation = v;
+    }
+    most = SPEC_INPLANE_STATE_DEFORMATION_FRACTION * model->radius;
+    if (!(deformation <= most)) {
+        snprintf(why, why_size, "its tire deforms by %.3g m, beyond the %.3g m a state may hold "
+                 "(%g of R)", deformation, most, SPEC_INPLANE_STATE_DEFORMATION_FRACTION);
+        return 2;
+    }
+    for (i = 0; i < 6; i++) rim[i] = get_double(doubles, 6 + (size_t)i);
+    rim_force(model, y, yd, ydd, get_double(doubles, 12), rim, f);
+    force = fmax(fabs(f[0]), fabs(f[1]));
+    at = STEPPER_SCALARS + 3 * ny_state;
+    for (k = 0; k < np; k++) {
+        double e = fabs(model->m.points.kx[k] * get_double(doubles, at + k));
+        double fn = fabs(get_double(doubles, at + np + k));
+        point = fmax(point, fmax(e, fn));
+    }
+    if (!(fmax(force, point) <= model->force_limit)) {
+        snprintf(why, why_size, "its forces reach %.4g N (on the rim %.4g N, at a point %.4g N), "
+                 "beyond %g times the load (%.6g N)", fmax(force, point), force, point,
+                 SPEC_INPLANE_MAX_FORCE_LOADS, model->load);
+        return 2;
+    }
+    return 0;
+}
+
 int model_state_check(const Model* model, const unsigned char* in, size_t size,
                       const double* values, double time, double start_time, char* why,
                       size_t why_size)
@@ -1383,7 +1468,6 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
     uint32_t ny, np, samples, dofs, fingerprint;
     int64_t steps;
     size_t n_doubles, i;
-    double nominal = fmax(model->speed / model->radius, 1.0);
     why[0] = '\0';
     if (size < FLAGS * 4 + STEPPER_HEAD) {
         snprintf(why, why_size, SPEC_MSG_STATE_MODEL_SHORT, (unsigned long)size);
@@ -1412,8 +1496,14 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
                  (unsigned long)n_abs(model), model->np);
         return MODEL_ERROR;
     }
-    if (samples == 0 || steps < 0 || samples > (size - FLAGS * 4) / 24) {
+    if (samples == 0 || steps < 0) {
         snprintf(why, why_size, "its stepper part's road or step count does not fit this tire");
+        return MODEL_ERROR;
+    }
+    if (samples > (size - FLAGS * 4) / 24 || samples > SPEC_INPLANE_MAX_ROAD_SAMPLES) {
+        snprintf(why, why_size, "its road history holds %lu samples; the tire keeps at most %d "
+                 "(one a step over the zone's reach)", (unsigned long)samples,
+                 (int)SPEC_INPLANE_MAX_ROAD_SAMPLES);
         return MODEL_ERROR;
     }
     if (!(ny > 0 && ny <= dofs)) {
@@ -1452,8 +1542,7 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
             snprintf(why, why_size, "its road speed %s m/s is not this tire's %s", a, b);
             return MODEL_ERROR;
         }
-        if (!(fabs(spin) <= SPEC_INPLANE_STATE_SPIN_FACTOR * nominal) ||
-            !(fabs(ring_spin) <= SPEC_INPLANE_STATE_SPIN_FACTOR * nominal)) {
+        if (!(fabs(spin) <= model->spin_limit) || !(fabs(ring_spin) <= model->spin_limit)) {
             py_repr(fabs(spin) > fabs(ring_spin) ? spin : ring_spin, a, sizeof a);
             snprintf(why, why_size, "its wheel spin %s rad/s is beyond what this tire can hold",
                      a);
@@ -1500,11 +1589,13 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
         int status = scratch == NULL ? -1
                                      : state_coordinates(model, doubles, ny, np, samples,
                                                          fingerprint, scratch, &off);
+        if (status == 0) status = meaning_problem(model, doubles, scratch, ny, np, why, why_size);
         mem_free(&model->host.mem, scratch);
         if (status < 0) {
             snprintf(why, why_size, "out of memory reading its coordinates");
             return MODEL_ERROR;
         }
+        if (status == 2) return MODEL_ERROR; /* why says what it means */
         if (status > 0) {
             snprintf(why, why_size, "its tire's shape lies outside this FMU's reduced basis "
                      "(%.2g of it): it was stepped in a basis built differently (another BLAS, "

@@ -74,6 +74,9 @@
 #define SPEC_INPLANE_STATE_SPIN_FACTOR 10.0
 #define SPEC_INPLANE_MIN_STEP_S 1e-07
 #define SPEC_INPLANE_STATE_BASIS_TOLERANCE 1e-09
+#define SPEC_INPLANE_MAX_FORCE_LOADS 20.0
+#define SPEC_INPLANE_STATE_DEFORMATION_FRACTION 0.5
+#define SPEC_INPLANE_MAX_ROAD_SAMPLES 100003
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -215,13 +218,13 @@ static const SpecRange SPEC_TANGENTIAL_FIELDS[SPEC_N_TANGENTIAL_FIELDS] = {
     {"wheel_inertia_kg_m2", "kg*m^2", 1e-06, 100000.0, 0},
     {"k_tx", "N/m^2", 0.0, 1000000000000.0, 0},
     {"friction_coefficient", "", 0.0, 3.0, 0},
-    {"loss_factor", "", 0.0, 1.0, 0},
+    {"loss_factor", "", 0.0, 0.1, 0},
 };
 #define SPEC_N_INPLANE_FIELDS 7
 static const SpecField SPEC_INPLANE_FIELDS[SPEC_N_INPLANE_FIELDS] = {
     {"load", "N", "static vertical load the footprint is built for", "(0, 100000] N", 0.0, 100000.0, 0, 0},
     {"speed", "m/s", "forward speed the reduced step is built at", "[0, 150] m/s", 0.0, 150.0, 1, 0},
-    {"n_elements", "", "the 5-point bending stencil needs at least 8 nodes around the ring; meshes above 1600 cost too much time and memory to build", "[8, 1600]", 8.0, 1600.0, 1, 1},
+    {"n_elements", "", "the 5-point bending stencil needs at least 8 nodes around the ring; the in-plane tire's initialisation grows as N³, and above 800 costs minutes and gigabytes", "[8, 800]", 8.0, 800.0, 1, 1},
     {"f_max", "Hz", "highest natural frequency of the ring's modes kept", "[1, 100000] Hz", 1.0, 100000.0, 1, 0},
     {"contact_zone_length", "m", "length of road under the contact points", "[0.01, 2] m", 0.01, 2.0, 1, 0},
     {"contact_point_spacing", "m", "spacing of the contact points", "[0.0001, 0.1] m", 0.0001, 0.1, 1, 0},
@@ -450,6 +453,9 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_NOT_LAST_POINT "t = %s s: must be the last communication point t = %s s (roll back with fmi2SetFMUstate to step from an earlier time)"
 #define SPEC_MSG_STEP_RANGE "step size h = %s s: must be in (0, %g] s"
 #define SPEC_MSG_INPLANE_STEP_SHORT "step size h = %s s: must be at least %g s, the in-plane tire's shortest step"
+#define SPEC_MSG_INPLANE_SPIN_LIMIT "step at t = %.6g s: the wheel's spin reached %.6g rad/s, beyond the %.6g rad/s the tire was built and verified for (%g of the critical speed %.6g m/s of this mesh, over R): less wheel_torque or wheel_rate; a tied sidewall or fewer elements raise the critical speed"
+#define SPEC_MSG_INPLANE_SPEED_LIMIT "step at t = %.6g s: the road's speed under the axle reached %.6g m/s (speed + rim_vx), beyond the %.6g m/s the tire was built and verified for (%g of the critical speed %.6g m/s of this mesh)"
+#define SPEC_MSG_INPLANE_FORCE_LIMIT "step at t = %.6g s: the tire's force on the rim reached %.6g N, beyond %g times the load (%.6g N): the inputs drive the tire outside what the model represents"
 #define SPEC_MSG_STEP_DELAY "step size h = %s s: must be at least %.3g s at this speed: the road reaches the contact zone's last node %.3g s after its front, and the FMU keeps at most %d steps of its history"
 #define SPEC_MSG_NO_STEP_PENDING "no step is pending (fmi2DoStep always completes)"
 #define SPEC_MSG_INPUT_RANGE "%s = %s %s: must be in [-%g, %g] %s"
