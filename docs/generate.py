@@ -182,6 +182,25 @@ def inplane_fmu_cost_table() -> str:
     return "\n".join(lines)
 
 
+@generator("host-timing")
+def host_timing_table() -> str:
+    data = record("bench_host_timing")
+    results = data["results"]
+    lines = ["| extending the inputs over a 1 ms step (the in-plane core) | rim_Fz | rim_Fx |",
+             "|---|---|---|"]
+    for scheme, errors in results["schemes"].items():
+        chosen = " (the FMUs')" if scheme == "rate and its changes" else ""
+        lines.append(f"| {scheme}{chosen} | {100 * errors['rim_Fz']:.2f} % | "
+                     f"{100 * errors['rim_Fx']:.2f} % |")
+    lines += ["", "| FMU (plain master) | h | rim_Fz | rim_Fx |", "|---|---|---|---|"]
+    for name, steps in results["fmus"].items():
+        for h, errors in steps.items():
+            lines.append(f"| {name} | {float(h) * 1e3:g} ms | {100 * errors['rim_Fz']:.2f} % "
+                         f"| {100 * errors['rim_Fx']:.2f} % |")
+    return ("\n".join(lines) + f"\n\nComputed by `{data['command']}` on {data['recorded']} "
+            "(the same numbers on any machine).\n")
+
+
 @generator("contact-footprint")
 def contact_footprint_table() -> str:
     from tire_fmu.core import OperatingPoint, TireParameters, build_model

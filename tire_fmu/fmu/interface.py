@@ -125,13 +125,14 @@ def _radial_signals() -> list[FmuVariable]:
         FmuVariable("rim_z", "Real", "input", 0.0, "m",
                     "rim vertical displacement from static equilibrium (z up)"),
         FmuVariable("rim_vz", "Real", "input", 0.0, "m/s",
-                    "rim vertical velocity: the rim ramps with it over the step"),
+                    "rim vertical velocity at t: the step extends the rim along it and its "
+                    "last changes (docs/fmu.md, Timing)"),
         FmuVariable("road_z", "Real", "input", 0.0, "m",
                     "road height at the front of the contact zone (contact_zone_length/2 ahead "
                     "of the contact centre), from static equilibrium"),
         FmuVariable("road_vz", "Real", "input", 0.0, "m/s",
-                    "road vertical velocity at the front of the contact zone: the road ramps "
-                    "with it"),
+                    "road vertical velocity at the front of the contact zone at t: the step "
+                    "extends the road along it and its last changes"),
         FmuVariable("rim_Fz", "Real", "output", DEFAULT_LOAD_N, OUTPUT_UNITS["rim_Fz"],
                     "vertical force of the tire on the rim, total (static load + dynamic)"),
         FmuVariable("rim_Fx", "Real", "output", 0.0, OUTPUT_UNITS["rim_Fx"],
