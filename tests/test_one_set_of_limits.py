@@ -62,7 +62,7 @@ INTERNAL = re.compile(r"ZeroDivision|ContactSetError|Error:|inplane_\w+|refused 
      "more than the 4000 the contact solve takes"),
     (dict(load=-1e-300), "load", "must be in (0, 100000] N"),
     (dict(load=0.0), "load", "must be in (0, 100000] N"),
-    (dict(n_elements=1601), "n_elements", "must be an integer in [8, 1600]"),
+    (dict(n_elements=801), "n_elements", "must be an integer in [8, 800]"),
 ])
 def test_both_fmus_refuse_the_edges_with_the_same_words(fmus, parameters, name, words):
     python, native = (_problems(fmus[kind], **parameters) for kind in ("python", "native"))

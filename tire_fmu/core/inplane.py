@@ -100,11 +100,12 @@ class TangentialParameters:
         return asdict(self)
 
 
-#: The largest hysteretic loss factor the tire takes: the loss enters the rolling ring as a
-#: circulatory stiffness η K H (the loss per cycle of a material point rolling through the
-#: deformation), which pumps energy into the ring's low modes as the viscous damping takes it
-#: out; with the GL073A data it settles up to 0.1 at every speed from 1 m/s to the critical
-#: speed, and grows from 0.15 on.
+#: The largest hysteretic loss factor the FMUs take (a rolling tire runs on): the loss enters
+#: the rolling ring as a circulatory stiffness η K H (the loss per cycle of a material point
+#: rolling through the deformation), which pumps energy into the ring's low modes as the
+#: viscous damping takes it out; with the GL073A data the ring settles up to 0.1 at every
+#: speed from 1 m/s to the critical speed, and grows from 0.15 on
+#: (tests/test_inplane_limits.py). The ring itself is built for any η of TANGENTIAL_RANGES.
 MAX_LOSS_FACTOR = 0.1
 
 #: Allowed ranges (inclusive) of the tangential parameters, and their units.
@@ -117,11 +118,10 @@ TANGENTIAL_RANGES = {
     "wheel_inertia_kg_m2": (1e-6, 1e5, "kg*m^2"),
     "k_tx": (0.0, 1e12, "N/m^2"),
     "friction_coefficient": (0.0, 3.0, ""),
-    # shown stable from rest to the critical speed with the GL073A data up to 0.1 (0.15 grows
-    # at every speed: the loss's circulatory term outweighs the ring's viscous damping,
-    # tests/test_inplane_limits.py)
-    "loss_factor": (0.0, MAX_LOSS_FACTOR, ""),
+    "loss_factor": (0.0, 1.0, ""),
 }
+#: The tangential ranges the FMUs take: the loss up to MAX_LOSS_FACTOR.
+HOST_TANGENTIAL_RANGES = {**TANGENTIAL_RANGES, "loss_factor": (0.0, MAX_LOSS_FACTOR, "")}
 
 #: Road speed (m/s) from which the hysteretic rolling loss acts in full: below it its share
 #: falls linearly to zero at rest (:func:`hysteresis_share`), so that the loss, which a
@@ -147,10 +147,13 @@ def hilbert_circulant(n: int) -> np.ndarray:
     return column[(orders[:, None] - orders[None, :]) % n]
 
 
-def tangential_problems(values: TangentialParameters, tread_radius_m: float) -> list[Problem]:
-    """Every problem with the tangential data at once (the rim must sit inside the tread)."""
+def tangential_problems(values: TangentialParameters, tread_radius_m: float,
+                        ranges: dict | None = None) -> list[Problem]:
+    """Every problem with the tangential data at once (the rim must sit inside the tread);
+    ``ranges`` (default TANGENTIAL_RANGES: what the ring is built for) narrows them, as the
+    FMUs do the loss (HOST_TANGENTIAL_RANGES)."""
     problems = []
-    for name, (low, high, unit) in TANGENTIAL_RANGES.items():
+    for name, (low, high, unit) in (TANGENTIAL_RANGES if ranges is None else ranges).items():
         value = getattr(values, name)
         if not (isinstance(value, (int, float)) and math.isfinite(value) and low <= value <= high):
             problems.append(Problem(name, value, unit,

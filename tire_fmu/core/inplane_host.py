@@ -19,7 +19,12 @@ from dataclasses import dataclass, field, fields, replace
 from .contact import DEFAULT_ZONE_LENGTH_M, zone_problems
 from .discretisation import Grid
 from .host_inputs import substeps
-from .inplane import InPlaneTire, TangentialParameters, tangential_problems
+from .inplane import (
+    HOST_TANGENTIAL_RANGES,
+    InPlaneTire,
+    TangentialParameters,
+    tangential_problems,
+)
 from .inplane_contact import (
     MAX_FORCE_LOADS,
     ContactSetError,
@@ -181,7 +186,7 @@ def settings_problems(settings: HostSettings) -> tuple[list[Problem], InPlaneTir
                                          if k in known})
     radius = tire_values.get("R", TireParameters().R)
     problems += tangential_problems(tangential, radius if isinstance(radius, (int, float))
-                                    else TireParameters().R)
+                                    else TireParameters().R, HOST_TANGENTIAL_RANGES)
     ranges = [HOST_FIELDS[name].problem(_number(getattr(settings, name)))
               for name in HOST_FIELDS]
     problems += [problem for problem in ranges if problem]

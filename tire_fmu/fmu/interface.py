@@ -294,7 +294,7 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
     inputs first (same names, same meaning), then the rim's fore-aft motion and the torque;
     outputs; in_contact; parameters (the tire data, radial and tangential, and the operating
     point). ``parameter_values`` replaces the parameters' start values."""
-    from ..core.inplane import TANGENTIAL_RANGES, TangentialParameters
+    from ..core.inplane import HOST_TANGENTIAL_RANGES, TangentialParameters
     from ..core.inplane_host import (
         CRITICAL_SPEED_FRACTION,
         DEFAULT_HOST_F_MAX_HZ,
@@ -382,7 +382,7 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                                   {"sidewall_shear": "; 0 for the in-plane ring (tie the "
                                                      "sidewall with sidewall_max_order)"})
     defaults = TangentialParameters()
-    for name, (low, high, unit) in TANGENTIAL_RANGES.items():
+    for name, (low, high, unit) in HOST_TANGENTIAL_RANGES.items():
         table.append(FmuVariable(name, "Real", "parameter", getattr(defaults, name),
                                  unit, f"tangential tire data ({name}); allowed [{low:g}, "
                                  f"{high:g}] {unit}".rstrip(), f"--tire {name}=VALUE"))

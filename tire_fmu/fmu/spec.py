@@ -616,13 +616,13 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     lines += [_field_row(f, f.name) for f in parameters.TIRE_FIELDS.values()]
     lines += ["};", "",
               "/* the in-plane FMU's ranges, in the order of the core's checks: the tangential "
-              "data (core/inplane.py's TANGENTIAL_RANGES, inclusive), then the operating point "
+              "data (core/inplane.py's HOST_TANGENTIAL_RANGES, inclusive), then the operating point "
               "(core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */",
               "typedef struct {", "    const char *name, *unit;", "    double low, high;",
               "    int integer;", "} SpecRange;", "",
-              f"#define SPEC_N_TANGENTIAL_FIELDS {len(inplane.TANGENTIAL_RANGES)}",
+              f"#define SPEC_N_TANGENTIAL_FIELDS {len(inplane.HOST_TANGENTIAL_RANGES)}",
               "static const SpecRange SPEC_TANGENTIAL_FIELDS[SPEC_N_TANGENTIAL_FIELDS] = {"]
-    for name, (low, high, unit) in inplane.TANGENTIAL_RANGES.items():
+    for name, (low, high, unit) in inplane.HOST_TANGENTIAL_RANGES.items():
         lines.append(f"    {{{_c_string(name)}, {_c_string(unit)}, {_c_number(float(low))}, "
                      f"{_c_number(float(high))}, 0}},")
     lines += ["};", f"#define SPEC_N_INPLANE_FIELDS {len(inplane_host.HOST_FIELDS)}",

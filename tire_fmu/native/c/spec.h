@@ -201,7 +201,7 @@ static const SpecField SPEC_TIRE_FIELDS[SPEC_N_TIRE_FIELDS] = {
     {"reference_pressure", "Pa", "inflation pressure at which k_r1, k_r2 and sidewall_shear are given (pressure law)", "[10000, 3e+06] Pa", 10000.0, 3000000.0, 1, 0},
 };
 
-/* the in-plane FMU's ranges, in the order of the core's checks: the tangential data (core/inplane.py's TANGENTIAL_RANGES, inclusive), then the operating point (core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */
+/* the in-plane FMU's ranges, in the order of the core's checks: the tangential data (core/inplane.py's HOST_TANGENTIAL_RANGES, inclusive), then the operating point (core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */
 typedef struct {
     const char *name, *unit;
     double low, high;
