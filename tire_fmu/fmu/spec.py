@@ -616,8 +616,8 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     lines += [_field_row(f, f.name) for f in parameters.TIRE_FIELDS.values()]
     lines += ["};", "",
               "/* the in-plane FMU's ranges, in the order of the core's checks: the tangential "
-              "data (core/inplane.py's HOST_TANGENTIAL_RANGES, inclusive), then the operating point "
-              "(core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */",
+              "data (core/inplane.py's HOST_TANGENTIAL_RANGES, inclusive), then the operating "
+              "point (core/inplane_host.py's HOST_FIELDS, as the tire data's, by FMU name) */",
               "typedef struct {", "    const char *name, *unit;", "    double low, high;",
               "    int integer;", "} SpecRange;", "",
               f"#define SPEC_N_TANGENTIAL_FIELDS {len(inplane.HOST_TANGENTIAL_RANGES)}",
