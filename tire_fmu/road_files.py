@@ -136,11 +136,15 @@ def read_road_file(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
     """The road in ``path``: an OpenCRG file (a ``.crg`` name, or a text starting with an
     OpenCRG block) read at ``lateral_offset_m``, else a two-column profile."""
     path = Path(path)
+    if not (isinstance(lateral_offset_m, (int, float)) and math.isfinite(lateral_offset_m)):
+        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m:g} m: must be a finite "
+                            "number")
+    _file_size(path, max(MAX_ROAD_FILE_BYTES, MAX_PROFILE_FILE_BYTES))  # there, a file
     if path.suffix.lower() == ".crg" or _starts_like_crg(path):
         return read_crg(path, lateral_offset_m)
     if lateral_offset_m != 0.0:
         raise RoadFileError(f"{path}: a profile file has no width: the lateral offset "
-                            f"{lateral_offset_m!r} m applies to OpenCRG files only (leave it 0)")
+                            f"{lateral_offset_m:g} m applies to OpenCRG files only (leave it 0)")
     return read_profile(path)
 
 
@@ -210,13 +214,16 @@ class _Header:
     by_number: bool
 
 
-def _header_lines(path: Path, head: bytes):
-    """(line number, text, offset after the line) of the header's lines."""
+def _header_lines(head: bytes, complete: bool):
+    """(line number, text, offset after the line) of the lines that end in ``head`` (the last
+    one without a line end too when ``head`` is the whole file)."""
     start = 0
     number = 0
     while start < len(head):
         end = head.find(b"\n", start)
         if end < 0:
+            if complete:
+                yield number + 1, head[start:].rstrip(b"\r").decode("latin-1"), len(head)
             return
         number += 1
         yield number, head[start:end].rstrip(b"\r").decode("latin-1"), end + 1
@@ -250,7 +257,7 @@ def _read_header(path: Path, head: bytes, complete: bool) -> _Header:
     road, options, modifiers = {}, {}, None
     data_format, channels, by_number = None, [], set()
     after_comment = None
-    for number, line, offset in _header_lines(path, head):
+    for number, line, offset in _header_lines(head, complete):
         if section == "comment":
             if line.startswith("$"):
                 section = None
@@ -378,7 +385,7 @@ def _checked_header(path, road, options, modifiers, data_format, channels, by_nu
         raise RoadFileError(f"{path}: no reference_line_increment in $ROAD_CRG (the spacing "
                             "of the cross sections along u)")
     if not MIN_INCREMENT_M <= increment <= 1e3:
-        raise RoadFileError(f"{path}: reference_line_increment = {increment!r} m: must be in "
+        raise RoadFileError(f"{path}: reference_line_increment = {increment:g} m: must be in "
                             f"[{MIN_INCREMENT_M:g}, 1000] m")
     mode = options.get("border_mode_u", 2)
     if mode != 2:
@@ -386,7 +393,7 @@ def _checked_header(path, road, options, modifiers, data_format, channels, by_nu
                             "beyond the road's ends, the default) is supported")
     for key in ("border_offset_u", "border_smooth_ubeg", "border_smooth_uend"):
         if options.get(key, 0.0) != 0.0:
-            raise RoadFileError(f"{path}: {key} = {options[key]!r}: not supported (the road "
+            raise RoadFileError(f"{path}: {key} = {options[key]:g}: not supported (the road "
                                 "is level at its end heights beyond its ends)")
     if modifiers is not None:
         scaling = [key for key in _SCALING if key in modifiers]
@@ -425,8 +432,8 @@ class _Grid:
             count = (end - start) / increment + 0.5
             if not 1.0 <= count < MAX_CROSS_SECTIONS:
                 raise RoadFileError(
-                    f"{path}: reference_line_start_u = {start!r}, end_u = {end!r} by "
-                    f"{increment!r} m: {count - 0.5:.6g} increments; must make 2 to "
+                    f"{path}: reference_line_start_u = {start:g}, end_u = {end:g} by "
+                    f"{increment:g} m: {count - 0.5:.6g} increments; must make 2 to "
                     f"{MAX_CROSS_SECTIONS} cross sections")
             self.rows = int(count) + 1
             dtype = _BINARY_TYPE[precision]
@@ -471,15 +478,8 @@ class _Grid:
         if len(lines) > MAX_CROSS_SECTIONS * lines_per_record:
             raise RoadFileError(f"{path}: more than {MAX_CROSS_SECTIONS} cross sections")
         rows, rest = divmod(len(lines), lines_per_record)
-        if rest:
-            raise RoadFileError(
-                f"{path}: truncated: the last cross section has {rest} of its "
-                f"{lines_per_record} lines ({width} values of {chars} characters, {per_line} "
-                "a line)")
-        if rows < 2:
-            raise RoadFileError(f"{path}: {rows} cross sections of data: a road needs 2")
         records = ["".join(lines[k:k + lines_per_record])
-                   for k in range(0, len(lines), lines_per_record)]
+                   for k in range(0, rows * lines_per_record, lines_per_record)]
         needed = width * chars
         short = next((k for k, r in enumerate(records) if len(r) < needed), None)
         if short is not None:
@@ -487,6 +487,13 @@ class _Grid:
                 f"{path}: cross section {short + 1} holds {len(records[short])} characters: "
                 f"{width} values of {chars} characters need {needed} (truncated or not "
                 f"{self.header.data_format})")
+        if rest:
+            raise RoadFileError(
+                f"{path}: truncated: the last cross section has {rest} of its "
+                f"{lines_per_record} lines ({width} values of {chars} characters, {per_line} "
+                "a line)")
+        if rows < 2:
+            raise RoadFileError(f"{path}: {rows} cross sections of data: a road needs 2")
         self.rows, self._records, self._chars = rows, records, chars
 
     def column(self, index: int) -> np.ndarray:
@@ -528,14 +535,14 @@ def _v_positions(path: Path, header: _Header) -> tuple[np.ndarray, np.ndarray]:
     if header.by_number:
         numbers = sorted(int(c.v_m) for c in z)
         if numbers != list(range(1, len(z) + 1)):
-            raise RoadFileError(f"{path}: long sections numbered {numbers[:8]}...: must be "
-                                f"1 to {len(z)}, each once")
+            raise RoadFileError(f"{path}: long sections numbered other than 1 to {len(z)}, "
+                                "each once")
         increment = header.road.get("long_section_v_increment")
         if increment is None:
             raise RoadFileError(f"{path}: long sections by number need "
                                 "long_section_v_increment in $ROAD_CRG")
         if not MIN_INCREMENT_M <= increment <= 1e3:
-            raise RoadFileError(f"{path}: long_section_v_increment = {increment!r} m: must be "
+            raise RoadFileError(f"{path}: long_section_v_increment = {increment:g} m: must be "
                                 f"in [{MIN_INCREMENT_M:g}, 1000] m")
         right = header.road.get("long_section_v_right", 0.0)
         ordered = sorted(z, key=lambda c: c.v_m)
@@ -730,9 +737,9 @@ def read_crg(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
     ``lateral_offset_m`` (m, left positive)."""
     path = Path(path)
     if not (isinstance(lateral_offset_m, (int, float)) and math.isfinite(lateral_offset_m)):
-        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m!r} m: must be a finite "
+        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m:g} m: must be a finite "
                             "number")
-    file_bytes = _file_size(path)
+    file_bytes = _file_size(path, MAX_ROAD_FILE_BYTES)
     with path.open("rb") as stream:
         head = stream.read(MAX_CRG_HEADER_BYTES)
     header = _read_header(path, head, complete=len(head) == file_bytes)
@@ -760,18 +767,20 @@ def read_crg(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
                     (float(v_positions[0]), float(v_positions[-1])))
 
 
-def _file_size(path: Path) -> int:
+def _file_size(path: Path, limit: int) -> int:
+    """The size of the file ``path`` once it is known to be a readable file within
+    ``limit``."""
+    if path.is_dir():
+        raise RoadFileError(f"{path}: is a folder, not a road file")
     try:
         size = path.stat().st_size
         with path.open("rb"):
             pass
     except OSError as cause:
         raise RoadFileError(f"{path}: cannot be read: {cause.strerror or cause}") from cause
-    if path.is_dir():
-        raise RoadFileError(f"{path}: is a folder, not a road file")
-    if size > MAX_ROAD_FILE_BYTES:
-        raise RoadFileError(f"{path}: {size} bytes: more than the {MAX_ROAD_FILE_BYTES} bytes "
-                            "a road file may hold")
+    if size > limit:
+        raise RoadFileError(f"{path}: {size} bytes: more than the {limit} bytes a road file "
+                            "may hold")
     return size
 
 
@@ -785,8 +794,7 @@ _SEPARATOR = re.compile(r"[,\s]+")
 def read_profile(path: str | Path) -> RoadFile:
     """The two-column profile (distance m, height m) in ``path``."""
     path = Path(path)
-    if path.is_dir():
-        raise RoadFileError(f"{path}: is a folder, not a road file")
+    _file_size(path, MAX_PROFILE_FILE_BYTES)
     text = read_text(path, MAX_PROFILE_FILE_BYTES, "a road profile", RoadFileError)
     distances, heights, lines = [], [], []
     header_allowed = True
@@ -815,8 +823,8 @@ def read_profile(path: str | Path) -> RoadFile:
             raise RoadFileError(f"{path}: line {number}: {content[:60]!r}: beyond "
                                 f"{MAX_ABS_DISTANCE_M:g} m along or {MAX_ABS_HEIGHT_M:g} m high")
         if distances and distance <= distances[-1]:
-            raise RoadFileError(f"{path}: line {number}: distance {distance!r} m after "
-                                f"{distances[-1]!r} m (line {lines[-1]}): distances must "
+            raise RoadFileError(f"{path}: line {number}: distance {distance:.15g} m after "
+                                f"{distances[-1]:.15g} m (line {lines[-1]}): distances must "
                                 "strictly increase")
         if len(distances) >= MAX_CROSS_SECTIONS:
             raise RoadFileError(f"{path}: more than {MAX_CROSS_SECTIONS} points")
