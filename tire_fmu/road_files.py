@@ -893,6 +893,9 @@ def crg_bytes(heights_m, increment_m: float, v_m, data_format: str = "KDBI",
               key("reference_line_increment", increment_m),
               key("long_section_v_right", v[0]), key("long_section_v_left", v[-1]),
               key("long_section_v_increment", v_increment), "$",
+              # an empty block: no modifiers, so every OpenCRG reader takes the heights as
+              # written (without one, OpenCRG's defaults would move the start to height 0)
+              "$ROAD_CRG_MODS", "$",
               "$KD_DEFINITION", f"#:{data_format}",
               f"U:reference line u,m,{start_u_m:.17g},{increment_m:.17g}"]
     lines += [f"D:long section {k + 1},m" for k in range(columns)]
@@ -943,3 +946,25 @@ def write_crg(path: str | Path, heights_m, increment_m: float, v_m,
     with published_file(path) as partial:
         partial.write_bytes(data)
     return path
+
+
+#: The long sections a road written here has across its width (the same heights on each: an
+#: obstacle across the whole road, a random road correlated across it).
+WRITTEN_LONG_SECTIONS = 3
+
+
+def write_road(path: str | Path, road: ProfileRoad, data_format: str = "KDBI",
+               width_m: float = 1.0, comments=()) -> Path:
+    """Write ``road`` to ``path``: an OpenCRG file in ``data_format`` for a ``.crg`` name
+    (the road's knots evenly spaced, the same heights on long sections across ``width_m``),
+    else a profile file."""
+    path = Path(path)
+    distances, heights = road.distances_m, road.heights_m
+    if path.suffix.lower() != ".crg":
+        return write_profile(path, distances, heights, comments)
+    spacing = (distances[-1] - distances[0]) / (distances.size - 1)
+    if not np.allclose(np.diff(distances), spacing, rtol=1e-9, atol=0.0):
+        raise ValueError("an OpenCRG road needs evenly spaced points")
+    v = np.linspace(-0.5 * width_m, 0.5 * width_m, WRITTEN_LONG_SECTIONS)
+    grid = np.repeat(heights[:, None], v.size, axis=1)
+    return write_crg(path, grid, spacing, v, data_format, float(distances[0]), comments)

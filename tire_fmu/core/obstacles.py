@@ -420,6 +420,30 @@ def cell_means(shape: _WindowMeans, s, spacing_m: float) -> np.ndarray:
     return shape.mean_height(s - half, s + half)
 
 
+def sampled_obstacle(shape: _WindowMeans, spacing_m: float, lead_in_m: float = 1.0,
+                     lead_out_m: float = 1.0, description: str | None = None) -> ProfileRoad:
+    """``shape`` (an :class:`Obstacle`, a :class:`TriangularCleat`, a :class:`StepCleat`)
+    after ``lead_in_m`` of level road, ``lead_out_m`` of road after it (level at 0, or at the
+    step's top), sampled every ``spacing_m`` from distance 0 by :func:`cell_means`."""
+    problems = []
+    if not (math.isfinite(spacing_m) and 1e-5 <= spacing_m <= 1.0):
+        problems.append(Problem("spacing_m", spacing_m, "m", "in [1e-05, 1] m"))
+    for name, value in (("lead_in_m", lead_in_m), ("lead_out_m", lead_out_m)):
+        if not (math.isfinite(value) and 0 <= value <= 1e4):
+            problems.append(Problem(name, value, "m", "in [0, 10000] m"))
+    if problems:
+        raise ParameterError(problems)
+    length = lead_in_m + getattr(shape, "length_m", 0.0) + lead_out_m
+    count = int(math.ceil(length / spacing_m - 1e-9)) + 1
+    if count > MAX_PROFILE_KNOTS:
+        raise ParameterError([Problem("spacing_m", spacing_m, "m",
+                                      f"at least {length / (MAX_PROFILE_KNOTS - 1):.3g} m",
+                                      f"{MAX_PROFILE_KNOTS} points at most")])
+    s = spacing_m * np.arange(max(count, 2))
+    return ProfileRoad(s, cell_means(shape, s - lead_in_m, spacing_m),
+                       description or shape.label)
+
+
 def cleat(height_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:
     return Obstacle(float(height_m), float(length_m), shape)
 
