@@ -69,7 +69,6 @@ import numpy as np
 
 from .core.obstacles import MAX_PROFILE_KNOTS, ProfileRoad
 from .file_checks import FileContentError, read_text
-from .publish import published_file
 
 SUPPORTED_CRG_FORMATS = ("KRBI", "KDBI", "LRFI", "LDFI")
 #: The largest road file read (bytes).
@@ -859,6 +858,8 @@ def profile_text(distances_m, heights_m, comments=()) -> str:
 
 def write_profile(path: str | Path, distances_m, heights_m, comments=()) -> Path:
     """Write a profile file (checked as the reader checks it, then published whole)."""
+    from .publish import published_file  # the writers only: the FMUs ship the readers
+
     path = Path(path)
     ProfileRoad(np.asarray(distances_m, float), np.asarray(heights_m, float))  # refuses a bad one
     with published_file(path) as partial:
@@ -941,6 +942,8 @@ def _text_field(value: float, chars: int) -> str:
 def write_crg(path: str | Path, heights_m, increment_m: float, v_m,
               data_format: str = "KDBI", start_u_m: float = 0.0, comments=()) -> Path:
     """Write an OpenCRG file (:func:`crg_bytes`), published whole."""
+    from .publish import published_file
+
     path = Path(path)
     data = crg_bytes(heights_m, increment_m, v_m, data_format, start_u_m, comments)
     with published_file(path) as partial:
