@@ -124,20 +124,12 @@ class RoadFile:
         first, last = self.extent_m
         return s_lo < first or s_hi > last
 
-    def describe(self) -> str:
-        first, last = self.extent_m
-        where = (f" at v = {self.lateral_offset_m:g} m" if self.width_m is not None else "")
-        return (f"{self.path} ({self.data_format}{where}): {self.road.distances_m.size} points "
-                f"from {first:g} to {last:g} m, level at the end heights beyond")
-
 
 def read_road_file(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
     """The road in ``path``: an OpenCRG file (a ``.crg`` name, or a text starting with an
     OpenCRG block) read at ``lateral_offset_m``, else a two-column profile."""
     path = Path(path)
-    if not (isinstance(lateral_offset_m, (int, float)) and math.isfinite(lateral_offset_m)):
-        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m:g} m: must be a finite "
-                            "number")
+    _check_offset(path, lateral_offset_m)
     _file_size(path, max(MAX_ROAD_FILE_BYTES, MAX_PROFILE_FILE_BYTES))  # there, a file
     if path.suffix.lower() == ".crg" or _starts_like_crg(path):
         return read_crg(path, lateral_offset_m)
@@ -145,6 +137,15 @@ def read_road_file(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
         raise RoadFileError(f"{path}: a profile file has no width: the lateral offset "
                             f"{lateral_offset_m:g} m applies to OpenCRG files only (leave it 0)")
     return read_profile(path)
+
+
+def _check_offset(path: Path, lateral_offset_m) -> None:
+    if isinstance(lateral_offset_m, bool) or not isinstance(lateral_offset_m, (int, float)):
+        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m!r}: must be a finite "
+                            "number (m)")
+    if not math.isfinite(lateral_offset_m):
+        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m:g} m: must be a finite "
+                            "number")
 
 
 def _starts_like_crg(path: Path) -> bool:
@@ -735,9 +736,7 @@ def read_crg(path: str | Path, lateral_offset_m: float = 0.0) -> RoadFile:
     """The road of the OpenCRG file ``path`` along its reference line at lateral offset
     ``lateral_offset_m`` (m, left positive)."""
     path = Path(path)
-    if not (isinstance(lateral_offset_m, (int, float)) and math.isfinite(lateral_offset_m)):
-        raise RoadFileError(f"{path}: lateral offset {lateral_offset_m:g} m: must be a finite "
-                            "number")
+    _check_offset(path, lateral_offset_m)
     file_bytes = _file_size(path, MAX_ROAD_FILE_BYTES)
     with path.open("rb") as stream:
         head = stream.read(MAX_CRG_HEADER_BYTES)
