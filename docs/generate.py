@@ -39,7 +39,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 MEASURED = ROOT / "docs" / "measured"
 FILES = ("README.md", "docs/fmu.md", "docs/native.md", "docs/vehicle_demo.md",
-         "docs/theory.md")
+         "docs/theory.md", "docs/roads.md")
 SECTION = re.compile(r"(<!-- generated: (?P<name>[\w-]+) -->\n)(?P<body>.*?)"
                      r"(<!-- end generated: (?P=name) -->)", re.S)
 VALUE = re.compile(r"(<!-- value: (?P<name>[\w:-]+) -->)(?P<body>[^\n]*?)(<!-- /value -->)")
@@ -2058,15 +2058,125 @@ def stale_sections(files=FILES) -> list[str]:
     return stale
 
 
+# -- road files (docs/roads.md) -----------------------------------------------------------------
+
+def _road_command(argv: list[str]) -> tuple[dict, str]:
+    """``tire-fmu ARGV --json`` run in a scratch folder: its JSON, and the command as shown."""
+    import contextlib
+    import io
+    import os
+    import tempfile
+
+    from tire_fmu.cli import main
+
+    start = os.getcwd()
+    buffer = io.StringIO()
+    with tempfile.TemporaryDirectory() as folder:
+        try:
+            os.chdir(folder)
+            with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(io.StringIO()):
+                code = main([*argv, "--json"])
+        finally:
+            os.chdir(start)
+    if code != 0:
+        raise StaleRecord(f"tire-fmu {' '.join(argv)} failed")
+    return json.loads(buffer.getvalue()), "tire-fmu " + " ".join(argv)
+
+
+def _road_summary(data: dict) -> str:
+    first, last = data["extent_m"]
+    return (f"{data['points']} points every {data['spacing_m']:g} m from {first:g} to "
+            f"{last:g} m, heights {1e3 * data['height_min_m']:.4g} to "
+            f"{1e3 * data['height_max_m']:.4g} mm, written as {data['format']}")
+
+
+@generator("road-examples")
+def road_examples() -> str:
+    runs = [["road", "cleat", "--height", "0.02", "--length", "0.02", "--out", "cleat.crg"],
+            ["road", "triangle", "--height", "0.05", "--half-angle", "60", "--out",
+             "triangle.crg"],
+            ["road", "step", "--height", "0.05", "--out", "step.csv"],
+            ["road", "pothole", "--depth", "0.05", "--length", "0.3", "--out", "pothole.crg"],
+            ["road", "iso8608", "--class", "C", "--length", "200", "--seed", "1", "--out",
+             "road_C.crg"]]
+    lines = ["| command | the file |", "|---|---|"]
+    for argv in runs:
+        data, command = _road_command(argv)
+        extra = (f"; rms height {1e3 * data['rms_height_m']:.3g} mm, Gd(n0) "
+                 f"{data['gd_n0_m3']:g} m³" if "rms_height_m" in data else "")
+        lines.append(f"| `{command}` | {_road_summary(data)}{extra} |")
+    lines += ["", "Computed by `docs/generate.py` running these commands (`--json`)."]
+    return "\n".join(lines)
+
+
+@generator("road-agreement")
+def road_agreement() -> str:
+    """The readers against the ASAM C API (pycrg) on a file of each format."""
+    import tempfile
+
+    import numpy as np
+    import pycrg
+
+    from tire_fmu.core.iso8608 import iso8608_profile
+    from tire_fmu.road_files import SUPPORTED_CRG_FORMATS, read_road_file, write_crg
+
+    pycrg.set_message_level(0)
+    profile = iso8608_profile("C", 4000, 0.005, seed=2, fade_in_m=1.0)
+    grid = np.column_stack([profile.heights_m, 0.5 * profile.heights_m, -profile.heights_m])
+    rng = np.random.default_rng(0)
+    lines = ["| format | largest difference from the C API (m) | the C API's single-precision "
+             "step at the largest height (m) |", "|---|---|---|"]
+    with tempfile.TemporaryDirectory() as folder:
+        for data_format in SUPPORTED_CRG_FORMATS:
+            path = Path(folder) / f"road_{data_format}.crg"
+            write_crg(path, grid, 0.005, [-0.5, 0.0, 0.5], data_format)
+            u = np.r_[rng.uniform(-1.0, 21.0, 400)]
+            worst = 0.0
+            for v in (0.0, 0.2, -0.37):
+                road = read_road_file(path, v).road
+                with pycrg.DataSet.open(str(path)) as dataset:
+                    point = dataset.create_contact_point()
+                    theirs = np.array([point.uv_to_z(float(x), v) for x in u])
+                worst = max(worst, float(np.max(np.abs(road.profile(u)[0] - theirs))))
+            step = float(np.spacing(np.float32(np.max(np.abs(grid)))))
+            lines.append(f"| {data_format} | {worst:.2g} | {step:.2g} |")
+    lines += ["", "An ISO 8608 class C road (20 m) written in each format, read at v = 0, 0.2 "
+              "and -0.37 m and compared at 400 random u (some beyond its ends) with pycrg's "
+              "`uv_to_z`; computed by `docs/generate.py`."]
+    return "\n".join(lines)
+
+
+@value("road-max-cross-sections")
+def road_max_cross_sections() -> str:
+    from tire_fmu.road_files import MAX_CROSS_SECTIONS
+
+    return f"{MAX_CROSS_SECTIONS:,}".replace(",", " ")
+
+
+@value("road-max-bytes")
+def road_max_bytes() -> str:
+    from tire_fmu.road_files import MAX_ROAD_FILE_BYTES
+
+    return f"{MAX_ROAD_FILE_BYTES / 2**30:g} GiB"
+
+
 # -- numbers typed into prose -------------------------------------------------------------------
 
 #: Files whose prose may not hold a measured-looking number that is not generated.
-PROSE_CHECKED = ("docs/vehicle_demo.md", "docs/fmu.md")
+PROSE_CHECKED = ("docs/vehicle_demo.md", "docs/fmu.md", "docs/roads.md")
 #: Numbers these files state as definitions (of a standard, a method, a test), not as
 #: results: exact phrases, each with where it is defined.
 DEFINITIONS: dict[str, tuple[str, ...]] = {
     "docs/vehicle_demo.md": (
         "95 %",  # the confidence of Welch's band in road_psd.png (demo.py: chi2 0.025/0.975)
+    ),
+    "docs/roads.md": (
+        "1.5 to 3.0 mm",  # SAE J2705's crown radius
+        "45, 60, 75, 80 or 85°",  # SAE J2705's apex half-angles
+        "0.1 cycles/m",  # ISO 8608's n0
+        "16e-6 m³",  # ISO 8608's class A
+        "0.011-2.83 cycles/m",  # ISO 8608's band
+        "1e-8 m",  # the C API's border tolerance in v
     ),
     "docs/fmu.md": (
         "FMI 2.0",  # the standard

@@ -630,3 +630,30 @@ def plot_inplane_cleat(run, load_n: float, window, path: Path) -> Path:
     bottom.grid(alpha=0.3)
     fig.tight_layout()
     return _save(fig, plt, path, dpi=120)
+
+
+def plot_road_profile(road, title: str, path: Path) -> Path:
+    """A road profile as the tire reads it (a :class:`~tire_fmu.core.obstacles.ProfileRoad`):
+    height against distance, the file's extent marked, the level road beyond it dashed."""
+    plt = _pyplot()
+    first, last = road.extent_m
+    span = last - first
+    margin = 0.05 * span
+    fig, ax = plt.subplots(figsize=(8, 3.6))
+    ax.plot(road.distances_m, road.heights_m * 1e3, lw=1.0, color="C0", label="road file")
+    for edge, beyond in ((first, first - margin), (last, last + margin)):
+        height = float(road.profile(edge)[0]) * 1e3
+        ax.plot([edge, beyond], [height, height], ls="--", lw=1.0, color="C0",
+                label="beyond: level at the end height" if edge == first else None)
+        ax.axvline(edge, color="0.6", lw=0.8)
+    low, high = road.heights_m.min() * 1e3, road.heights_m.max() * 1e3
+    pad = 0.08 * (high - low) or 1.0
+    ax.set_xlim(first - margin, last + margin)
+    ax.set_ylim(low - pad, high + pad)
+    ax.set_xlabel("distance along the road [m]")
+    ax.set_ylabel("height [mm]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    return _save(fig, plt, path)

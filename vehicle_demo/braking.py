@@ -210,15 +210,15 @@ def _simulator(settings, model, deflection, speed, obstacle=None, ahead_m=ROAD_A
 def rough_road(settings: BrakingSettings):
     """The ISO 8608 profile under the braking run, level for its first ``road_fade_in_m``
     (a half-cosine rise), long enough for the run at the start speed."""
+    from tire_fmu.core.iso8608 import iso8608_profile
     from tire_fmu.core.obstacles import SampledRoad
-    from vehicle_demo.road import iso8608_road
 
     spacing = 0.25 * settings.point_spacing_m
     length = settings.speed_m_s * settings.duration_s + 1.0
-    # a road of the class at 1 m/s is its profile in space: time in s is distance in m
-    signal, _ = iso8608_road(settings.road_class, 1.0, length, spacing, settings.road_seed,
-                             fade_in_s=min(settings.road_fade_in_m, length))
-    return SampledRoad(spacing, signal.height_m,
+    samples = int(round(length / spacing))
+    profile = iso8608_profile(settings.road_class, samples, spacing, settings.road_seed,
+                              fade_in_m=min(settings.road_fade_in_m, samples * spacing))
+    return SampledRoad(spacing, profile.heights_m,
                        f"ISO 8608 class {settings.road_class} (seed {settings.road_seed})")
 
 

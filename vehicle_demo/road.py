@@ -1,19 +1,13 @@
 """Road inputs for the tire FMU: height and velocity at the front of its contact zone (the
 ``road_z`` it takes), sampled at the communication points.
 
-ISO 8608 random road: one-sided displacement PSD over spatial frequency n (cycles/m),
-
-    G_d(n) = G_d(n0) · (n / n0)^(-w),    n0 = 0.1 cycles/m, waviness w = 2,
-
-with the geometric-mean G_d(n0) of each class A-H (each class is 4x the previous one). It is
-synthesised as a sum of cosines on the grid n_k = k / (V·T) with deterministic amplitudes
-sqrt(2 G_d(n_k) Δn) and uniformly random phases (ISO 8608 annex, Cebon's method), through one
-inverse FFT; the velocity is the exact derivative of the same sum. At speed V the time-
-frequency PSD is G(f) = G_d(f/V)/V. The default band is ISO's, 0.011-2.83 cycles/m (up to
-57 Hz at 20 m/s); a higher n_max extrapolates the slope. Each tread node of the tire sees the
-road averaged over its own arc, so wavelengths shorter than a node's arc (4 cm at N = 100)
-are averaged out node by node, and the unilateral footprint lets go of a dip it cannot
-follow.
+ISO 8608 random road: the profile of :func:`tire_fmu.core.iso8608.iso8608_profile` (one
+generator for the demo and the road files ``tire-fmu road iso8608`` writes) seen at speed V:
+height(t) = profile(V t), velocity = V times its exact slope. At speed V the time-frequency PSD
+is G(f) = G_d(f/V)/V. The default band is ISO's, 0.011-2.83 cycles/m (up to 57 Hz at 20 m/s).
+Each tread node of the tire sees the road averaged over its own arc, so wavelengths shorter
+than a node's arc (4 cm at N = 100) are averaged out node by node, and the unilateral
+footprint lets go of a dip it cannot follow.
 
 Cleat: a short obstacle of height H and length L across the road, rectangular (its edges are
 steps of the road history; each tread node averages them over its arc) or rounded, a
@@ -28,15 +22,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tire_fmu.core.iso8608 import (  # noqa: F401  (the demo's names for them)
+    ISO_8608_GD_N0_M3,
+    ISO_N_MAX_CYCLES_PER_M,
+    ISO_N_MIN_CYCLES_PER_M,
+    N0_CYCLES_PER_M,
+    WAVINESS,
+    Iso8608Spectrum,
+    iso8608_profile,
+)
 from tire_fmu.core.obstacles import OBSTACLE_SHAPES, Obstacle
 from tire_fmu.core.parameters import ParameterError
-
-#: Geometric-mean G_d(n0) per ISO 8608 class, m³ (= m²/(cycles/m)).
-ISO_8608_GD_N0_M3 = {c: 16e-6 * 4**i for i, c in enumerate("ABCDEFGH")}
-N0_CYCLES_PER_M = 0.1
-WAVINESS = 2.0
-ISO_N_MIN_CYCLES_PER_M = 0.011
-ISO_N_MAX_CYCLES_PER_M = 2.83
 
 
 class RoadError(ValueError):
@@ -58,39 +54,6 @@ class RoadSignal:
         return float(self.time_s[1] - self.time_s[0])
 
 
-@dataclass(frozen=True)
-class Iso8608Spectrum:
-    """The target displacement PSD of an ISO 8608 class over a spatial band."""
-
-    road_class: str = "C"
-    waviness: float = WAVINESS
-    n_min_cycles_per_m: float = ISO_N_MIN_CYCLES_PER_M
-    n_max_cycles_per_m: float = ISO_N_MAX_CYCLES_PER_M
-
-    def __post_init__(self) -> None:
-        if self.road_class not in ISO_8608_GD_N0_M3:
-            raise RoadError(f"road class {self.road_class!r}: must be one of "
-                            f"{''.join(ISO_8608_GD_N0_M3)}")
-        if not 0 < self.n_min_cycles_per_m < self.n_max_cycles_per_m:
-            raise RoadError(f"spatial band ({self.n_min_cycles_per_m:g}, "
-                            f"{self.n_max_cycles_per_m:g}) cycles/m: must have 0 < n_min < n_max")
-
-    @property
-    def gd_n0_m3(self) -> float:
-        return ISO_8608_GD_N0_M3[self.road_class]
-
-    def psd_m3(self, n_cycles_per_m) -> np.ndarray:
-        """One-sided G_d(n), m³; zero outside the band."""
-        n = np.asarray(n_cycles_per_m, dtype=float)
-        inside = (n >= self.n_min_cycles_per_m) & (n <= self.n_max_cycles_per_m)
-        safe = np.where(inside, n, N0_CYCLES_PER_M)
-        return np.where(inside, self.gd_n0_m3 * (safe / N0_CYCLES_PER_M) ** -self.waviness, 0.0)
-
-    def time_psd_m2_per_hz(self, f_hz, speed_m_s: float) -> np.ndarray:
-        """One-sided PSD of the height seen at speed V over time frequency: G_d(f/V)/V."""
-        return self.psd_m3(np.asarray(f_hz, dtype=float) / speed_m_s) / speed_m_s
-
-
 def iso8608_road(road_class: str, speed_m_s: float, duration_s: float, step_s: float,
                  seed: int = 0, n_min_cycles_per_m: float = ISO_N_MIN_CYCLES_PER_M,
                  n_max_cycles_per_m: float = ISO_N_MAX_CYCLES_PER_M, fade_in_s: float = 0.0,
@@ -110,29 +73,17 @@ def iso8608_road(road_class: str, speed_m_s: float, duration_s: float, step_s: f
                         "duration >= 10 steps > 0")
     if not 0 <= fade_in_s <= duration_s:
         raise RoadError(f"fade_in = {fade_in_s!r} s: must be in [0, duration]")
-    spectrum = Iso8608Spectrum(road_class, WAVINESS, n_min_cycles_per_m, n_max_cycles_per_m)
     samples = int(round(duration_s / step_s))
-    period = samples * step_s
-    k = np.arange(samples // 2 + 1)
-    f = k / period
-    n = f / speed_m_s
-    dn = 1.0 / (speed_m_s * period)
-    amplitude = np.sqrt(2.0 * spectrum.psd_m3(n) * dn)
-    amplitude[f >= 0.5 / step_s] = 0.0  # nothing at or above Nyquist
-    phase = np.random.default_rng(seed).uniform(0.0, 2 * np.pi, k.size)
-    coefficients = 0.5 * samples * amplitude * np.exp(1j * phase)
-    height = np.fft.irfft(coefficients, samples)
-    velocity = np.fft.irfft(1j * 2 * np.pi * f * coefficients, samples)
+    try:
+        profile = iso8608_profile(road_class, samples, speed_m_s * step_s, seed,
+                                  n_min_cycles_per_m, n_max_cycles_per_m,
+                                  fade_in_m=speed_m_s * fade_in_s)
+    except ParameterError as error:
+        raise RoadError(f"ISO 8608 road: {error}") from None
     time = step_s * np.arange(samples + 1)
-    height, velocity = np.r_[height, height[0]], np.r_[velocity, velocity[0]]
-    if fade_in_s > 0:
-        ramp = np.clip(time / fade_in_s, 0.0, 1.0)
-        window = 0.5 * (1 - np.cos(np.pi * ramp))
-        slope = np.where(ramp < 1, 0.5 * np.pi / fade_in_s * np.sin(np.pi * ramp), 0.0)
-        height, velocity = window * height, window * velocity + slope * height
-    signal = RoadSignal(time, height, velocity, float(speed_m_s),
+    signal = RoadSignal(time, profile.heights_m, speed_m_s * profile.slopes, float(speed_m_s),
                         f"ISO 8608 class {road_class} at {speed_m_s:g} m/s (seed {seed})")
-    return signal, spectrum
+    return signal, profile.spectrum
 
 
 CLEAT_SHAPES = OBSTACLE_SHAPES

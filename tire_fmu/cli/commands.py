@@ -38,6 +38,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                "(A, B, C, D) or a native C FMU (.fmu)"),
     "build-fmu": ("fmu", "build TireModal.fmu, the FMI 2.0 co-simulation FMU"),
     "fit": ("fit", "identify tire data from measured natural frequencies"),
+    "road": ("road", "road files for road_file: cleats (SAE J2730, J2705), potholes, ISO 8608 "
+             "roads as OpenCRG or profile files; read one back"),
 }
 
 

@@ -10,8 +10,14 @@ distance along the road behind its first edge (the edge a rolling tire meets fir
 - rounded: a (1 - cos) bump, H/2 (1 - cos 2πs/L) on 0 <= s < L, with its slope.
 
 A longer road (a random ISO 8608 profile, a measured one) is a :class:`SampledRoad`: heights
-every ``spacing_m`` from s = 0, linear between them. Both answer what the in-plane simulator
-asks of a road, the mean height over each contact point's window, from their exact integral.
+every ``spacing_m`` from s = 0, linear between them. A road read from a file is a
+:class:`ProfileRoad`: heights at any strictly increasing distances, linear between them and
+level at its end heights beyond them. All answer what the in-plane simulator asks of a road,
+the mean height over each contact point's window, from their exact integral.
+
+The cleats of the SAE tire tests that have no length of their own are here too:
+:class:`TriangularCleat` (SAE J2705's triangular cleats, given by their apex half-angle, with
+a rounded crown) and :class:`StepCleat` (J2705's step, its top edge rounded).
 """
 
 from __future__ import annotations
@@ -183,6 +189,259 @@ class SampledRoad(_WindowMeans):
         h = self.heights_m
         slope = (h[k + 1] - h[k]) / self.spacing_m
         return self._at_samples[k] + h[k] * past + 0.5 * slope * past**2
+
+
+#: The most knots a :class:`ProfileRoad` holds (a road file's cross sections: 10 million, 10 km
+#: at 1 mm, 80 MB for each array).
+MAX_PROFILE_KNOTS = 10_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class ProfileRoad(_WindowMeans):
+    """A road profile through knots: ``heights_m`` at ``distances_m`` (strictly increasing, any
+    spacing), linear between knots, and beyond them level at the first height before the first
+    knot and at the last height after the last (OpenCRG's default border mode, "keep the last
+    value"). :attr:`extent_m` is the stretch the knots cover, so that a user can say when a
+    wheel has left it."""
+
+    distances_m: np.ndarray
+    heights_m: np.ndarray
+    description: str = "road profile"
+
+    def __post_init__(self) -> None:
+        distances = np.asarray(self.distances_m, dtype=float)
+        heights = np.asarray(self.heights_m, dtype=float)
+        problems = []
+        if distances.ndim != 1 or not 2 <= distances.size <= MAX_PROFILE_KNOTS:
+            problems.append(Problem("distances_m", f"shape {distances.shape}", "",
+                                    f"a 1-D array of 2 to {MAX_PROFILE_KNOTS} distances"))
+        elif not np.all(np.isfinite(distances)):
+            problems.append(Problem("distances_m", "a non-finite distance", "m", "finite"))
+        elif not np.all(np.diff(distances) > 0):
+            k = int(np.argmin(np.diff(distances) > 0))
+            problems.append(Problem("distances_m", f"{distances[k + 1]!r} after "
+                                    f"{distances[k]!r}", "m", "strictly increasing"))
+        if heights.shape != distances.shape:
+            problems.append(Problem("heights_m", f"shape {heights.shape}", "",
+                                    f"one height per distance (shape {distances.shape})"))
+        elif not np.all(np.isfinite(heights)):
+            problems.append(Problem("heights_m", "a non-finite height", "m", "finite"))
+        if problems:
+            raise ParameterError(problems)
+        for name, values in (("distances_m", distances), ("heights_m", heights)):
+            values = values.copy()
+            values.flags.writeable = False
+            object.__setattr__(self, name, values)
+        # the integral at each knot from the first (trapezoids: exact for the linear profile)
+        steps = 0.5 * np.diff(distances) * (heights[1:] + heights[:-1])
+        object.__setattr__(self, "_at_knots", np.r_[0.0, np.cumsum(steps)])
+
+    @property
+    def extent_m(self) -> tuple[float, float]:
+        """(first, last) distance the knots cover (m); the road is level beyond them."""
+        return float(self.distances_m[0]), float(self.distances_m[-1])
+
+    @property
+    def length_m(self) -> float:
+        return float(self.distances_m[-1] - self.distances_m[0])
+
+    @property
+    def label(self) -> str:
+        return self.description
+
+    def _segment(self, s) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(s, the knot each s follows, s clipped to the extent, the segment's slope)."""
+        s = np.asarray(s, dtype=float)
+        d, h = self.distances_m, self.heights_m
+        k = np.clip(np.searchsorted(d, s, side="right") - 1, 0, d.size - 2)
+        inside = np.clip(s, d[0], d[-1])
+        slope = (h[k + 1] - h[k]) / (d[k + 1] - d[k])
+        return s, k, inside, slope
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at ``s`` (m): level, slope 0, beyond the extent."""
+        s, k, inside, slope = self._segment(s)
+        height = self.heights_m[k] + slope * (inside - self.distances_m[k])
+        on = (s >= self.distances_m[0]) & (s <= self.distances_m[-1])
+        return height, np.where(on, slope, 0.0)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first knot to ``s`` (m²; negative before it, the level
+        road's beyond either end)."""
+        s, k, inside, slope = self._segment(s)
+        past = inside - self.distances_m[k]
+        height = self.heights_m[k] + slope * past
+        return (self._at_knots[k] + (self.heights_m[k] + 0.5 * slope * past) * past
+                + (s - inside) * height)
+
+
+#: The largest crown radius of a cleat here (m): SAE J2705 asks for 1.5 to 3.0 mm.
+MAX_CROWN_RADIUS_M = 0.05
+
+
+def _cleat_problems(height_m: float, crown_radius_m: float) -> list[Problem]:
+    problems = []
+    if not (isinstance(height_m, (int, float)) and math.isfinite(height_m)
+            and 0 < height_m <= MAX_OBSTACLE_SIZE_M):
+        problems.append(Problem("height_m", height_m, "m",
+                                f"in (0, {MAX_OBSTACLE_SIZE_M:g}] m"))
+    if not (isinstance(crown_radius_m, (int, float)) and math.isfinite(crown_radius_m)
+            and 0 <= crown_radius_m <= MAX_CROWN_RADIUS_M):
+        problems.append(Problem("crown_radius_m", crown_radius_m, "m",
+                                f"in [0, {MAX_CROWN_RADIUS_M:g}] m"))
+    elif problems == [] and crown_radius_m >= height_m:
+        problems.append(Problem("crown_radius_m", crown_radius_m, "m",
+                                f"below the height ({height_m:g} m)"))
+    return problems
+
+
+def _arc_area(x, r: float) -> np.ndarray:
+    """∫_0^x sqrt(r² - t²) dt for |x| <= r."""
+    x = np.clip(x, -r, r)
+    if r == 0:
+        return np.zeros_like(x)
+    return 0.5 * (x * np.sqrt(np.maximum(r * r - x * x, 0.0)) + r * r * np.arcsin(x / r))
+
+
+@dataclass(frozen=True)
+class TriangularCleat(_WindowMeans):
+    """A triangular cleat across the road (SAE J2705): flanks at ``half_angle_deg`` from the
+    vertical, its apex rounded with ``crown_radius_m``, ``height_m`` to the top of the crown,
+    its base from s = 0 to :attr:`length_m`."""
+
+    height_m: float
+    half_angle_deg: float = 45.0
+    crown_radius_m: float = 0.002
+
+    def __post_init__(self) -> None:
+        problems = _cleat_problems(self.height_m, self.crown_radius_m)
+        if not (isinstance(self.half_angle_deg, (int, float))
+                and 10.0 <= self.half_angle_deg <= 89.0):
+            problems.append(Problem("half_angle_deg", self.half_angle_deg, "deg",
+                                    "in [10, 89] deg", "SAE J2705 uses 45, 60, 75, 80, 85"))
+        if problems:
+            raise ParameterError(problems)
+
+    @property
+    def _apex_m(self) -> float:
+        """The sharp apex's height, above the crown's top."""
+        alpha = math.radians(self.half_angle_deg)
+        return self.height_m + self.crown_radius_m * (1.0 / math.sin(alpha) - 1.0)
+
+    @property
+    def length_m(self) -> float:
+        """The base's length (m)."""
+        return 2.0 * self._apex_m * math.tan(math.radians(self.half_angle_deg))
+
+    @property
+    def label(self) -> str:
+        return (f"{self.height_m * 1e3:g} mm triangular cleat, half-angle "
+                f"{self.half_angle_deg:g} deg, crown radius {self.crown_radius_m * 1e3:g} mm")
+
+    def _parts(self):
+        alpha = math.radians(self.half_angle_deg)
+        r = self.crown_radius_m
+        return 0.5 * self.length_m, r * math.cos(alpha), 1.0 / math.tan(alpha), r
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope) at ``s`` (m) from the base's first edge."""
+        s = np.asarray(s, dtype=float)
+        half, crown, cot, r = self._parts()
+        x = s - half
+        flank = self._apex_m - np.abs(x) * cot
+        on_crown = np.abs(x) < crown
+        arc = np.sqrt(np.maximum(r * r - x * x, 0.0))
+        height = np.where(on_crown, self.height_m - r + arc, np.maximum(flank, 0.0))
+        slope = np.where(on_crown, -x / np.where(arc > 0, arc, 1.0), -np.sign(x) * cot)
+        off = (s < 0) | (s > self.length_m)
+        return np.where(off, 0.0, height), np.where(off, 0.0, slope)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from s = 0 to ``s`` (m²)."""
+        s = np.clip(np.asarray(s, dtype=float), 0.0, self.length_m)
+        half, crown, cot, r = self._parts()
+        x = s - half  # from the axis
+        rising = 0.5 * cot * np.minimum(s, half - crown) ** 2
+        on = np.clip(x, -crown, crown)
+        crest = (self.height_m - r) * (on + crown) + _arc_area(on, r) - _arc_area(-crown, r)
+        past = np.maximum(x, crown)
+        falling = self._apex_m * (past - crown) - 0.5 * cot * (past * past - crown * crown)
+        return rising + np.where(x > -crown, crest, 0.0) + falling
+
+
+@dataclass(frozen=True)
+class StepCleat(_WindowMeans):
+    """A step up of ``height_m`` at s = 0, level beyond (SAE J2705's step cleat): a vertical
+    face, its top edge rounded with ``crown_radius_m``."""
+
+    height_m: float
+    crown_radius_m: float = 0.002
+
+    def __post_init__(self) -> None:
+        problems = _cleat_problems(self.height_m, self.crown_radius_m)
+        if problems:
+            raise ParameterError(problems)
+
+    @property
+    def label(self) -> str:
+        return (f"{self.height_m * 1e3:g} mm step, top edge radius "
+                f"{self.crown_radius_m * 1e3:g} mm")
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope) at ``s`` (m); the face at s = 0 is a jump (slope 0 there)."""
+        s = np.asarray(s, dtype=float)
+        r = self.crown_radius_m
+        x = np.clip(s - r, -r, 0.0)
+        arc = np.sqrt(np.maximum(r * r - x * x, 0.0))
+        on_edge = (s >= 0) & (s < r)
+        height = np.where(s < 0, 0.0, np.where(on_edge, self.height_m - r + arc,
+                                                 self.height_m))
+        slope = np.where(on_edge, -x / np.where(arc > 0, arc, 1.0), 0.0)
+        return height, slope
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from s = 0 to ``s`` (m²; 0 before the face)."""
+        s = np.maximum(np.asarray(s, dtype=float), 0.0)
+        r = self.crown_radius_m
+        edge = np.minimum(s, r)
+        over_edge = (self.height_m - r) * edge + _arc_area(edge - r, r) - _arc_area(-r, r)
+        return over_edge + self.height_m * np.maximum(s - r, 0.0)
+
+
+def cell_means(shape: _WindowMeans, s, spacing_m: float) -> np.ndarray:
+    """The heights a road sampled every ``spacing_m`` at ``s`` holds for ``shape``: its mean
+    over each sample's stretch [s - spacing/2, s + spacing/2], from its exact integral. The
+    linear interpolant of such samples has the shape's exact integral at every sample (its
+    trapezoid sum telescopes), whatever the phase of an edge between samples, so the window
+    means the contact points read keep the obstacle's area; an edge becomes a ramp one
+    spacing long."""
+    s = np.asarray(s, dtype=float)
+    half = 0.5 * spacing_m
+    return shape.mean_height(s - half, s + half)
+
+
+def sampled_obstacle(shape: _WindowMeans, spacing_m: float, lead_in_m: float = 1.0,
+                     lead_out_m: float = 1.0, description: str | None = None) -> ProfileRoad:
+    """``shape`` (an :class:`Obstacle`, a :class:`TriangularCleat`, a :class:`StepCleat`)
+    after ``lead_in_m`` of level road, ``lead_out_m`` of road after it (level at 0, or at the
+    step's top), sampled every ``spacing_m`` from distance 0 by :func:`cell_means`."""
+    problems = []
+    if not (math.isfinite(spacing_m) and 1e-5 <= spacing_m <= 1.0):
+        problems.append(Problem("spacing_m", spacing_m, "m", "in [1e-05, 1] m"))
+    for name, value in (("lead_in_m", lead_in_m), ("lead_out_m", lead_out_m)):
+        if not (math.isfinite(value) and 0 <= value <= 1e4):
+            problems.append(Problem(name, value, "m", "in [0, 10000] m"))
+    if problems:
+        raise ParameterError(problems)
+    length = lead_in_m + getattr(shape, "length_m", 0.0) + lead_out_m
+    count = int(math.ceil(length / spacing_m - 1e-9)) + 1
+    if count > MAX_PROFILE_KNOTS:
+        raise ParameterError([Problem("spacing_m", spacing_m, "m",
+                                      f"at least {length / (MAX_PROFILE_KNOTS - 1):.3g} m",
+                                      f"{MAX_PROFILE_KNOTS} points at most")])
+    s = spacing_m * np.arange(max(count, 2))
+    return ProfileRoad(s, cell_means(shape, s - lead_in_m, spacing_m),
+                       description or shape.label)
 
 
 def cleat(height_m: float, length_m: float, shape: str = "rectangular") -> Obstacle:

@@ -246,8 +246,9 @@ def stage_package(folder: Path, model_identifier: str,
     ``tire_fmu`` renamed), and the host's requirements: (its name, [its folder, the
     requirements file])."""
     _, _, slaves = SLAVES[model_identifier]
-    # how the slave checks a file it reads (resources/tire_parameters.json): file_checks
-    files = [Path("__init__.py"), Path("file_checks.py"),
+    # how the slave checks a file it reads (resources/tire_parameters.json): file_checks;
+    # the road files its road_file parameter names: road_files (numpy and the core only)
+    files = [Path("__init__.py"), Path("file_checks.py"), Path("road_files.py"),
              *(Path("core", source.name) for source in
                sorted((package_root / "core").glob("*.py")))]
     files += [Path("fmu", name) for name in sorted(_FMU_MODULES + slaves)]
