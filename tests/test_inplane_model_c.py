@@ -113,11 +113,11 @@ CASES = [("default", "free"), ("hysteretic", "free"), ("hysteretic", "held")]
 def test_the_one_call_builds_the_assembled_arrays(name, wheel):
     model = tire(name)
     options = {"f_max_hz": F_MAX_HZ, "wheel": wheel}
-    search = c_deflection_search(CAssembled(model, N, 0.0, 0.0, **options), LOAD_N)
+    search = c_deflection_search(CAssembled(model, N, 10.0, 0.0, **options), LOAD_N)
     assembled = CAssembled(model, N, 10.0, search.deflection_m, backend="compiled", **options)
     arrays = one_call(assembled, model, wheel)
     assert INPLANE_PASSES == MAX_SET_PASSES  # the static brick's passes are the core's
-    # the deflection: the static brick's on CAssembled at rest, with its secant and state
+    # the deflection: the static brick's on CAssembled at the speed, with its secant and state
     assert abs(arrays.deflection_m - search.deflection_m) <= TOLERANCE * search.deflection_m
     assert arrays.secant_iterations == search.iterations
     assert close(arrays.static_y, search.y) <= 1e-10
@@ -149,7 +149,7 @@ def test_the_one_call_builds_the_assembled_arrays(name, wheel):
 def test_the_one_call_steps_as_the_assembled(name, wheel):
     model = tire(name)
     options = {"f_max_hz": F_MAX_HZ, "wheel": wheel}
-    deflection = c_deflection_search(CAssembled(model, N, 0.0, 0.0, **options),
+    deflection = c_deflection_search(CAssembled(model, N, 10.0, 0.0, **options),
                                      LOAD_N).deflection_m
     assembled = CAssembled(model, N, 10.0, deflection, backend="compiled", **options)
     arrays = one_call(assembled, model, wheel)

@@ -470,6 +470,17 @@ class InPlaneSimulator:
         step that is no whole number of it has cut it shorter (:meth:`set_step_length`)."""
         return self.step_s if self._h is None else self._h
 
+    def set_deflection(self, deflection_m: float) -> None:
+        """Press the tire onto the road by ``deflection_m`` (m): only the points' penetrations
+        and their windows of road depend on it, not the ring's step."""
+        if not (math.isfinite(deflection_m) and 0.0 <= deflection_m < 0.2 * self.model.tire.R):
+            raise ParameterError([Problem("deflection_m", deflection_m, "m",
+                                          f"in [0, {0.2 * self.model.tire.R:g}) m")])
+        self.deflection_m = deflection_m
+        t = self.model.tire
+        self._pen0 = t.R - (t.R - deflection_m) * self._sec
+        self._x_lo, self._x_hi = self._zone.road_windows_m(deflection_m)
+
     def set_step_length(self, h: float) -> None:
         """Build the step for steps of ``h`` (s) at the current spins: what depends on the
         step's length (the ring's inverse, the tread's gain and carry) is built again; the
@@ -1685,7 +1696,14 @@ def deflection_for_load(model: InPlaneTire, load_n: float, n_elements: int = 100
     piecewise linear static footprint."""
     # the static footprint at rest does not depend on the simulator's own deflection
     # (only its penetrations do): one simulator serves every trial
-    sim = InPlaneSimulator(model, n_elements, 0.0, 0.0, **options)
+    return deflection_carrying(InPlaneSimulator(model, n_elements, 0.0, 0.0, **options), load_n)
+
+
+def deflection_carrying(sim: InPlaneSimulator, load_n: float) -> float:
+    """The rim deflection (m) whose static footprint carries ``load_n`` on this simulator, at
+    its speed (the spin's stiffness and the loss at their values there; at rest, rest's), by
+    the secant method on the piecewise linear static footprint. At speed the tire rolling
+    steadily then carries the load to the small share the friction and damping move."""
 
     def load(deflection):
         return sim.static_load_n(deflection)

@@ -323,22 +323,41 @@ static int assemble(const InPlaneModelInput* in, InPlaneModel* out, Scratch* s, 
     s->static_iwork = (int*)take(mem, inplane_static_work_ints(r, P), sizeof(int), &failed);
     if (failed)
         return no_memory(why, size, "the static footprint");
-    /* at rest K is k0 (the spin's terms vanish) and the rim's Fz row is rim_k0's z row on the
-     * coordinates, both on the ring's coordinates only (a free wheel's turn is 0 at rest) */
-    for (i = 0; i < r; i++)
-        for (k = 0; k < r; k++)
-            s->k_rest[(size_t)i * (size_t)r + (size_t)k] =
-                out->terms.k0[(size_t)i * (size_t)ny + (size_t)k];
+    /* K and the rim's Fz row at the spin the step is built at (k0 + W k1 + W^2 k2 + s kh, s
+     * the loss's share there; at rest k0), on the ring's coordinates only (a free wheel's turn
+     * is still): the footprint found on them carries the load rolling steadily at the speed
+     * (core/inplane_contact.py's deflection_carrying on the simulator at its speed) */
+    {   /* (a spin that is no number is refused by the points' build below, in its words) */
+        double w = isfinite(in->spin_rad_s) ? in->spin_rad_s : 0.0;
+        double sh = t->loss_factor != 0.0 ? inplane_hysteresis_share(w, t->R) : 0.0;
+        for (i = 0; i < r; i++)
+            for (k = 0; k < r; k++) {
+                size_t at = (size_t)i * (size_t)ny + (size_t)k;
+                double v = out->terms.k0[at] + w * out->terms.k1[at] + w * w * out->terms.k2[at];
+                if (sh != 0.0) v += sh * out->terms.kh[at];
+                s->k_rest[(size_t)i * (size_t)r + (size_t)k] = v;
+            }
+    }
     for (i = 0; i < P; i++)
         for (k = 0; k < r; k++)
             s->jn_rest[(size_t)i * (size_t)r + (size_t)k] =
                 s->rest.jn[(size_t)i * (size_t)ny + (size_t)k];
-    for (k = 0; k < r; k++) {
-        double sum = 0.0;
-        size_t a;
-        for (a = 0; a < nd3; a++)
-            sum += out->terms.rim_k0[nd3 + a] * out->terms.to_abs[a * (size_t)ny + (size_t)k];
-        out->rim_fz_row[k] = sum;
+    {   /* the rim's Fz row at the spin, as rim_force takes it: each power of the spin on the
+         * coordinates, then combined */
+        double w = isfinite(in->spin_rad_s) ? in->spin_rad_s : 0.0;
+        double sh = t->loss_factor != 0.0 ? inplane_hysteresis_share(w, t->R) : 0.0;
+        for (k = 0; k < r; k++) {
+            double g[4] = {0.0, 0.0, 0.0, 0.0};
+            size_t a;
+            for (a = 0; a < nd3; a++) {
+                double e = out->terms.to_abs[a * (size_t)ny + (size_t)k];
+                g[0] += out->terms.rim_k0[nd3 + a] * e;
+                g[1] += out->terms.rim_k1[nd3 + a] * e;
+                g[2] += out->terms.rim_k2[nd3 + a] * e;
+                g[3] += out->terms.rim_kh[nd3 + a] * e;
+            }
+            out->rim_fz_row[k] = g[0] + g[1] * w + g[2] * (w * w) + g[3] * sh;
+        }
     }
     memset(&st, 0, sizeof st);
     st.n_coords = r;
