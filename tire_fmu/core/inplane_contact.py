@@ -962,10 +962,19 @@ class InPlaneStepper:
     critical_speed_m_s = math.nan
     load_n = math.nan
 
-    def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0, host_road: bool = False):
-        """Start from the static state, with ``torque_n_m`` on the wheel at t = 0."""
+    def __init__(self, sim: InPlaneSimulator, torque_n_m: float = 0.0, host_road: bool = False,
+                 position_road=None):
+        """Start from the static state, with ``torque_n_m`` on the wheel at t = 0.
+        ``position_road``: the road by position along it (anything with
+        ``window_reads(s_lo, s_hi, speed)``: a road file's ProfileRoad, the host's
+        PositionRoad), read at the wheel centre's position at every step of the tire's: the
+        wheel-centre mode of :meth:`advance_wheel` (the FMUs')."""
         self.sim = sim
         self.road: HostRoad | None = None
+        self.position_road = position_road
+        # where the wheel-centre mode's coordinates start: the wheel's position along the road
+        # and the road's height under it at the first step (None before it)
+        self._origin: tuple[float, float] | None = None
         if host_road:
             if sim.obstacle is not None:
                 raise ValueError("InPlaneStepper(host_road=True): the simulator already has "
@@ -1051,7 +1060,13 @@ class InPlaneStepper:
                 spin = spin_start + (spin_end - spin_start) * (k / count)
                 sim._driven_rate = spin - sim._spin_now
             distance = sim.speed_m_s * time + rim[0]
-            if road is not None:
+            if self.position_road is not None:
+                x_origin, z_origin = self._origin
+                height, rate = self.position_road.window_reads(
+                    sim._x_lo + (x_origin + distance), sim._x_hi + (x_origin + distance),
+                    sim._speed_now + rim[1])
+                height = height - z_origin
+            elif road is not None:
                 front, front_rate, _ = front_path(tau)
                 if plate:
                     height = np.full(sim._zone.n_points, front)
@@ -1092,6 +1107,101 @@ class InPlaneStepper:
                 time_s, speed_m_s, self.speed_limit_m_s, _critical_fraction(),
                 self.critical_speed_m_s))
 
+    def advance_wheel(self, step_s: float, wheel_x_m: float, wheel_vx_m_s: float,
+                      wheel_z_m: float, wheel_vz_m_s: float, torque_n_m: float = 0.0,
+                      wheel_spin_rad_s: float | None = None, at_time_s: float = 0.0,
+                      road_positions=None, road_heights=None) -> InPlaneOutputs:
+        """Advance by ``step_s`` from the wheel centre's state at the step's start: its position
+        along the road and height above the road's datum (m), their rates (m/s), the torque,
+        and a driven wheel's spin (rad/s). The road is :attr:`position_road`'s, read at the
+        wheel's position; the tire is the one built at ``sim.speed_m_s`` and its static load,
+        its rim at the loaded radius above the road there. The coordinates start at the first
+        step's position and the road's height under it, so that nothing far from the road's
+        origin enters a step's arithmetic. ``road_positions`` and ``road_heights``: the host's
+        road there (the samples its road_queries asked for), taken before the step."""
+        if self.position_road is None:
+            raise ValueError("advance_wheel: the stepper has no position_road (the FMUs' "
+                             "wheel-centre mode); advance() takes the deviation inputs")
+        sim = self.sim
+        if road_positions is not None:
+            self.position_road.set_samples(road_positions, road_heights)
+        if self._origin is None:
+            self._origin = (float(wheel_x_m), self.road_height(wheel_x_m))
+        x_origin, z_origin = self._origin
+        rate = 0.0 if wheel_spin_rad_s is None else wheel_spin_rad_s - sim.spin_rad_s
+        return self.advance(step_s, wheel_x_m - x_origin - sim.speed_m_s * self.elapsed_s,
+                            wheel_vx_m_s - sim.speed_m_s,
+                            wheel_z_m - z_origin - self.loaded_radius_m, wheel_vz_m_s,
+                            torque_n_m, 0.0, 0.0, rate, at_time_s)
+
+    @property
+    def loaded_radius_m(self) -> float:
+        """The wheel centre's height above a flat road when the tire carries its static load
+        (m): the tread radius less the static deflection (a host places its wheel so)."""
+        return self.sim.model.tire.R - self.sim.deflection_m
+
+    def road_height(self, x_m: float) -> float:
+        """The road's height at ``x_m`` along it (m, in the road's datum)."""
+        height, _ = self.position_road.profile(np.array([float(x_m)]))
+        return float(height[0])
+
+    def wheel_centre(self) -> tuple[float, float, float]:
+        """Where the last step left the wheel centre (m, m/s, m): its position along the road,
+        its speed and its height above the road's datum, on the path the step extended the
+        host's values along (the host gives the values at the next step's start after)."""
+        x_origin, z_origin = self._origin
+        sim, rim = self.sim, self._rim
+        return (x_origin + sim.speed_m_s * self.elapsed_s + rim[0], sim.speed_m_s + rim[1],
+                z_origin + self.loaded_radius_m + rim[3])
+
+    def wheel_outputs(self, wheel_x_m: float, wheel_vx_m_s: float, wheel_z_m: float
+                      ) -> dict[str, float]:
+        """What a host reads besides the forces, with the wheel centre at ``wheel_x_m``,
+        ``wheel_vx_m_s``, ``wheel_z_m`` (:meth:`wheel_centre` after a step): the loaded radius
+        (the wheel centre's height above the road under it), the effective rolling radius
+        (speed over spin; R when the wheel barely turns), the longitudinal slip ((spin R -
+        speed) / max(|speed|, 0.1 m/s), R the tread radius) and the contact length (the road
+        the pushing points' windows cover)."""
+        sim, st = self.sim, self.state
+        spin = sim.spin_total_rad_s(st.yd)
+        radius = sim.model.tire.R
+        on = np.flatnonzero(st.f_n > 0.0)
+        return {
+            "loaded_radius": float(wheel_z_m - self.road_height(wheel_x_m)),
+            "effective_rolling_radius": (float(wheel_vx_m_s / spin) if abs(spin) > 1e-9
+                                         else radius),
+            "longitudinal_slip": float((spin * radius - wheel_vx_m_s)
+                                       / max(abs(wheel_vx_m_s), SLIP_SPEED_FLOOR_M_S)),
+            "contact_length": (float(sim._x_hi[on].max() - sim._x_lo[on].min()) if on.size
+                               else 0.0),
+        }
+
+    def road_queries(self, count: int, wheel_x_m: float, wheel_vx_m_s: float,
+                     step_s: float) -> np.ndarray:
+        """Where the tire needs the host's road next (m along it), ``count`` positions: ahead of
+        the newest sample it holds, at most the contact points' spacing apart (closer when a
+        step covers less; farther when the wheel outruns them), covering the zone's front and
+        the wheel's travel over the step; the whole zone before the first samples and while the
+        wheel does not get ahead of them (at rest: the host's road moves under a still tire)."""
+        sim = self.sim
+        spacing = sim.point_spacing_m
+        rear = wheel_x_m + float(sim._x_lo.min())
+        front = wheel_x_m + float(sim._x_hi.max())
+        reach = front + abs(wheel_vx_m_s) * step_s + spacing
+        held = self.position_road.s if hasattr(self.position_road, "s") else np.zeros(0)
+        newest = float(held[-1]) if held.size else -math.inf
+        if newest >= reach or not held.size:  # the zone itself
+            return rear + (front - rear) * np.arange(count) / (count - 1)
+        gap = max(spacing, (reach - newest) / count)
+        return newest + gap * np.arange(1, count + 1)
+
+    def _road_store(self):
+        """The road whose samples are part of the state: the legacy HostRoad, or the host's
+        PositionRoad (a road file's is the file's: nothing to keep)."""
+        if self.road is not None:
+            return self.road
+        return self.position_road if hasattr(self.position_road, "restore") else None
+
     def _take_rim_jump(self, given: np.ndarray) -> None:
         """The rim from where the last step's extension left it to the host's values now: its
         jump (position and rate) is taken off the tire's coordinates, so that the tire's own
@@ -1124,22 +1234,28 @@ class InPlaneStepper:
         if road is not None:
             last = road._buffer[:, road._hi - 1].copy() if road._hi > road._lo else None
             kept_road = (road._buffer, road._lo, road._hi, last)
+        elif hasattr(self.position_road, "state"):  # the host's samples (a few hundred)
+            kept_road = self.position_road.state()
         return (StepState(**vars(self.state)), self.steps, self.elapsed_s, self._carry_s,
                 self._given, self._rate_given, self._h_given, self._accel, self._h_accel,
                 self._rim, sim.step_length_s,
-                sim._ring_spin, sim._spin_now, sim._speed_now, sim._s0, kept_road)
+                sim._ring_spin, sim._spin_now, sim._speed_now, sim._s0, kept_road,
+                self._origin)
 
     def rollback(self, checkpoint: tuple) -> None:
         """Back to the :meth:`checkpoint` (a step that failed leaves the stepper as it was)."""
         (state, steps, elapsed, carry, given, rate_given, h_given, accel, h_accel, rim, length,
-         ring_spin, spin, speed, s0, kept_road) = checkpoint
+         ring_spin, spin, speed, s0, kept_road, origin) = checkpoint
+        self._origin = origin
         self.sim._take_spins(ring_spin, spin, speed, length)
         self.sim._s0 = s0
         self.state, self.steps, self._rim = state, steps, rim
         self.elapsed_s, self._carry_s = elapsed, carry
         self._given, self._rate_given, self._h_given = given, rate_given, h_given
         self._accel, self._h_accel = accel, h_accel
-        if kept_road is not None:
+        if kept_road is not None and self.road is None:
+            self.position_road.restore(kept_road)
+        elif kept_road is not None:
             buffer, lo, hi, last = kept_road
             road = self.road
             road._buffer, road._lo, road._hi = buffer, lo, hi
@@ -1151,13 +1267,15 @@ class InPlaneStepper:
         """The stepper's state: :data:`STEPPER_STATE_HEAD`, then the doubles
         (:data:`STEPPER_SCALARS` scalars, y, ẏ, ÿ, e, f_n, the road's samples) and flags."""
         st, sim = self.state, self.sim
-        road = self.road.state() if self.road is not None else np.zeros((0, 3))
+        store = self._road_store()
+        road = store.state() if store is not None else np.zeros((0, 3))
         to_abs = sim._to_abs
         head = struct.pack(STEPPER_STATE_HEAD, STEPPER_STATE_MAGIC, st.y.size, st.e.size,
                            road.shape[0], self.steps, to_abs.shape[0], sim.basis_fingerprint)
         scalars = [*self._given, *self._rim, sim._spin_now, sim._speed_now, sim._ring_spin,
                    self._rate_given, self._h_given, self.elapsed_s, self._carry_s,
-                   sim.step_length_s, *self._accel, self._h_accel]
+                   sim.step_length_s, *self._accel, self._h_accel,
+                   *(self._origin if self._origin is not None else (math.nan, math.nan))]
         # the coordinates, and what they are in the tire's own DOFs (what another basis of the
         # same tire takes them back from)
         dofs = to_abs @ np.column_stack([st.y, st.yd, st.ydd])
@@ -1180,7 +1298,9 @@ class InPlaneStepper:
         if n_dof != own_dof or points != self.state.e.size:
             return (f"its stepper part has {n_dof} DOFs and {points} points, this tire "
                     f"{own_dof} and {self.state.e.size}")
-        if (samples > 0) != (self.road is not None) or steps < 0:
+        store = self._road_store()
+        if (samples > 0 and store is None) or (isinstance(store, HostRoad) and samples == 0) \
+                or steps < 0:
             return "its stepper part's road or step count does not fit this tire"
         if not 0 < ny <= n_dof:
             return f"its stepper part has {ny} coordinates for {n_dof} DOFs"
@@ -1191,7 +1311,10 @@ class InPlaneStepper:
         if len(data) != head + 8 * doubles + 3 * points:
             return "its stepper part has the wrong size"
         values = np.frombuffer(data, "<f8", doubles, head)
-        if not np.all(np.isfinite(values)):
+        origin = values[24:26]
+        finite = np.isfinite(values)
+        finite[24:26] = np.all(np.isfinite(origin)) or np.all(np.isnan(origin))
+        if not np.all(finite):
             return "its stepper part holds values that are not finite"
         flags = np.frombuffer(data, np.int8, 3 * points, head + 8 * doubles)
         if np.any((flags[:2 * points] != 0) & (flags[:2 * points] != 1)) or np.any(
@@ -1277,8 +1400,10 @@ class InPlaneStepper:
         doubles = STEPPER_SCALARS + 3 * ny + 2 * p + 3 * samples + 3 * n_dof
         values = np.frombuffer(data, "<f8", doubles, head).copy()
         flags = np.frombuffer(data, np.int8, 3 * p, head + 8 * doubles)
-        cut = np.cumsum([6, 6, 3, 5, 4, ny, ny, ny, p, p, 3 * samples])
-        given, rim, spins, clocks, changes, _, _, _, e, f_n, road, _ = np.split(values, cut)
+        cut = np.cumsum([6, 6, 3, 5, 4, 2, ny, ny, ny, p, p, 3 * samples])
+        given, rim, spins, clocks, changes, origin, _, _, _, e, f_n, road, _ = np.split(values,
+                                                                                      cut)
+        self._origin = None if np.isnan(origin[0]) else (float(origin[0]), float(origin[1]))
         (y, yd, ydd), _ = self._state_coordinates(data)
         rate_given, h_given, elapsed, carry, length = (float(v) for v in clocks)
         self._accel, self._h_accel = changes[:3].copy(), float(changes[3])
@@ -1288,10 +1413,13 @@ class InPlaneStepper:
         self._given, self._rim, self.steps = given, rim, int(steps)
         self._rate_given, self._h_given = rate_given, h_given
         self.elapsed_s, self._carry_s = elapsed, carry
-        if self.road is not None:
-            self.road.restore(road)
+        store = self._road_store()
+        if store is not None:
+            store.restore(road)
 
 
+#: The speed below which the slip is taken over this one (m/s): rest has no slip.
+SLIP_SPEED_FLOOR_M_S = 0.1
 #: A host's road is kept this far behind the zone's rear (m): the rim may move back by up to
 #: the largest displacement an FMU input takes.
 HOST_ROAD_MARGIN_M = 1.0
@@ -1313,8 +1441,9 @@ STEPPER_STATE_MAGIC = b"INPLANE3"
 #: Its scalars: the host's values at the last communication point (6), the rim (6), the
 #: spins (the tread's, the road speed, the ring's), the wheel_rate given, the last host step,
 #: the elapsed time and its Kahan carry, the tire's step length, the rates' last change (3)
-#: and the step it was made over.
-STEPPER_SCALARS = 24
+#: and the step it was made over, the wheel-centre mode's origin (position, road height; nan
+#: before its first step).
+STEPPER_SCALARS = 26
 
 
 def step_work(ny: int, points: int) -> float:

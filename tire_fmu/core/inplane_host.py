@@ -232,11 +232,14 @@ def _critical_speed(tire, n: int, backend: str, library) -> float:
 
 
 def build_host_stepper(settings: HostSettings, backend: str = "auto",
-                       library=None) -> HostModel:
+                       library=None, road=None) -> HostModel:
     """The stepper for these settings, or a ParameterError naming every problem. ``backend``
     is the step's arithmetic (:data:`~.inplane_contact.BACKENDS`: "auto" steps with the C of
     ``native/c/inplane_step.c`` when it can be had, ``library`` being a loaded kernel library
-    to use, else numpy)."""
+    to use, else numpy). ``road``: the road by position the FMUs' wheel-centre mode reads
+    (:meth:`~.inplane_contact.InPlaneStepper.advance_wheel`: a road file's profile or the
+    host's :class:`~.obstacles.PositionRoad`); without, the deviation mode with the host's
+    height at the zone's front (:meth:`~.inplane_contact.InPlaneStepper.advance`)."""
     problems, tire = settings_problems(settings)
     if problems:
         raise ParameterError(problems)
@@ -271,7 +274,8 @@ def build_host_stepper(settings: HostSettings, backend: str = "auto",
                                           f"a load the tire carries below {most:g} m of "
                                           "deflection")])
         sim.set_deflection(deflection)
-        stepper = InPlaneStepper(sim, host_road=True)
+        stepper = (InPlaneStepper(sim, host_road=True) if road is None
+                   else InPlaneStepper(sim, position_road=road))
     except ContactSetError as error:  # the static footprint, at rest or at the speed
         raise ParameterError([footprint_problem(settings.load_n, tire.tire.k_cw, n)]) from error
     contact = stepper.state.contact

@@ -140,11 +140,25 @@ def build_inplane_fmu(out: str | Path = ".", validate: bool = True, tire=None) -
     and tangential (default: GL073A with the shipped tangential estimates)."""
     from .interface import inplane_fmu_variables
 
-    starts = None
-    if tire is not None:
-        starts = {**tire.tire.as_dict(), **tire.tangential.as_dict()}
-    return _build_tire_fmu(INPLANE_MODEL_IDENTIFIER, inplane_fmu_variables(), out, validate,
-                           starts)
+    # the FMUs' default tire is the parameters' start values (GL073A, its sidewall tied)
+    starts = {} if tire is None else {**tire.tire.as_dict(), **tire.tangential.as_dict()}
+    starts["wheel_z"] = inplane_loaded_radius(starts)
+    return _build_tire_fmu(INPLANE_MODEL_IDENTIFIER, inplane_fmu_variables(starts), out,
+                           validate, starts)
+
+
+def inplane_loaded_radius(values: dict) -> float:
+    """The in-plane tire's loaded radius (m) with these tire data (the rest the FMUs'
+    defaults) at the default load and settings: wheel_z's start value, so that a host that
+    leaves it unset has the tire carry its load."""
+    from ..core.inplane import TANGENTIAL_RANGES
+    from ..core.inplane_host import HostSettings, build_host_stepper
+    from ..core.parameters import TIRE_FIELDS
+
+    settings = HostSettings(tire={k: v for k, v in values.items() if k in TIRE_FIELDS},
+                            tangential={k: v for k, v in values.items()
+                                        if k in TANGENTIAL_RANGES})
+    return build_host_stepper(settings, "numpy").stepper.loaded_radius_m
 
 
 def _build_tire_fmu(model_identifier: str, table, out, validate: bool,

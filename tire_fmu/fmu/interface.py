@@ -287,6 +287,83 @@ def unit_definitions(units) -> ElementTree.Element:
     return definitions
 
 
+# -- the wheel centre and the road by position (both tires' FMUs, docs/fmu.md) ----------------
+
+#: How many heights of the host's road a step takes (road_z_i at road_x_i): at 40 m/s and a
+#: 1 ms step the wheel travels 40 mm, four of the in-plane tire's 10 mm contact points and
+#: sixteen of the radial tire's 2.5 mm ones.
+ROAD_QUERIES = 16
+#: The largest position and height a wheel-centre input takes (m): a road of ten thousand
+#: kilometres at a double's 2e-9 m there, heights of any road on Earth.
+MAX_ROAD_POSITION_M = 1.0e7
+MAX_ROAD_HEIGHT_M = 1.0e4
+
+
+#: wheel_z's start value in the in-plane FMUs built for the default tire (m): its loaded radius
+#: at the default load on a level road, where a host that leaves wheel_z unset has the tire
+#: carry its load (tests/test_inplane_fmu.py checks it against the built tire; an FMU built for
+#: other data bakes its own, builder.build_inplane_fmu).
+DEFAULT_INPLANE_WHEEL_Z_M = 0.6336175640756
+
+
+def wheel_centre_inputs(wheel_z_m: float = 0.0) -> list[FmuVariable]:
+    return [
+        FmuVariable("wheel_x", "Real", "input", 0.0, "m",
+                    "the wheel centre's position along the road (x forward; the road file's "
+                    "u), at t"),
+        FmuVariable("wheel_vx", "Real", "input", 0.0, "m/s",
+                    "the wheel centre's speed along the road at t (the tire rolls at it)"),
+        FmuVariable("wheel_z", "Real", "input", wheel_z_m, "m",
+                    "the wheel centre's height above the road's datum (z up) at t: at "
+                    "loaded_radius above the road the tire carries load"),
+        FmuVariable("wheel_vz", "Real", "input", 0.0, "m/s",
+                    "the wheel centre's vertical speed at t"),
+    ]
+
+
+def road_height_inputs() -> list[FmuVariable]:
+    return [FmuVariable(f"road_z_{i}", "Real", "input", 0.0, "m",
+                        f"with no road_file: the road's height at road_x_{i}, where the tire "
+                        "asked for it after its last step (the host's road)")
+            for i in range(1, ROAD_QUERIES + 1)]
+
+
+def road_query_outputs() -> list[FmuVariable]:
+    return [FmuVariable(f"road_x_{i}", "Real", "output", 0.0, "m",
+                        f"with no road_file: where along the road the tire needs the host's "
+                        f"road_z_{i} for its next step")
+            for i in range(1, ROAD_QUERIES + 1)]
+
+
+def wheel_centre_outputs() -> list[FmuVariable]:
+    return [
+        FmuVariable("loaded_radius", "Real", "output", 0.0, "m",
+                    "the wheel centre's height above the road under it (after "
+                    "initialisation: where to place the wheel to carry load)"),
+        FmuVariable("effective_rolling_radius", "Real", "output", 0.0, "m",
+                    "wheel_vx over the wheel's spin (R while the wheel barely turns)"),
+        FmuVariable("longitudinal_slip", "Real", "output", 0.0, "",
+                    "(spin R - wheel_vx) / max(|wheel_vx|, 0.1 m/s), R the tread radius: "
+                    "negative braking"),
+    ]
+
+
+def road_parameters() -> list[FmuVariable]:
+    return [
+        FmuVariable("road_file", "String", "parameter", "", "",
+                    "the road: an OpenCRG .crg or a two-column profile (distance m, height m) "
+                    "file; empty: the host gives it (road_x_i, road_z_i)", ""),
+        FmuVariable("road_lateral_offset", "Real", "parameter", 0.0, "m",
+                    "where across an OpenCRG road the tire rolls (its v, left positive)", ""),
+    ]
+
+
+#: The largest magnitude of an input, by name where it differs from its unit's
+#: (slave.INPUT_LIMITS): positions along the road, heights above its datum.
+INPUT_NAME_LIMITS = {"wheel_x": MAX_ROAD_POSITION_M, "wheel_z": MAX_ROAD_HEIGHT_M,
+                     **{f"road_z_{i}": MAX_ROAD_HEIGHT_M for i in range(1, ROAD_QUERIES + 1)}}
+
+
 # -- the in-plane tire's FMU (TireInPlane): the ring with tangential motion, friction, Fx, My --
 
 def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVariable, ...]:
@@ -307,22 +384,16 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         return f"allowed {HOST_FIELDS[name].range_text()}"
 
     radial = {v.name: v for v in _signals()}
-    table = [radial[name] for name in ("rim_z", "rim_vz", "road_z", "road_vz")] + [
-        FmuVariable("rim_x", "Real", "input", 0.0, "m",
-                    "rim fore-aft displacement from its steady travel at speed (x forward): "
-                    "the axle ahead of where speed * t puts it"),
-        FmuVariable("rim_vx", "Real", "input", 0.0, "m/s",
-                    "rim fore-aft velocity relative to speed (x forward): the axle's speed "
-                    "over the road is speed + rim_vx (braking to rest: rim_vx = -speed)"),
+    table = wheel_centre_inputs(DEFAULT_INPLANE_WHEEL_Z_M) + [
         FmuVariable("wheel_torque", "Real", "input", 0.0, "N.m",
                     "drive (+) or brake (-) torque on the wheel about the axle, in the sense "
                     "of its rolling; with wheel_free = false the wheel's spin is held and "
                     "this is ignored, as with wheel_driven"),
         FmuVariable("wheel_rate", "Real", "input", 0.0, "rad/s",
-                    "with wheel_driven: the wheel's spin beyond speed / R (rad/s, in the sense "
-                    "of rolling), given by a host that models the wheel's body itself: the "
-                    "wheel spins at speed / R + wheel_rate, linearly over the step (a locked "
-                    "wheel: wheel_rate = -speed / R); not read otherwise"),
+                    "with wheel_driven: the wheel's spin (rad/s, in the sense of rolling), "
+                    "given by a host that models the wheel's body itself (a locked wheel: 0); "
+                    "not read otherwise"),
+        *road_height_inputs(),
         radial["rim_Fz"],
         FmuVariable("rim_Fx", "Real", "output", 0.0, "N",
                     "fore-aft force of the tire on the rim (x forward), total: braking "
@@ -341,15 +412,19 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
         FmuVariable("sliding_points", "Real", "output", 0.0, "",
                     "how many contact points slide (Coulomb friction at its limit); 0 while "
                     "the whole footprint sticks"),
+        *wheel_centre_outputs(),
+        FmuVariable("contact_length", "Real", "output", 0.0, "m",
+                    "length of road the pushing contact points cover"),
+        *road_query_outputs(),
         FmuVariable("in_contact", "Boolean", "output", True, "",
                     "true while at least one contact point pushes on the road"),
         FmuVariable("load", "Real", "parameter", DEFAULT_LOAD_N, "N",
                     f"static vertical load the footprint is built for; {allowed('load_n')}",
                     "--load"),
         FmuVariable("speed", "Real", "parameter", 0.0, "m/s",
-                    "forward speed the reduced step is built at (the road passes at speed + "
-                    f"rim_vx); allowed [0, {CRITICAL_SPEED_FRACTION:g} of the mesh's critical "
-                    "speed]", "--speed"),
+                    "forward speed the reduced step is built at (the tire then rolls at "
+                    f"wheel_vx, its spin followed); allowed [0, {CRITICAL_SPEED_FRACTION:g} of "
+                    "the mesh's critical speed]", "--speed"),
         FmuVariable("n_elements", "Integer", "parameter", 100, "",
                     f"nodes around the ring; {allowed('n_elements')} (with the lumped "
                     "sidewall, sidewall_max_order = 0, the critical speed falls as the mesh "
@@ -360,16 +435,17 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
                     f"keeps (with every contact-zone node's static shapes); {allowed('f_max_hz')}",
                     "--f-max"),
         FmuVariable("contact_zone_length", "Real", "parameter", DEFAULT_ZONE_LENGTH_M, "m",
-                    "length of road under the contact points, centred on the contact centre "
-                    f"(road_z is measured at its front); {allowed('zone_length_m')}",
-                    "--zone-length"),
+                    "length of road under the contact points, centred on the contact centre; "
+                    f"{allowed('zone_length_m')}", "--zone-length"),
         FmuVariable("contact_point_spacing", "Real", "parameter",
                     DEFAULT_HOST_POINT_SPACING_M, "m",
                     "spacing of the contact points, each with its tread element and "
                     f"friction; {allowed('point_spacing_m')}", "--point-spacing"),
         FmuVariable("step_size", "Real", "parameter", DEFAULT_HOST_STEP_S, "s",
-                    "the tire's own step: every communication step must be a whole multiple "
-                    f"of it; {allowed('step_s')}", "--step"),
+                    "the tire's own step: a communication step is cut into steps of it (or "
+                    f"equal shorter ones where it is no whole number of them); "
+                    f"{allowed('step_s')}", "--step"),
+        *road_parameters(),
         FmuVariable("wheel_free", "Boolean", "parameter", True, "",
                     "the wheel turns under wheel_torque and the tread's drag (its inertia "
                     "wheel_inertia_kg_m2); false holds its spin at speed / R", "--wheel-held"),
@@ -390,13 +466,15 @@ def inplane_fmu_variables(parameter_values: dict | None = None) -> tuple[FmuVari
     # feeds through: each is the last step's, whatever the inputs set since
     table = [replace(v, export_option="", depends_on=() if v.causality == "output" else None)
              for v in table]
-    if parameter_values:
+    if parameter_values:  # the tire data and the loaded radius (wheel_z) of a built FMU
         table = [replace(v, start=parameter_values.get(v.name, v.start))
-                 if v.causality == "parameter" else v for v in table]
+                 if v.causality == "parameter" or v.name == "wheel_z" else v for v in table]
     return tuple(table)
 
 
-#: The in-plane FMU's hot-path blocks: inputs, outputs, in_contact.
-INPLANE_INPUTS = slice(0, 8)
-INPLANE_OUTPUTS = slice(8, 15)
-INPLANE_IN_CONTACT = 15
+#: The in-plane FMU's hot-path blocks: inputs (the wheel centre's four, the torque, the spin,
+#: the host road's heights), outputs (the forces, what a host reads of the tire, where the host
+#: road is wanted next), in_contact.
+INPLANE_INPUTS = slice(0, 6 + ROAD_QUERIES)
+INPLANE_OUTPUTS = slice(INPLANE_INPUTS.stop, INPLANE_INPUTS.stop + 11 + ROAD_QUERIES)
+INPLANE_IN_CONTACT = INPLANE_OUTPUTS.stop

@@ -34,7 +34,15 @@ import struct
 import time
 import warnings
 
-from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
+from pythonfmu import (
+    Boolean,
+    Fmi2Causality,
+    Fmi2Slave,
+    Fmi2Variability,
+    Integer,
+    Real,
+    String,
+)
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 
@@ -59,6 +67,7 @@ from tire_fmu.fmu.interface import (
     FMU_UNSET,
     IN_CONTACT,
     INPUTS,
+    INPUT_NAME_LIMITS,
     MAX_DELAY_STEPS,
     MAX_STEP_S,
     OUTPUTS,
@@ -92,7 +101,7 @@ _RUNNING = Phase.RUNNING
 _MAX_M, _MAX_M_S = MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S
 
 #: pythonfmu's variable class for each FMI type of the shared table
-_KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
+_KINDS = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
 #: The variables' names, types and causalities (start values differ only by the tire data an
 #: FMU was built with, which the serialized states do not depend on).
 _TABLE = fmu_variables()
@@ -474,9 +483,11 @@ class TireModal(Fmi2Slave):
         return self._get("fmi2GetBoolean", vrs, "Boolean", bool, False)
 
     def get_string(self, vrs):
-        if self._allowed("fmi2GetString") and vrs:
-            self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
-        return ["" for _ in vrs]
+        if not any(v.type == "String" for v in self._table):
+            if self._allowed("fmi2GetString") and vrs:
+                self._refuse("fmi2GetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
+            return ["" for _ in vrs]
+        return self._get("fmi2GetString", vrs, "String", str, "")
 
     def _get(self, call, vrs, kind, convert, fallback):
         """Every value, or (refused: the call's phase or a reference) the fallbacks."""
@@ -518,8 +529,11 @@ class TireModal(Fmi2Slave):
         self._set("fmi2SetBoolean", vrs, [bool(v) for v in values], "Boolean")
 
     def set_string(self, vrs, values):
-        if self._allowed("fmi2SetString") and vrs:
-            self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
+        if not any(v.type == "String" for v in self._table):
+            if self._allowed("fmi2SetString") and vrs:
+                self._refuse("fmi2SetString", MESSAGES["NO_STRINGS"] % self.model_identifier)
+            return
+        self._set("fmi2SetString", vrs, [str(v) for v in values], "String")
 
     def _set(self, call, vrs, values, kind) -> None:
         """Set every value or, if one is refused, none."""
@@ -566,8 +580,12 @@ class TireModal(Fmi2Slave):
                 model = (struct.pack("<2i", self._contact_warning_armed, self._contact_logged)
                          + self._model_state_bytes())
             reason = self._error_reason if self._phase == Phase.ERROR else ""
+            table = self._table
             return state_pack(self._phase, self._guid(), self._now, self._start_time,
-                              self._stale, self._values, model, reason)
+                              self._stale, [0.0 if v.type == "String" else x
+                                            for v, x in zip(table, self._values)],
+                              model, reason, [x for v, x in zip(table, self._values)
+                                              if v.type == "String"])
         except Exception as error:  # an escaping exception would be fmi2Fatal
             self.log(f"fmi2GetFMUstate failed: {_cause(error)}", Fmi2Status.error)
             return b""
@@ -586,7 +604,9 @@ class TireModal(Fmi2Slave):
             self._refuse(call, problem)
             return
         fields = state_unpack(data, len(self._table))
-        values = [float(x) if v.type == "Real" else int(x) if v.type == "Integer" else x != 0.0
+        strings = iter(state_strings(fields["strings"]))
+        values = [float(x) if v.type == "Real" else int(x) if v.type == "Integer"
+                  else next(strings) if v.type == "String" else x != 0.0
                   for v, x in zip(self._table, fields["values"])]
         model = fields["model"]
         simulator, built_for = self._simulator, self._built_for
@@ -617,6 +637,10 @@ class TireModal(Fmi2Slave):
         self._error_reason = fields["reason"].decode("utf-8", errors="replace")
         self._start_time, self._now = fields["start_time"], fields["time"]
         self._stale = bool(fields["stale"])
+        self._restored()
+
+    def _restored(self) -> None:
+        """What a subclass derives from the values a state restored (nothing here)."""
 
     # the model's part of an FMU state (a subclass with another model replaces these)
     def _model_state_bytes(self) -> bytes:
@@ -684,8 +708,11 @@ def state_problem(data: bytes, table: tuple[FmuVariable, ...], guid: str) -> str
             # a Real parameter holds whatever a set gave it: checked when it is used
             return m["STATE_VALUE"] % (v.name, v.type)
     model_size, reason_size = f["model_size"], f["reason_size"]
-    if model_size + reason_size != len(data) - fixed:
+    if model_size + reason_size + f["strings_size"] != len(data) - fixed:
         return m["STATE_MODEL_SIZE"]
+    texts = state_strings(f["strings"])
+    if texts is None or len(texts) != sum(v.type == "String" for v in table):
+        return m["STATE_STRINGS"]
     if (phase in (Phase.RUNNING, Phase.TERMINATED)) != (model_size > 0):
         return m["STATE_MODEL_PHASE"]
     if (phase == Phase.ERROR) != (reason_size > 0):
@@ -694,6 +721,17 @@ def state_problem(data: bytes, table: tuple[FmuVariable, ...], guid: str) -> str
     if b"\0" in f["reason"]:
         return m["STATE_REASON_NUL"]
     return None
+
+
+def state_strings(data: bytes) -> list[str] | None:
+    """The String values of a state's strings section (each UTF-8, ended by a NUL), or None
+    when it is no such list."""
+    if data and not data.endswith(b"\0"):
+        return None
+    try:
+        return [part.decode("utf-8") for part in data.split(b"\0")[:-1]]
+    except UnicodeDecodeError:
+        return None
 
 
 def _model_part_problem(simulator: ContactSimulator, model: bytes, values: list,
@@ -735,7 +773,7 @@ INPUT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TOR
 
 def _input_problem(v: FmuVariable, value) -> str | None:
     """Why input ``v`` cannot take ``value`` (spec INPUT_RANGE), or None."""
-    limit = INPUT_LIMITS.get(v.unit, MAX_DISPLACEMENT_M)
+    limit = INPUT_NAME_LIMITS.get(v.name) or INPUT_LIMITS.get(v.unit, MAX_DISPLACEMENT_M)
     if abs(value) <= limit:
         return None
     return MESSAGES["INPUT_RANGE"] % (v.name, repr(float(value)), v.unit, limit, limit, v.unit)

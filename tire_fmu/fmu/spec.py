@@ -283,6 +283,9 @@ MESSAGES: dict[str, str] = {
     "PARAMETER_FIXED": "%s = %s: parameters are fixed after initialisation (they define the "
                        "model built there); reset the FMU to change them",
     "NO_STRINGS": "%s has no String variables",
+    "ROAD_EXTENT": "at t = %s s the contact zone (wheel_x = %s m) reaches beyond the road file "
+                   "%s (%.6g to %.6g m along it): the road is level at its end heights there "
+                   "(said again if it leaves the file's road again after coming back)",
     # FMU states (STATE_LAYOUT): the bytes, then what they mean
     "STATE_NOT_OURS": "it is not a state of this FMU (%s)",
     "STATE_TOO_SHORT": "too short",
@@ -298,6 +301,7 @@ MESSAGES: dict[str, str] = {
     "STATE_VALUE": "its value of %s is not a valid %s",
     "STATE_INPUT": "its %s",
     "STATE_MODEL_SIZE": "its model part has the wrong size",
+    "STATE_STRINGS": "its String values are not one NUL-ended UTF-8 text per String variable",
     "STATE_MODEL_PHASE": "its model part does not fit its phase",
     "STATE_NO_REASON": "its phase is error without the reason: it would refuse every call "
                        "without saying why",
@@ -396,7 +400,7 @@ def phase_refusal(phase: int, reason: str = "") -> str:
 # -- the FMU state: one byte format for both FMUs ----------------------------------------------
 #: Serialized FMU states start with these bytes, then this version.
 STATE_MAGIC = "TIREFMUS"
-STATE_VERSION = 3
+STATE_VERSION = 4
 #: The longest GUID a state holds (its field is NUL padded to STATE_GUID_BYTES).
 STATE_GUID_BYTES = 48
 #: The fields of a state in order: (name, struct format or a size rule, meaning). Little-
@@ -412,16 +416,19 @@ STATE_LAYOUT = (
     ("start_time", "<d", "the start time (s)"),
     ("stale", "<I", "1 if inputs were set since the outputs were computed, else 0"),
     ("reason_size", "<I", "bytes of the error reason (0 unless the phase is error)"),
+    ("strings_size", "<I", "bytes of the String variables' values"),
     ("values", "<V d", "every variable's value by value reference (Integer and Boolean exact)"),
     ("model_size", "<Q", "bytes of the model part (0 unless running or terminated)"),
     ("model", "model_size", "the model part: int32 zone warning armed, int32 in contact (the "
                             "last in_contact an event was logged for), then the step kernel's "
                             "state (kernel.c's kernel_state_write)"),
+    ("strings", "strings_size", "each String variable's value by value reference, UTF-8, "
+                                "each ended by a NUL"),
     ("reason", "reason_size", "the error reason, UTF-8 without NUL"),
     ("checksum", "<I", "CRC-32 (zlib's, IEEE 802.3) of every byte before it"),
 )
 #: Bytes before the values, and the model part's two int32 flags.
-STATE_HEAD = 8 + 4 + 4 + STATE_GUID_BYTES + 8 + 8 + 8 + 4 + 4
+STATE_HEAD = 8 + 4 + 4 + STATE_GUID_BYTES + 8 + 8 + 8 + 4 + 4 + 4
 STATE_MODEL_FLAGS = 2
 
 
@@ -438,36 +445,41 @@ def state_checksum(data: bytes) -> int:
 
 
 def state_pack(phase: int, guid: str, time: float, start_time: float, stale: bool,
-               values, model: bytes = b"", reason: str = "") -> bytes:
-    """The state bytes of these fields (both FMUs write exactly these)."""
+               values, model: bytes = b"", reason: str = "", strings=()) -> bytes:
+    """The state bytes of these fields (both FMUs write exactly these); ``strings``: the String
+    variables' values in value-reference order."""
     guid_bytes = guid.encode()
     reason_bytes = reason.encode()
+    string_bytes = b"".join(str(text).encode() + b"\0" for text in strings)
     if len(guid_bytes) >= STATE_GUID_BYTES:
         raise ValueError(f"GUID {guid!r}: at most {STATE_GUID_BYTES - 1} bytes")
-    size = state_fixed_size(len(values)) + len(model) + len(reason_bytes)
+    size = state_fixed_size(len(values)) + len(model) + len(string_bytes) + len(reason_bytes)
     body = b"".join([
-        struct.pack(f"<8sII{STATE_GUID_BYTES}sQddII", STATE_MAGIC.encode(), STATE_VERSION,
-                    phase, guid_bytes, size, time, start_time, int(stale), len(reason_bytes)),
+        struct.pack(f"<8sII{STATE_GUID_BYTES}sQddIII", STATE_MAGIC.encode(), STATE_VERSION,
+                    phase, guid_bytes, size, time, start_time, int(stale), len(reason_bytes),
+                    len(string_bytes)),
         struct.pack(f"<{len(values)}d", *(float(v) for v in values)),
-        struct.pack("<Q", len(model)), model, reason_bytes])
+        struct.pack("<Q", len(model)), model, string_bytes, reason_bytes])
     return body + struct.pack("<I", state_checksum(body))
 
 
 def state_unpack(data: bytes, n_values: int) -> dict:
     """The fields of state bytes whose sizes are sound (see :data:`STATE_LAYOUT`; the checks
     of what they hold are the FMUs')."""
-    (magic, version, phase, guid, size, time, start, stale,
-     reason_size) = struct.unpack_from(f"<8sII{STATE_GUID_BYTES}sQddII", data, 0)
+    (magic, version, phase, guid, size, time, start, stale, reason_size,
+     strings_size) = struct.unpack_from(f"<8sII{STATE_GUID_BYTES}sQddIII", data, 0)
     values = struct.unpack_from(f"<{n_values}d", data, STATE_HEAD)
     at = STATE_HEAD + 8 * n_values
     (model_size,) = struct.unpack_from("<Q", data, at)
     model = data[at + 8:at + 8 + model_size]
-    reason = data[at + 8 + model_size:len(data) - 4]
+    strings = data[at + 8 + model_size:at + 8 + model_size + strings_size]
+    reason = data[at + 8 + model_size + strings_size:len(data) - 4]
     (checksum,) = struct.unpack_from("<I", data, len(data) - 4)
     return {"magic": magic, "version": version, "phase": phase,
             "guid": guid.rstrip(b"\0").decode(errors="replace"), "size": size, "time": time,
             "start_time": start, "stale": stale, "reason_size": reason_size, "values": values,
-            "model_size": model_size, "model": model, "model_at": at + 8, "reason": reason,
+            "model_size": model_size, "model": model, "model_at": at + 8,
+            "strings_size": strings_size, "strings": strings, "reason": reason,
             "checksum": checksum}
 
 
@@ -547,12 +559,13 @@ def _c_string(text: str) -> str:
     return f'"{escaped}"'
 
 
-_C_TYPES = {"Real": "SPEC_REAL", "Integer": "SPEC_INTEGER", "Boolean": "SPEC_BOOLEAN"}
+_C_TYPES = {"Real": "SPEC_REAL", "Integer": "SPEC_INTEGER", "Boolean": "SPEC_BOOLEAN",
+            "String": "SPEC_STRING"}
 _C_CAUSALITY = {"input": "SPEC_INPUT", "output": "SPEC_OUTPUT", "parameter": "SPEC_PARAMETER"}
 
 
 def _variable_row(v: FmuVariable) -> str:
-    start = 0.0 if v.start is None else float(v.start)
+    start = 0.0 if v.start is None or v.type == "String" else float(v.start)
     return (f"    {{{_c_string(v.name)}, {_C_TYPES[v.type]}, {_C_CAUSALITY[v.causality]}, "
             f"{_c_number(start)}, {_c_string(v.unit)}}},")
 
@@ -580,11 +593,12 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
     for name, value in value_references(variables).items():
         lines.append(f"#define SPEC_BLOCK_{name} {value}")
     lines.append(f"#define SPEC_N_VARIABLES {len(variables)}")
+    lines.append(f"#define SPEC_N_STRINGS {sum(v.type == 'String' for v in variables)}")
     for vr, v in enumerate(variables):
         lines.append(f"#define SPEC_VR_{v.name.upper()} {vr}")
     lines += [
         "",
-        "typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;",
+        "typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN, SPEC_STRING } SpecType;",
         "typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;",
         "typedef struct {",
         "    const char* name;",

@@ -44,6 +44,11 @@ typedef struct {
     double time, start_time;
     int stale;            /* inputs set since the outputs were computed */
     double values[SPEC_N_VARIABLES];
+    /* the String variables' values (NULL: ""), those the model was built with, and while a
+     * state's model is built the state's (string_view) */
+    char* strings[SPEC_N_VARIABLES];
+    char* built_strings[SPEC_N_VARIABLES];
+    char* const* string_view;
     Model* model;
     /* while the model builds: whether its parameter problems are collected, them ("; "
      * between them), how many, and whether its messages reach the host */
@@ -232,12 +237,58 @@ static void start_values(Instance* inst)
     set_reason(inst, NULL);
 }
 
+static const char* string_of(const Instance* inst, int vr)
+{
+    const char* text = inst->string_view != NULL ? inst->string_view[vr] : inst->strings[vr];
+    return text != NULL ? text : "";
+}
+
+/* ModelHost.string: a String parameter's value as the model is built with it */
+static const char* layer_string(void* layer, int vr) { return string_of((Instance*)layer, vr); }
+
+static char* copy_text(Instance* inst, const char* text)
+{
+    size_t n = strlen(text) + 1;
+    char* copy = (char*)inst->mem.allocate(n, 1);
+    if (copy != NULL) memcpy(copy, text, n);
+    return copy;
+}
+
+static void release_strings(Instance* inst, char** strings)
+{
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (strings[vr] != NULL) inst->mem.release(strings[vr]);
+        strings[vr] = NULL;
+    }
+}
+
+/* strings[] := the texts (NULL entries: ""); 0, or -1 out of memory (nothing changed) */
+static int take_strings(Instance* inst, char** strings, char* const* texts)
+{
+    char* copies[SPEC_N_VARIABLES];
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        copies[vr] = NULL;
+        if (texts[vr] == NULL || texts[vr][0] == '\0') continue;
+        copies[vr] = copy_text(inst, texts[vr]);
+        if (copies[vr] == NULL) {
+            release_strings(inst, copies);
+            return -1;
+        }
+    }
+    release_strings(inst, strings);
+    memcpy(strings, copies, sizeof copies);
+    return 0;
+}
+
 static ModelHost host_of(Instance* inst)
 {
     ModelHost host;
     host.mem = inst->mem;
     host.layer = inst;
     host.log = model_log;
+    host.string = layer_string;
     return host;
 }
 
@@ -304,6 +355,8 @@ void fmi2FreeInstance(fmi2Component c)
     if (inst == NULL) return;
     release = inst->mem.release;
     model_destroy(inst->model);
+    release_strings(inst, inst->strings);
+    release_strings(inst, inst->built_strings);
     set_reason(inst, NULL);
     stop_collecting(inst);
     release(inst->name);
@@ -397,6 +450,12 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     ENTER(SPEC_CALL_EXIT_INITIALIZATION_MODE);
     start_collecting(inst, 0);
     status = model_initialise(inst->model, inst->values, inst->start_time, inst->values);
+    if (status == MODEL_OK && take_strings(inst, inst->built_strings, inst->strings) != 0) {
+        model_destroy(inst->model);
+        inst->model = NULL;
+        stop_collecting(inst);
+        return fail(inst, SPEC_MSG_OUTPUTS_FAILED, SPEC_MSG_OUT_OF_MEMORY);
+    }
     if (status != MODEL_OK) {
         /* no model to step: FMI's error state, every later refusal saying why */
         inst->phase = SPEC_PHASE_ERROR;
@@ -435,6 +494,8 @@ fmi2Status fmi2Reset(fmi2Component c)
     }
     model_destroy(inst->model);
     inst->model = fresh;
+    release_strings(inst, inst->strings);
+    release_strings(inst, inst->built_strings);
     start_values(inst);
     return fmi2OK;
 }
@@ -443,7 +504,10 @@ fmi2Status fmi2Reset(fmi2Component c)
 
 static const char* type_name(SpecType type)
 {
-    return type == SPEC_REAL ? "Real" : type == SPEC_INTEGER ? "Integer" : "Boolean";
+    return type == SPEC_REAL      ? "Real"
+           : type == SPEC_INTEGER ? "Integer"
+           : type == SPEC_STRING  ? "String"
+                                  : "Boolean";
 }
 
 /* The largest magnitude an input may have: a position (m), a rate (m/s, rad/s) or a torque
@@ -564,12 +628,25 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
                          fmi2String value[])
 {
     char why[256];
+    size_t i;
     ENTER(SPEC_CALL_GET_STRING);
-    (void)vr;
-    (void)value;
     if (nvr == 0) return fmi2OK;
-    snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
-    return refuse(inst, "fmi2GetString", why);
+    if (SPEC_N_STRINGS == 0) {
+        snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
+        return refuse(inst, "fmi2GetString", why);
+    }
+    if (vr == NULL || value == NULL) {
+        log_message(inst, fmi2Error, "fmi2GetString refused: %lu values but no arrays",
+                    (unsigned long)nvr);
+        return fmi2Error;
+    }
+    for (i = 0; i < nvr; i++) {
+        if (reference_problem(vr[i], SPEC_STRING, why, sizeof why) != NULL) {
+            return refuse(inst, "fmi2GetString", why);
+        }
+    }
+    for (i = 0; i < nvr; i++) value[i] = string_of(inst, (int)vr[i]);
+    return fmi2OK;
 }
 
 /* set every value or, if one is refused, none */
@@ -662,13 +739,44 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                          const fmi2String value[])
 {
-    char why[256];
+    char why[512], *texts[SPEC_N_VARIABLES];
+    size_t i;
+    int k;
     ENTER(SPEC_CALL_SET_STRING);
-    (void)vr;
-    (void)value;
     if (nvr == 0) return fmi2OK;
-    snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
-    return refuse(inst, "fmi2SetString", why);
+    if (SPEC_N_STRINGS == 0) {
+        snprintf(why, sizeof why, SPEC_MSG_NO_STRINGS, EXPORT_MODEL_IDENTIFIER);
+        return refuse(inst, "fmi2SetString", why);
+    }
+    if (vr == NULL || value == NULL) {
+        log_message(inst, fmi2Error, "fmi2SetString refused: %lu values but no arrays",
+                    (unsigned long)nvr);
+        return fmi2Error;
+    }
+    for (i = 0; i < nvr; i++) {
+        const SpecVariable* v;
+        char text[256];
+        if (reference_problem(vr[i], SPEC_STRING, why, sizeof why) != NULL) {
+            return refuse(inst, "fmi2SetString", why);
+        }
+        v = &SPEC_VARIABLES[vr[i]];
+        snprintf(text, sizeof text, "'%s'", value[i] != NULL ? value[i] : "");
+        if (v->causality == SPEC_OUTPUT) {
+            snprintf(why, sizeof why, SPEC_MSG_OUTPUT_SET, v->name, text);
+            return refuse(inst, "fmi2SetString", why);
+        }
+        if (v->causality == SPEC_PARAMETER && inst->phase == SPEC_PHASE_RUNNING) {
+            snprintf(why, sizeof why, SPEC_MSG_PARAMETER_FIXED, v->name, text);
+            return refuse(inst, "fmi2SetString", why);
+        }
+    }
+    /* every value or none: the new texts in a copy of the strings, then swapped in */
+    for (k = 0; k < SPEC_N_VARIABLES; k++) texts[k] = inst->strings[k];
+    for (i = 0; i < nvr; i++) texts[vr[i]] = (char*)(value[i] != NULL ? value[i] : "");
+    if (take_strings(inst, inst->strings, texts) != 0) {
+        return refuse(inst, "fmi2SetString", SPEC_MSG_OUT_OF_MEMORY);
+    }
+    return fmi2OK;
 }
 
 /* -- stepping ------------------------------------------------------------------------------------- */
@@ -895,6 +1003,53 @@ static void put(unsigned char** p, const void* data, size_t size)
     *p += size;
 }
 
+/* the bytes of the String values as a state holds them: each, then a NUL */
+static size_t strings_size(const Instance* inst)
+{
+    size_t total = 0;
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++)
+        if (SPEC_VARIABLES[vr].type == SPEC_STRING) total += strlen(string_of(inst, vr)) + 1;
+    return total;
+}
+
+/* whether the bytes are one NUL-ended UTF-8 text per String variable (state_strings) */
+static int strings_valid(const unsigned char* bytes, size_t size)
+{
+    size_t i = 0, texts = 0;
+    while (i < size) {
+        unsigned char c = bytes[i];
+        int more = c < 0x80 ? 0 : (c & 0xe0) == 0xc0 ? 1 : (c & 0xf0) == 0xe0 ? 2
+                 : (c & 0xf8) == 0xf0 ? 3 : -1;
+        if (more < 0 || (more == 1 && c < 0xc2) || i + (size_t)more >= size) return 0;
+        for (i++; more > 0; more--, i++)
+            if ((bytes[i] & 0xc0) != 0x80) return 0;
+        if (c == 0) texts++;
+    }
+    return (size == 0 || bytes[size - 1] == 0) && texts == SPEC_N_STRINGS;
+}
+
+/* texts[vr] := the state's String values (pointers into its bytes), the rest NULL */
+static void state_texts(const unsigned char* bytes, char** texts)
+{
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        texts[vr] = NULL;
+        if (SPEC_VARIABLES[vr].type != SPEC_STRING) continue;
+        texts[vr] = (char*)bytes;
+        bytes += strlen((const char*)bytes) + 1;
+    }
+}
+
+static int same_strings(char* const* a, char* const* b)
+{
+    int vr;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (strcmp(a[vr] != NULL ? a[vr] : "", b[vr] != NULL ? b[vr] : "") != 0) return 0;
+    }
+    return 1;
+}
+
 static int has_model_part(int phase)
 {
     return phase == SPEC_PHASE_RUNNING || phase == SPEC_PHASE_TERMINATED;
@@ -902,8 +1057,9 @@ static int has_model_part(int phase)
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 {
-    size_t model_size, reason_size, total;
+    size_t model_size, reason_size, texts_size, total;
     unsigned char *bytes, *p;
+    int vr;
     uint32_t u;
     uint64_t size64;
     char guid[SPEC_STATE_GUID_BYTES];
@@ -915,7 +1071,8 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
     if (refresh(inst) != fmi2OK) return fmi2Error;
     model_size = has_model_part(inst->phase) ? model_state_size(inst->model) : 0;
     reason_size = inst->phase == SPEC_PHASE_ERROR && inst->reason ? strlen(inst->reason) : 0;
-    total = STATE_FIXED + model_size + reason_size;
+    texts_size = strings_size(inst);
+    total = STATE_FIXED + model_size + texts_size + reason_size;
     bytes = (unsigned char*)inst->mem.allocate(total, 1);
     if (bytes == NULL) {
         log_message(inst, fmi2Error, "fmi2GetFMUstate: out of memory (%lu bytes)",
@@ -939,11 +1096,19 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
     put(&p, &u, 4);
     u = (uint32_t)reason_size;
     put(&p, &u, 4);
+    u = (uint32_t)texts_size;
+    put(&p, &u, 4);
     put(&p, inst->values, STATE_VALUES);
     size64 = (uint64_t)model_size;
     put(&p, &size64, 8);
     if (model_size > 0) model_state_write(inst->model, p);
     p += model_size;
+    for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
+        if (SPEC_VARIABLES[vr].type == SPEC_STRING) {
+            const char* text = string_of(inst, vr);
+            put(&p, text, strlen(text) + 1);
+        }
+    }
     if (reason_size > 0) put(&p, inst->reason, reason_size);
     u = state_crc(bytes, (size_t)(p - bytes));
     put(&p, &u, 4);
@@ -957,7 +1122,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 static size_t state_problem(const unsigned char* bytes, size_t size, char* why,
                             size_t why_size)
 {
-    uint32_t version, phase, stale, reason_size, crc;
+    uint32_t version, phase, stale, reason_size, texts_size, crc;
     uint64_t total, model_size;
     char guid[SPEC_STATE_GUID_BYTES + 1], a[40], b[40];
     double time, start;
@@ -998,6 +1163,7 @@ static size_t state_problem(const unsigned char* bytes, size_t size, char* why,
     memcpy(&start, bytes + AT_TIME + 8, 8);
     memcpy(&stale, bytes + AT_TIME + 16, 4);
     memcpy(&reason_size, bytes + AT_TIME + 20, 4);
+    memcpy(&texts_size, bytes + AT_TIME + 24, 4);
     if (!isfinite(time) || !isfinite(start) || stale > 1) {
         number(a, time);
         number(b, start);
@@ -1041,8 +1207,13 @@ static size_t state_problem(const unsigned char* bytes, size_t size, char* why,
     memcpy(&model_size, bytes + SPEC_STATE_HEAD + STATE_VALUES, 8);
     /* (the sizes of the model part and the reason fill what the header leaves, exactly; no
      * sum that could wrap around) */
-    if (reason_size > size - STATE_FIXED || model_size != size - STATE_FIXED - reason_size) {
+    if (reason_size > size - STATE_FIXED || texts_size > size - STATE_FIXED - reason_size ||
+        model_size != size - STATE_FIXED - reason_size - texts_size) {
         snprintf(why, why_size, "%s", SPEC_MSG_STATE_MODEL_SIZE);
+        return 0;
+    }
+    if (!strings_valid(bytes + SPEC_STATE_HEAD + STATE_VALUES + 8 + model_size, texts_size)) {
+        snprintf(why, why_size, "%s", SPEC_MSG_STATE_STRINGS);
         return 0;
     }
     if (has_model_part((int)phase) != (model_size > 0)) {
@@ -1067,11 +1238,12 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     const unsigned char* bytes = (const unsigned char*)FMUstate;
     char why[MESSAGE_SIZE];
     uint64_t total = 0;
-    uint32_t phase, stale, reason_size;
+    uint32_t phase, stale, reason_size, texts_size;
     double values[SPEC_N_VARIABLES], time, start;
     const unsigned char* model_part;
     size_t model_size;
     char* reason = NULL;
+    char* texts[SPEC_N_VARIABLES];
     Model* model;
     ENTER(SPEC_CALL_SET_FMUSTATE);
     if (bytes != NULL && memcmp(bytes, SPEC_STATE_MAGIC, 8) == 0) {
@@ -1085,11 +1257,14 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     memcpy(&start, bytes + AT_TIME + 8, 8);
     memcpy(&stale, bytes + AT_TIME + 16, 4);
     memcpy(&reason_size, bytes + AT_TIME + 20, 4);
+    memcpy(&texts_size, bytes + AT_TIME + 24, 4);
     memcpy(values, bytes + SPEC_STATE_HEAD, STATE_VALUES);
     model_part = bytes + SPEC_STATE_HEAD + STATE_VALUES + 8;
-    model_size = (size_t)total - STATE_FIXED - reason_size;
+    model_size = (size_t)total - STATE_FIXED - reason_size - texts_size;
+    state_texts(model_part + model_size, texts);
     model = inst->model;
-    if (model_size > 0 && !model_built_for(inst->model, values)) {
+    if (model_size > 0 && (!model_built_for(inst->model, values) ||
+                           !same_strings(texts, inst->built_strings))) {
         /* a state of other parameters, or set into a fresh instance: build its model (its
          * messages unlogged, its problems the reason of the refusal) */
         ModelHost host = host_of(inst);
@@ -1098,7 +1273,9 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
         model = model_create(&host);
         memcpy(scratch, values, sizeof scratch);
         start_collecting(inst, 1);
+        inst->string_view = texts;  /* the model is built with the state's String values */
         built = model != NULL && model_initialise(model, values, start, scratch) == MODEL_OK;
+        inst->string_view = NULL;
         if (!built) {
             char* text = new_text(inst, SPEC_MSG_STATE_PARAMETERS,
                                   inst->problems ? inst->problems : SPEC_MSG_OUT_OF_MEMORY);
@@ -1122,7 +1299,13 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
             if (model != inst->model) model_destroy(model);
             return refuse(inst, "fmi2SetFMUstate", SPEC_MSG_OUT_OF_MEMORY);
         }
-        memcpy(reason, model_part + model_size, reason_size);
+        memcpy(reason, model_part + model_size + texts_size, reason_size);
+    }
+    if (take_strings(inst, inst->strings, texts) != 0 ||
+        (model_size > 0 && take_strings(inst, inst->built_strings, texts) != 0)) {
+        if (model != inst->model) model_destroy(model);
+        if (reason != NULL) inst->mem.release(reason);
+        return refuse(inst, "fmi2SetFMUstate", SPEC_MSG_OUT_OF_MEMORY);
     }
     if (model != inst->model) {
         model_destroy(inst->model);

@@ -19,6 +19,8 @@ typedef struct {
     void* layer;
     /* status: an fmi2Status; category: a log category of the model description */
     void (*log)(void* layer, int status, const char* category, const char* message);
+    /* a String variable's value (its value reference; "" when unset) */
+    const char* (*string)(void* layer, int vr);
 } ModelHost;
 
 typedef struct Model Model;
