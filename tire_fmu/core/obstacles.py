@@ -36,6 +36,38 @@ MAX_OBSTACLE_SIZE_M = 0.3
 MAX_OBSTACLE_LENGTH_M = 10.0
 
 
+def sampled_reads(s, z, at, x) -> tuple[np.ndarray, np.ndarray]:
+    """(height, integral) at each ``x`` of the road through the samples (s, z) with running
+    integral ``at`` (trapezoids from the first sample): linear between samples, level at the
+    end heights beyond them (native/c/inplane_step.c's road_read, the same arithmetic)."""
+    x = np.asarray(x, dtype=float)
+    n = s.size
+    if n < 2:
+        level = z[0] if n else 0.0
+        return np.full(x.shape, level), level * (x - (s[0] if n else 0.0))
+    k = np.searchsorted(s, x, side="right") - 1
+    np.clip(k, 0, n - 2, out=k)
+    s_k, z_k = s[k], z[k]
+    slope = (z[k + 1] - z_k) / (s[k + 1] - s_k)
+    inside = np.clip(x, s[0], s[-1])
+    past = inside - s_k
+    height = z_k + slope * past
+    return height, at[k] + (z_k + 0.5 * slope * past) * past + (x - inside) * height
+
+
+def sampled_window_reads(s, z, at, s_lo, s_hi, speed_m_s: float
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """(mean height, its rate) over each window [s_lo, s_hi] of the sampled road as it passes at
+    ``speed_m_s``: the rate of a window mean is the speed times the difference of the heights
+    at its ends over its width (the profile is continuous, so this is exact)."""
+    n = len(s_lo)
+    height, integral = sampled_reads(s, z, at, np.concatenate([s_lo, s_hi]))
+    width = np.asarray(s_hi) - np.asarray(s_lo)
+    safe = np.where(width > 0, width, 1.0)
+    mean = np.where(width > 0, (integral[n:] - integral[:n]) / safe, height[:n])
+    return mean, speed_m_s * (height[n:] - height[:n]) / safe
+
+
 class _WindowMeans:
     """The mean of a height profile over windows of road, from its exact integral."""
 
@@ -240,6 +272,12 @@ class ProfileRoad(_WindowMeans):
     def extent_m(self) -> tuple[float, float]:
         """(first, last) distance the knots cover (m); the road is level beyond them."""
         return float(self.distances_m[0]), float(self.distances_m[-1])
+
+    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
+        ``speed_m_s`` (:func:`sampled_window_reads`: the C reads a road file so too)."""
+        return sampled_window_reads(self.distances_m, self.heights_m, self._at_knots, s_lo,
+                                    s_hi, speed_m_s)
 
     @property
     def length_m(self) -> float:
@@ -452,6 +490,117 @@ def pothole(depth_m: float, length_m: float, shape: str = "rectangular") -> Obst
     return Obstacle(-float(depth_m), float(length_m), shape)
 
 
+class PositionRoad(_WindowMeans):
+    """A road a host gives by samples at positions along it (m), linear between them, level at
+    the first sample before it and at the newest beyond it: the FMUs' host road, sampled where
+    they ask (their ``road_x_i`` outputs) at the contact points' resolution. A sample at a
+    position already held replaces its height (at rest the host's road moves under a still tire
+    so: a shaker plate); one between held positions is inserted. Samples further behind the
+    newest than ``keep_m`` are forgotten (the one just before that reach is kept)."""
+
+    label = "the host's road"
+    #: Positions closer than this (relative to their magnitude, or 1e-12 m) are one position.
+    SAME_POSITION = 1e-12
+
+    def __init__(self, keep_m: float):
+        self.keep_m = float(keep_m)
+        # positions, heights and the running integral, live in columns [lo, hi) of a buffer
+        # that grows by doubling (samples a step: no copy of the history per sample)
+        self._buffer = np.zeros((3, 64))
+        self._lo = self._hi = 0
+
+    @property
+    def s(self) -> np.ndarray:
+        return self._buffer[0, self._lo:self._hi]
+
+    @property
+    def z(self) -> np.ndarray:
+        return self._buffer[1, self._lo:self._hi]
+
+    @property
+    def _at(self) -> np.ndarray:
+        return self._buffer[2, self._lo:self._hi]
+
+    def set_samples(self, positions, heights) -> None:
+        """The host's heights at these positions (m, any order): appended beyond the newest,
+        replacing a height held at the same position, inserted between others."""
+        b = self._buffer
+        first_changed = None
+        for x, z in sorted(zip(np.asarray(positions, float).ravel(),
+                               np.asarray(heights, float).ravel())):
+            lo, hi = self._lo, self._hi
+            k = lo + int(np.searchsorted(b[0, lo:hi], x))
+            same = abs(x) * self.SAME_POSITION + 1e-12
+            if k < hi and abs(b[0, k] - x) <= same:
+                b[1, k] = z
+            elif k > lo and abs(b[0, k - 1] - x) <= same:
+                k -= 1
+                b[1, k] = z
+            else:
+                if hi == b.shape[1]:
+                    live = hi - lo
+                    grown = np.zeros((3, max(64, 2 * live + 2)))
+                    grown[:, :live] = b[:, lo:hi]
+                    k -= lo
+                    self._buffer, b, self._lo, self._hi, lo, hi = grown, grown, 0, live, 0, live
+                b[:, k + 1:hi + 1] = b[:, k:hi].copy()
+                b[0, k], b[1, k] = x, z
+                self._hi = hi = hi + 1
+            first_changed = k if first_changed is None else min(first_changed, k)
+        if first_changed is None:
+            return
+        self._integrate_from(first_changed)
+        self._forget()
+
+    def _integrate_from(self, k: int) -> None:
+        """The running integral again from sample k on (trapezoids from the first kept)."""
+        b, lo, hi = self._buffer, self._lo, self._hi
+        if k <= lo:
+            b[2, lo] = 0.0
+            k = lo + 1
+        for i in range(k, hi):
+            b[2, i] = b[2, i - 1] + 0.5 * (b[0, i] - b[0, i - 1]) * (b[1, i] + b[1, i - 1])
+
+    def _forget(self) -> None:
+        b, lo, hi = self._buffer, self._lo, self._hi
+        if hi - lo < 2:
+            return
+        reach = b[0, hi - 1] - self.keep_m
+        self._lo = max(int(np.searchsorted(b[0, lo:hi], reach, side="right")) - 1, 0) + lo
+
+    def state(self) -> np.ndarray:
+        """(samples, 3): positions, heights and the running integral, what :meth:`restore`
+        takes back (the integral too, so that a restored road reads the same bits)."""
+        return self._buffer[:, self._lo:self._hi].T.copy()
+
+    def restore(self, samples: np.ndarray) -> None:
+        samples = np.asarray(samples, dtype=float).reshape(-1, 3)
+        n = samples.shape[0]
+        self._buffer = np.zeros((3, max(64, 2 * n + 2)))
+        self._buffer[:, :n] = samples.T
+        self._lo, self._hi = 0, n
+
+    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
+        ``speed_m_s`` (:func:`sampled_window_reads`)."""
+        return sampled_window_reads(self.s, self.z, self._at, s_lo, s_hi, speed_m_s)
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at ``s`` (m)."""
+        x = np.asarray(s, dtype=float)
+        height, _ = sampled_reads(self.s, self.z, self._at, x)
+        if self.s.size < 2:
+            return height, np.zeros(x.shape)
+        gap = np.diff(self.s)
+        k = np.clip(np.searchsorted(self.s, x, side="right") - 1, 0, self.s.size - 2)
+        inside = (x >= self.s[0]) & (x <= self.s[-1])
+        return height, np.where(inside, np.diff(self.z)[k] / gap[k], 0.0)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first sample kept to ``s`` (m²; level outside)."""
+        return sampled_reads(self.s, self.z, self._at, np.asarray(s, dtype=float))[1]
+
+
 class HostRoad(_WindowMeans):
     """The road a host gives at one place ahead of the tire, kept along the road as it passes.
 
@@ -522,19 +671,7 @@ class HostRoad(_WindowMeans):
 
     def _reads(self, x):
         """(height, integral) at each x: one search for both."""
-        s, z, at = self.s, self.z, self._at
-        n = s.size
-        if n < 2:
-            level = z[0] if n else 0.0
-            return np.full(x.shape, level), level * (x - (s[0] if n else 0.0))
-        k = np.searchsorted(s, x, side="right") - 1
-        np.clip(k, 0, n - 2, out=k)
-        s_k, z_k = s[k], z[k]
-        slope = (z[k + 1] - z_k) / (s[k + 1] - s_k)
-        inside = np.clip(x, s[0], s[-1])
-        past = inside - s_k
-        height = z_k + slope * past  # level at the end values outside the samples
-        return height, at[k] + (z_k + 0.5 * slope * past) * past + (x - inside) * height
+        return sampled_reads(self.s, self.z, self._at, x)
 
     def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
         """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
