@@ -45,7 +45,13 @@ def same_fixed_value(given: float, fixed: float) -> bool:
     given, fixed = float(given), float(fixed)
     return abs(given - fixed) <= FIXED_PARAMETER_REL_TOLERANCE * max(abs(given), abs(fixed))
 
-from ..core.step_limits import MAX_DELAY_STEPS, MAX_HISTORY_SAMPLES, MAX_STEP_S  # noqa: E402, F401
+from ..core.step_limits import (  # noqa: E402, F401
+    MAX_DELAY_STEPS,
+    MAX_HISTORY_SAMPLES,
+    MAX_ROAD_HEIGHT_M,
+    MAX_ROAD_POSITION_M,
+    MAX_STEP_S,
+)
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
 #: "no limit" (the core's None), for rendering the core's parameter problems.
@@ -293,10 +299,6 @@ def unit_definitions(units) -> ElementTree.Element:
 #: 1 ms step the wheel travels 40 mm, four of the in-plane tire's 10 mm contact points and
 #: sixteen of the radial tire's 2.5 mm ones.
 ROAD_QUERIES = 16
-#: The largest position and height a wheel-centre input takes (m): a road of ten thousand
-#: kilometres at a double's 2e-9 m there, heights of any road on Earth.
-MAX_ROAD_POSITION_M = 1.0e7
-MAX_ROAD_HEIGHT_M = 1.0e4
 
 
 #: wheel_z's start value in the in-plane FMUs built for the default tire (m): its loaded radius

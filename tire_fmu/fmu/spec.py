@@ -92,6 +92,7 @@ CONSTANTS: dict[str, float | int] = {
     # the inputs a step accepts (beyond them a product inside the step could overflow)
     "MAX_DISPLACEMENT_M": contact_dynamics.MAX_DISPLACEMENT_M,
     "MAX_VELOCITY_M_S": contact_dynamics.MAX_VELOCITY_M_S,
+    "MAX_ROAD_POSITION_M": step_limits.MAX_ROAD_POSITION_M,
     "MAX_TORQUE_N_M": step_limits.MAX_TORQUE_N_M,
     # what an FMU state may hold (a state is checked for what it means)
     "MAX_STATE_DISPLACEMENT_M": contact_dynamics.MAX_STATE_DISPLACEMENT_M,

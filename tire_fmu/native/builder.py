@@ -88,9 +88,10 @@ class NativeKind:
 RADIAL = NativeKind(
     "radial", "TireModalNative",
     ("fmi2_layer.c", "tire_model.c", "model_problems.c", "ring.c", "contact.c",
-     "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c", "road_file.c"),
+     "contract_pack.c", "road.c", "kernel.c", "memory.c", "numerics.c", "road_file.c",
+     "road_samples.c"),
     ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "contract_pack.h",
-     "kernel.h", "road_file.h", *FMI_HEADERS),
+     "kernel.h", "road_file.h", "road_samples.h", *FMI_HEADERS),
     lambda start_values: fmu_variables(parameter_values=start_values),
     "Open in-plane ring tire (0-300 Hz), native C: builds its free-ring modal model and "
     "static footprint for the parameters at initialisation, then steps with the unilateral "
@@ -102,11 +103,11 @@ INPLANE = NativeKind(
     ("fmi2_layer.c", "inplane_tire_model.c", "model_problems.c", "inplane_model.c",
      "inplane_step.c", "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c",
      "inplane_build.c", "inplane_static.c", "inplane_points.c", "inplane_terms.c", "contact.c",
-     "numerics.c", "memory.c", "road_file.c"),
+     "numerics.c", "memory.c", "road_file.c", "road_samples.c"),
     ("model.h", "model_problems.h", "tire.h", "numerics.h", "contract.h", "inplane_model.h",
      "inplane_step.h", "inplane_build.h", "inplane_critical.h", "inplane_points.h",
      "inplane_ring.h", "inplane_ritz.h", "inplane_static.h", "inplane_terms.h", "road_file.h",
-     *FMI_HEADERS),
+     "road_samples.h", *FMI_HEADERS),
     inplane_fmu_variables,
     "Open in-plane ring tire with tangential tread motion, the wheel's rotation and Coulomb "
     "friction in the footprint (0-300 Hz), native C: Fx, Fz and the axle moment My from the "

@@ -27,6 +27,7 @@
 #define SPEC_KERNEL_CACHE_SIZE 32
 #define SPEC_MAX_DISPLACEMENT_M 10.0
 #define SPEC_MAX_VELOCITY_M_S 1000.0
+#define SPEC_MAX_ROAD_POSITION_M 10000000.0
 #define SPEC_MAX_TORQUE_N_M 300000.0
 #define SPEC_MAX_STATE_DISPLACEMENT_M 10000.0
 #define SPEC_MAX_STATE_VELOCITY_M_S 1000000.0
@@ -86,6 +87,7 @@
 #define SPEC_BLOCK_N_OUTPUTS 6
 #define SPEC_BLOCK_IN_CONTACT 10
 #define SPEC_N_VARIABLES 36
+#define SPEC_N_STRINGS 0
 #define SPEC_VR_RIM_Z 0
 #define SPEC_VR_RIM_VZ 1
 #define SPEC_VR_ROAD_Z 2
@@ -123,7 +125,7 @@
 #define SPEC_VR_SIDEWALL_PRESSURE_EXPONENT 34
 #define SPEC_VR_REFERENCE_PRESSURE 35
 
-typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN } SpecType;
+typedef enum { SPEC_REAL, SPEC_INTEGER, SPEC_BOOLEAN, SPEC_STRING } SpecType;
 typedef enum { SPEC_INPUT, SPEC_OUTPUT, SPEC_PARAMETER } SpecCausality;
 typedef struct {
     const char* name;
@@ -232,9 +234,9 @@ static const SpecField SPEC_INPLANE_FIELDS[SPEC_N_INPLANE_FIELDS] = {
 };
 
 #define SPEC_STATE_MAGIC "TIREFMUS"
-#define SPEC_STATE_VERSION 3
+#define SPEC_STATE_VERSION 4
 #define SPEC_STATE_GUID_BYTES 48
-#define SPEC_STATE_HEAD 96
+#define SPEC_STATE_HEAD 100
 #define SPEC_STATE_MODEL_FLAGS 2
 
 /* the FMI state machine: phases by number, and per call the phases that allow it (bit i: phase i) */
@@ -464,6 +466,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_OUTPUT_SET "%s = %s: it is an output"
 #define SPEC_MSG_PARAMETER_FIXED "%s = %s: parameters are fixed after initialisation (they define the model built there); reset the FMU to change them"
 #define SPEC_MSG_NO_STRINGS "%s has no String variables"
+#define SPEC_MSG_ROAD_EXTENT "at t = %s s the contact zone (wheel_x = %s m) reaches beyond the road file %s (%.6g to %.6g m along it): the road is level at its end heights there (said again if it leaves the file's road again after coming back)"
 #define SPEC_MSG_STATE_NOT_OURS "it is not a state of this FMU (%s)"
 #define SPEC_MSG_STATE_TOO_SHORT "too short"
 #define SPEC_MSG_STATE_NO_HEADER "no state header"
@@ -478,6 +481,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_STATE_VALUE "its value of %s is not a valid %s"
 #define SPEC_MSG_STATE_INPUT "its %s"
 #define SPEC_MSG_STATE_MODEL_SIZE "its model part has the wrong size"
+#define SPEC_MSG_STATE_STRINGS "its String values are not one NUL-ended UTF-8 text per String variable"
 #define SPEC_MSG_STATE_MODEL_PHASE "its model part does not fit its phase"
 #define SPEC_MSG_STATE_NO_REASON "its phase is error without the reason: it would refuse every call without saying why"
 #define SPEC_MSG_STATE_REASON_PHASE "it holds an error reason, but its phase is %s"
