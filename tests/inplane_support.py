@@ -97,6 +97,9 @@ class Instance:
     def inputs(self, road=level, **inputs) -> list[float]:
         """All the inputs at t: the named ones, the steady wheel centre's for the others, and
         the host's ``road`` at the positions the FMU asked for (recorded in ``last_road``)."""
+        unknown = set(inputs) - set(CENTRE)
+        if unknown:  # an old name (rim_z, road_z, ...) would otherwise be a silent zero
+            raise TypeError(f"not inputs of the in-plane FMU: {sorted(unknown)}")
         values = self.centre() | inputs
         positions = np.array(self.read(*ROAD_X))
         heights = np.asarray(road(positions), dtype=float)
