@@ -36,6 +36,10 @@ from record import cpu_model, load_average, write_record  # noqa: E402
 START_M, CLEAT_AT_M = 2.0, 3.0
 DURATION_S = 0.2
 FINE_S = 1e-4
+#: The host steps compared with FINE_S (s).
+HOST_STEPS_S = (5e-4, 1e-3, 2e-3)
+#: Where the wheel starts beyond START_M (m): the host's samples fall elsewhere on the cleat.
+PHASES_M = (0.0, 1e-3, 2.5e-3, 4e-3)
 
 
 def cleat_road():
@@ -43,7 +47,7 @@ def cleat_road():
     means: an edge is a 1 mm ramp, its area exact)."""
     from tire_fmu.core.obstacles import cleat, sampled_obstacle
 
-    return sampled_obstacle(cleat(0.02, 0.02), 1e-3, lead_in_m=CLEAT_AT_M, lead_out_m=2.0)
+    return sampled_obstacle(cleat(0.02, 0.02), 1e-3, lead_in_m=CLEAT_AT_M, lead_out_m=4.0)
 
 
 def write_roads(folder: Path) -> dict[str, Path]:
@@ -85,7 +89,7 @@ class Host:
 
 
 def cleat_run(fmu_path, h: float, speed: float, road_file: str = "", road=None,
-              n_elements: int = 100) -> np.ndarray:
+              n_elements: int = 100, start_m: float = START_M) -> np.ndarray:
     """rim_Fz and rim_Fx after each host step of ``h``: the wheel centre at the loaded radius,
     moving at ``speed`` from START_M; the road a file's, or with ``road`` (a ProfileRoad) the
     host's, given where the FMU asks."""
@@ -98,7 +102,7 @@ def cleat_run(fmu_path, h: float, speed: float, road_file: str = "", road=None,
     rows = []
     for k in range(int(round(DURATION_S / h))):
         t = k * h
-        host.fmu.setReal(centre, [START_M + speed * t, speed, height])
+        host.fmu.setReal(centre, [start_m + speed * t, speed, height])
         if road is not None:
             host.fmu.setReal(heights, list(road.profile(np.array(host.fmu.getReal(asked)))[0]))
         host.fmu.doStep(t, h)
@@ -158,10 +162,10 @@ def main(argv=None) -> int:
               f"{'Fx rms':>8s}")
         for kind, path in roads.items():
             fine = cleat_run(fmu, FINE_S, speed, str(path))
-            cases = [(f"road file ({kind})", h, str(path), None) for h in (1e-3, 2e-3)]
+            cases = [(f"road file ({kind})", h, str(path), None) for h in HOST_STEPS_S]
             if kind == "profile":
                 cases += [("host's road (road_x, road_z)", h, "", cleat_road())
-                          for h in (FINE_S, 1e-3)]
+                          for h in (FINE_S,) + HOST_STEPS_S]
             for label, h, road_file, road in cases:
                 found = differences(cleat_run(fmu, h, speed, road_file, road), on(h, fine))
                 results["host_step"][f"{label}, {h * 1e3:g} ms"] = found
@@ -169,6 +173,17 @@ def main(argv=None) -> int:
                 print(f"   {label:28s} {h * 1e3:4.1f}ms {100 * fz['peak']:7.2f}% "
                       f"{100 * fz['rms']:7.2f}% {100 * fx['peak']:7.2f}% {100 * fx['rms']:7.2f}%",
                       flush=True)
+        print(f"\n   the host's road at 1 ms, the wheel's start moved (the samples fall elsewhere "
+              f"on the cleat), against the road file at {FINE_S * 1e3:g} ms from there")
+        for phase in PHASES_M:
+            fine = cleat_run(fmu, FINE_S, speed, str(roads["profile"]), start_m=START_M + phase)
+            found = differences(cleat_run(fmu, 1e-3, speed, "", cleat_road(),
+                                          start_m=START_M + phase), on(1e-3, fine))
+            results["host_step"][f"host's road, 1 ms, start + {phase * 1e3:g} mm"] = found
+            fz, fx = found["rim_Fz"], found["rim_Fx"]
+            print(f"   {'start + %g mm' % (phase * 1e3):28s} {1:4.1f}ms {100 * fz['peak']:7.2f}% "
+                  f"{100 * fz['rms']:7.2f}% {100 * fx['peak']:7.2f}% {100 * fx['rms']:7.2f}%",
+                  flush=True)
         finest = max(args.meshes)
         print(f"\n2. mesh: the same road file (profile), host step {FINE_S * 1e3:g} ms, no "
               f"alignment; against N = {finest} (rms of the difference, % of the departure; "

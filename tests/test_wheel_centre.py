@@ -41,7 +41,7 @@ def fmu_path(tmp_path_factory):
 def cleat_road():
     """The 20 mm x 20 mm cleat after CLEAT_AT_M of level road, sampled every mm (cell means:
     an edge is a 1 mm ramp, the cleat's area exact)."""
-    return sampled_obstacle(cleat(0.02, 0.02), 1e-3, lead_in_m=CLEAT_AT_M, lead_out_m=2.0)
+    return sampled_obstacle(cleat(0.02, 0.02), 1e-3, lead_in_m=CLEAT_AT_M, lead_out_m=4.0)
 
 
 @pytest.fixture(scope="module")
@@ -149,3 +149,4 @@ def test_a_zone_that_leaves_the_road_files_road_is_warned_of_once(fmu_path, tmp_
     warned = [(status, m) for status, m in fmu.log[first:] if "beyond the road file" in m]
     assert len(warned) == 1 and warned[0][0] == 1, fmu.log[first:]
     assert str(path) in warned[0][1] and "level at its end heights" in warned[0][1]
+    assert "np.float64" not in warned[0][1]  # the position as a number (it once showed numpy's)
