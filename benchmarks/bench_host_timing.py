@@ -10,7 +10,9 @@ Two parts, printed side by side and recorded with ``--record``:
    do). The error is the largest difference of rim_Fz and rim_Fx at 1 ms from 0.1 ms, over
    their range at 0.1 ms.
 2. **The four FMUs** through fmpy's FMU2Slave in a plain master loop: the wheel hopping 1 mm at
-   12 Hz (and half of it fore and aft) and a 10 mm rounded bump at the zone front, 10 m/s.
+   12 Hz (and half of it fore and aft) and a 10 mm rounded bump at the zone front, 10 m/s (the
+   in-plane FMUs: the wheel centre, and the bump on the host's road by position, road_x_i
+   out, road_z_i in).
 
     python3 benchmarks/bench_host_timing.py [--record docs/measured/bench_host_timing.json]
 """
@@ -94,10 +96,24 @@ def fmu_run(path, h: float) -> np.ndarray:
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.setReal([vr["speed"]], [SPEED])
+    centre = "wheel_z" in vr  # the in-plane FMUs: the wheel centre, the host's road by position
+    if centre:
+        fmu.setReal([vr["wheel_vx"]], [SPEED])
     fmu.exitInitializationMode()
+    if centre:
+        radius = fmu.getReal([vr["loaded_radius"]])[0]
+        asked = [vr[f"road_x_{i}"] for i in range(1, 17)]
+        heights = [vr[f"road_z_{i}"] for i in range(1, 17)]
     rows, outputs = [], [vr["rim_Fz"], vr["rim_Fx"]]
     for k in range(int(round(DURATION / h))):
-        inputs = {n: v for n, v in hop(k * h).items() if n in vr}
+        inputs = hop(k * h)
+        if centre:  # the same motion; the bump where the zone's front (0.15 m) meets it
+            inputs = {"wheel_x": SPEED * k * h + inputs["rim_x"],
+                      "wheel_vx": SPEED + inputs["rim_vx"],
+                      "wheel_z": radius + inputs["rim_z"], "wheel_vz": inputs["rim_vz"]}
+            u = np.clip((np.array(fmu.getReal(asked)) - 1.15) / 0.5, 0.0, 1.0)
+            fmu.setReal(heights, list(5e-3 * (1 - np.cos(2 * np.pi * u))))
+        inputs = {n: v for n, v in inputs.items() if n in vr}
         fmu.setReal([vr[n] for n in inputs], list(inputs.values()))
         fmu.doStep(k * h, h)
         rows.append(fmu.getReal(outputs))

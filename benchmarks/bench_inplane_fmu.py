@@ -39,11 +39,15 @@ from bench_fmu import Opened, build_minimal, build_trivial, init_time  # noqa: E
 
 from tire_fmu.core.obstacles import cleat  # noqa: E402
 from tire_fmu.fmu.builder import build_fmu, build_inplane_fmu  # noqa: E402
+from tire_fmu.fmu.interface import ROAD_QUERIES  # noqa: E402
 from tire_fmu.native import build_native_fmu, build_native_inplane_fmu  # noqa: E402
 
 H = 1e-4
 RADIAL_INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz")
-INPLANE_INPUTS = RADIAL_INPUTS + ("rim_x", "rim_vx", "wheel_torque")
+#: The in-plane FMUs': the wheel centre, the torque and spin, the host's road (here the
+#: signal's height at every position asked: the cost of the call, a level road moving)
+INPLANE_INPUTS = ("wheel_x", "wheel_vx", "wheel_z", "wheel_vz", "wheel_torque",
+                  "wheel_rate") + tuple(f"road_z_{i}" for i in range(1, ROAD_QUERIES + 1))
 RADIAL_OUTPUTS = ("rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length",
                   "tread_deflection")
 INPLANE_OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
@@ -92,8 +96,12 @@ class Case:
         outputs = INPLANE_OUTPUTS if inplane else RADIAL_OUTPUTS
         self.inputs = [fmu.vr[n] for n in inputs]
         self.outputs = [fmu.vr[n] for n in outputs]
-        self.values = [signal(k * H)[:len(inputs)] for k in range(steps)]
+        self.values = [signal(k * H)[:7 if inplane else 4] for k in range(steps)]
         self.k = 0
+        if inplane:  # the wheel centre rolling at the speed, from the loaded radius
+            radius = self.slave.getReal([fmu.vr["loaded_radius"]])[0]
+            self.values = [[speed * k * H, speed + v[5], radius + v[0], v[1], v[6], 0.0,
+                            *([v[2]] * ROAD_QUERIES)] for k, v in enumerate(self.values)]
 
     def run(self, steps: int) -> float:
         set_real, do_step, get_real = self.slave.setReal, self.slave.doStep, self.slave.getReal

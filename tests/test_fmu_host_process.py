@@ -83,11 +83,24 @@ PAIR_HOST = """
         fmu.enterInitializationMode()
         fmu.setInteger([refs["n_elements"]], [n_elements])
         fmu.setReal([refs["speed"]], [10.0])
+        centre = "wheel_z" in refs  # the in-plane FMU: the wheel centre and the road by position
+        if centre:
+            fmu.setReal([refs["wheel_vx"]], [10.0])
         fmu.exitInitializationMode()
+        if centre:
+            radius = fmu.getReal([refs["loaded_radius"]])[0]
+            asked = [refs[f"road_x_{i}"] for i in range(1, 17)]
+            heights = [refs[f"road_z_{i}"] for i in range(1, 17)]
         rows = []
         for k in range(steps):
             bump = 2e-3 * min(k / 40, 1.0)
-            fmu.setReal([refs["road_z"], refs["road_vz"]], [bump, 0.05 if k < 40 else 0.0])
+            if centre:  # the road rising 2 mm over the 40 steps' travel ahead of the zone
+                fmu.setReal([refs["wheel_x"], refs["wheel_vx"], refs["wheel_z"]],
+                            [10.0 * k * h, 10.0, radius])
+                fmu.setReal(heights, [2e-3 * min(max(x - 0.15, 0.0) / (400 * h), 1.0)
+                                      for x in fmu.getReal(asked)])
+            else:
+                fmu.setReal([refs["road_z"], refs["road_vz"]], [bump, 0.05 if k < 40 else 0.0])
             if "wheel_torque" in refs:
                 fmu.setReal([refs["wheel_torque"]], [-2000.0])
             fmu.doStep(k * h, h)
@@ -343,6 +356,8 @@ def test_without_threadpoolctl_the_fmus_run_and_say_once_that_threads_are_not_li
                 fmu.enterInitializationMode()
                 fmu.setInteger([refs["n_elements"]], [n])
                 fmu.exitInitializationMode()
+                if "loaded_radius" in refs:  # the wheel centre placed where it carries the load
+                    fmu.setReal([refs["wheel_z"]], fmu.getReal([refs["loaded_radius"]]))
                 fmu.doStep(0.0, 1e-4)
                 states.append(fmu.serializeFMUstate(fmu.getFMUstate()))
                 fmu.freeInstance()

@@ -10,10 +10,16 @@ TireInPlaneNative alike:
   within 1 % of their range;
 - a quarter car integrated semi-implicitly (the position from the new velocity), the usual
   host integrator, stays stable at 1 ms on a cleat;
-- an inconsistent input (a 1 mm step of rim_z with rim_vz zero) gives bounded forces, the same
-  at either step;
+- an inconsistent input (a 1 mm step of the rim's height with its rate zero) gives bounded
+  forces, the same at either step;
 - simulate_fmu from a start time of 1e9 s gives the outputs of a start at 0 (any step the FMU
   declares it takes is taken, exactly in time).
+
+The in-plane FMUs take the wheel centre (wheel_x, wheel_vx along the road, wheel_z, wheel_vz
+above its datum, from the loaded_radius they report after initialisation) and, with no road
+file, the host's road by position: heights road_z_i at the road_x_i they ask for. The same
+motions are given to them so (:class:`Master`); the road's bumps then lie at positions along
+the road where the radial FMUs get them at the zone's front in time.
 """
 
 import math
@@ -29,21 +35,45 @@ SPEED_M_S = 10.0
 KINDS = ("TireModal", "TireModalNative", "TireInPlane", "TireInPlaneNative")
 
 
+class _Built(dict):
+    """The four FMUs, each built when a test first asks for it."""
+
+    def __init__(self, folder):
+        super().__init__()
+        self.folder = folder
+
+    def __missing__(self, kind):
+        from tire_fmu.fmu.builder import build_fmu, build_inplane_fmu
+        from tire_fmu.native import build_native_fmu
+        from tire_fmu.native.builder import build_native_inplane_fmu
+
+        build = {"TireModal": lambda: build_fmu(self.folder / "modal"),
+                 "TireModalNative": lambda: build_native_fmu(
+                     self.folder / "TireModalNative.fmu"),
+                 "TireInPlane": lambda: build_inplane_fmu(self.folder / "inplane"),
+                 "TireInPlaneNative": lambda: build_native_inplane_fmu(
+                     self.folder / "inplane_native")}[kind]
+        self[kind] = path = build()
+        return path
+
+
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
-    from tire_fmu.fmu.builder import build_fmu, build_inplane_fmu
-    from tire_fmu.native import build_native_fmu
-    from tire_fmu.native.builder import build_native_inplane_fmu
+    return _Built(tmp_path_factory.mktemp("host_timing"))
 
-    folder = tmp_path_factory.mktemp("host_timing")
-    return {"TireModal": build_fmu(folder / "modal"),
-            "TireModalNative": build_native_fmu(folder / "TireModalNative.fmu"),
-            "TireInPlane": build_inplane_fmu(folder / "inplane"),
-            "TireInPlaneNative": build_native_inplane_fmu(folder / "inplane_native")}
+
+def level(x):
+    return np.zeros_like(x)
 
 
 class Master:
-    """A minimal master: one instance, inputs set at t, then fmi2DoStep(t, h)."""
+    """A minimal master: one instance, inputs set at t, then fmi2DoStep(t, h).
+
+    :meth:`step` takes the rim's motion as the deviation from rolling steadily at
+    ``SPEED_M_S`` at the static load (``rim_z``, ``rim_vz``, ``rim_x``, ``rim_vx``) and the
+    road as heights by position (``road``, m along the road from the wheel centre's start);
+    it gives an in-plane FMU the wheel centre's state at t and the road where it asks, a
+    radial one its own inputs (the road at its zone's front, ``road_z``, ``road_vz``)."""
 
     def __init__(self, path, start_time=0.0, **parameters):
         md = read_model_description(str(path))
@@ -56,14 +86,34 @@ class Master:
         self.fmu.enterInitializationMode()
         for name, value in parameters.items():
             self.fmu.setReal([self.vr[name]], [value])
+        self.speed = parameters.get("speed", 0.0)
+        self.wheel_centre = "wheel_z" in self.vr
+        if self.wheel_centre:
+            self.fmu.setReal([self.vr["wheel_vx"]], [self.speed])
         self.fmu.exitInitializationMode()
-        self.t = start_time
+        self.start_time = self.t = start_time
+        if self.wheel_centre:
+            self.loaded_radius = self.read("loaded_radius")[0]
+            self.asked = [self.vr[n] for n in self.vr if n.startswith("road_x_")]
+            self.heights = [self.vr[n.replace("road_x_", "road_z_")]
+                            for n in self.vr if n.startswith("road_x_")]
 
     def read(self, *names):
         return self.fmu.getReal([self.vr[n] for n in names])
 
-    def step(self, h, **inputs):
+    def step(self, h, road=None, **inputs):
+        if self.wheel_centre:
+            t = self.t - self.start_time
+            inputs = {"wheel_x": self.speed * t + inputs.get("rim_x", 0.0),
+                      "wheel_vx": self.speed + inputs.get("rim_vx", 0.0),
+                      "wheel_z": self.loaded_radius + inputs.get("rim_z", 0.0),
+                      "wheel_vz": inputs.get("rim_vz", 0.0)}
+            heights = (road or level)(np.array(self.fmu.getReal(self.asked)))
+            self.fmu.setReal(self.heights, list(heights))
+        elif road is not None:  # the radial FMUs: the road at the zone's front (at 0.15 m)
+            inputs = inputs | road_at_front(road, self.speed * (self.t - self.start_time))
         names = [n for n in inputs if n in self.vr]
+        assert len(names) == len(inputs), set(inputs) - set(names)
         self.fmu.setReal([self.vr[n] for n in names], [inputs[n] for n in names])
         self.fmu.doStep(self.t, h)
         self.t += h
@@ -73,27 +123,46 @@ class Master:
         self.fmu.freeInstance()
 
 
-def rim_and_road(t):
+#: Where the radial FMUs read the road: ahead of the wheel centre (their zone's front, m).
+FRONT_M = 0.15
+
+
+def rounded_bump(start_m, length_m, height_m):
+    """A (1 - cos) bump on a level road (m along it): heights and slopes at x."""
+    def road(x, slope=False):
+        u = np.clip((np.asarray(x, dtype=float) - start_m) / length_m, 0.0, 1.0)
+        if slope:
+            on = (u > 0) & (u < 1)
+            return np.where(on, 0.5 * height_m * 2 * np.pi * np.sin(2 * np.pi * u) / length_m,
+                            0.0)
+        return 0.5 * height_m * (1 - np.cos(2 * np.pi * u))
+    return road
+
+
+def road_at_front(road, travelled_m):
+    """The radial FMUs' road inputs: the height and its rate at their zone's front."""
+    at = np.array([travelled_m + FRONT_M])
+    return {"road_z": float(road(at)[0]), "road_vz": float(road(at, slope=True)[0]) * SPEED_M_S}
+
+
+#: A 10 mm, 0.5 m long rounded bump whose start the zone's front meets at 0.1 s.
+BUMP = rounded_bump(1.0 + FRONT_M, 0.5, 1e-2)
+
+
+def rim(t):
     """The wheel hopping 1 mm at 12 Hz (vertically, and half of it fore and aft), from rest
-    (sin³: its rate and acceleration start at zero), and a 10 mm, 0.5 m long rounded bump at
-    the zone front from 0.1 s on: values and rates at t."""
+    (sin³: its rate and acceleration start at zero): values and rates at t."""
     w = 2 * math.pi * 12.0
     s, c = math.sin(w * t), math.cos(w * t)
     z, vz = 1e-3 * s**3, 3e-3 * w * s * s * c
-    u = (SPEED_M_S * t - 1.0) / 0.5
-    bump, bump_rate = 0.0, 0.0
-    if 0.0 <= u <= 1.0:
-        bump = 5e-3 * (1 - math.cos(2 * math.pi * u))
-        bump_rate = 5e-3 * 2 * math.pi * math.sin(2 * math.pi * u) * SPEED_M_S / 0.5
-    return {"rim_z": z, "rim_vz": vz, "rim_x": 0.5 * z, "rim_vx": 0.5 * vz,
-            "road_z": bump, "road_vz": bump_rate}
+    return {"rim_z": z, "rim_vz": vz, "rim_x": 0.5 * z, "rim_vx": 0.5 * vz}
 
 
-def history(path, h, duration_s, outputs, inputs=rim_and_road):
+def history(path, h, duration_s, outputs, inputs=rim, road=BUMP):
     master = Master(path, speed=SPEED_M_S)
     rows = []
     for k in range(int(round(duration_s / h))):
-        master.step(h, **inputs(k * h))
+        master.step(h, road=road, **inputs(k * h))
         rows.append(master.read(*outputs))
     master.close()
     return np.array(rows)
@@ -122,12 +191,9 @@ def quarter_car(path, h, duration_s=0.5, wheel_kg=200.0):
     load = master.read("rim_Fz")[0]
     zw = vw = zb = vb = 0.0
     forces = []
-    for i in range(int(round(duration_s / h))):
-        u = (SPEED_M_S * i * h - 1.0) / 0.3
-        cleat = 0.01 * (1 - math.cos(2 * math.pi * u)) if 0 <= u <= 1 else 0.0
-        cleat_rate = (0.01 * 2 * math.pi * math.sin(2 * math.pi * u) * SPEED_M_S / 0.3
-                      if 0 <= u <= 1 else 0.0)
-        master.step(h, rim_z=zw, rim_vz=vw, road_z=cleat, road_vz=cleat_rate)
+    cleat = rounded_bump(1.0 + FRONT_M, 0.3, 0.02)
+    for _ in range(int(round(duration_s / h))):
+        master.step(h, road=cleat, rim_z=zw, rim_vz=vw)
         fz = master.read("rim_Fz")[0]
         spring = k_s * (zb - zw) + c_s * (vb - vw)
         vw += h * ((fz - load) + spring) / wheel_kg
@@ -158,7 +224,8 @@ def test_a_rim_step_with_no_rate_gives_bounded_forces(fmus, kind):
     def lifted(t):
         return {"rim_z": -1e-3 if t >= 0.05 else 0.0}
 
-    runs = [history(fmus[kind], h, 0.6, ("rim_Fz",), lifted)[:, 0] for h in (1e-3, 1e-4)]
+    runs = [history(fmus[kind], h, 0.6, ("rim_Fz",), lifted, road=None)[:, 0]
+            for h in (1e-3, 1e-4)]
     load = runs[1][0]
     for forces in runs:
         assert np.abs(forces - load).max() < 20e3  # about ten times the static 1.5 MN/m * 1 mm
@@ -174,14 +241,20 @@ def test_simulate_fmu_from_a_start_time_of_1e9_s_gives_the_run_from_0(fmus, kind
     gives the outputs of a run from 0 (the rim lowered 1 mm from the start and rolling at
     10 m/s: the tire rings). simulate_fmu itself ends a run within 1e-9 of the stop time
     relative, a second at 1e9 s, and takes every sample of an input table as an event there,
-    so the inputs are start values and the rows it gives are compared."""
+    so the inputs are start values and the rows it gives are compared. The in-plane FMUs take
+    the wheel centre's position, which constant inputs cannot move along: their wheel stands
+    (speed 0) 1 mm below its loaded radius with a 2 kN m torque on it (Fz and Fx ring)."""
     names = list(outputs_of(kind))
     h, duration = 1e-3, 1.3
+    starts = {"speed": SPEED_M_S, "rim_z": -1e-3}
+    if "InPlane" in kind:
+        md = read_model_description(str(fmus[kind]))
+        loaded = next(float(v.start) for v in md.modelVariables if v.name == "wheel_z")
+        starts = {"speed": 0.0, "wheel_z": loaded - 1e-3, "wheel_torque": 2e3}
 
     def run(start):
         result = simulate_fmu(str(fmus[kind]), start_time=start, stop_time=start + duration,
-                              output_interval=h, output=names,
-                              start_values={"speed": SPEED_M_S, "rim_z": -1e-3})
+                              output_interval=h, output=names, start_values=starts)
         return np.column_stack([result[n] for n in names])
 
     from_zero, late = run(0.0), run(1e9)

@@ -123,8 +123,9 @@ def test_the_braking_car_runs_the_in_plane_fmu_through_fmpy_as_it_runs_the_core(
                                                                                   tmp_path):
     """--fmu: the same quarter car stepping TireInPlane.fmu through fmpy. On the level road
     it is the core's tire (its C step against the core's numpy one: 1e-8 of the load); over
-    the rough road and the cleat the FMU reads the road a host gives it, at the zone front
-    and at the communication points, so the forces follow the core's closely, not exactly."""
+    the rough road and the cleat the FMU reads the road a host gives it, heights at the
+    positions it asks for (the contact points' spacing apart), where the core reads window
+    means of the exact profile, so the forces follow the core's closely, not exactly."""
     from dataclasses import replace
 
     settings, core = braking
@@ -142,8 +143,8 @@ def test_the_braking_car_runs_the_in_plane_fmu_through_fmpy_as_it_runs_the_core(
 
     rough_core, rough_fmu = core.runs[1], fmu.runs[1]
     assert rms(rough_core.fz_n - rough_fmu.fz_n) < 0.01 * rms(rough_core.fz_n - load)
-    # the 20 mm cleat at about 19 m/s, sampled every 1 ms (19 mm of road): the host's cubic
-    # through those samples rounds its edges, and the peak comes out a few per cent low
+    # the 20 mm cleat given as heights 20 mm apart (this coarse tire's point spacing): the
+    # lines between them round its edges
     cleat_core, cleat_fmu = core.runs[2], fmu.runs[2]
     assert cleat_fmu.fz_n.max() == pytest.approx(cleat_core.fz_n.max(), rel=0.1)
     assert cleat_fmu.fz_n.max() - load > 0.5 * (cleat_core.fz_n.max() - load)

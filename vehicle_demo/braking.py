@@ -15,10 +15,10 @@ test of a drum: axle held, wheel free, constant road speed, Fx and Fz at the axl
 time and their spectra. Figures and ``summary.json`` go to ``--out``.
 
 The tire is the core's stepper in process by default; with ``fmu`` (``--fmu``) the braking
-runs and the cleat test step TireInPlane.fmu through fmpy instead (built into ``--out``), the
-road given to it as a host gives it: its height and rate at the front of the contact zone,
-sampled at the communication points (over the 20 mm cleat at 1 ms that smooths the cleat's
-edges, which the in-process tire reads exactly).
+runs and the cleat test step TireInPlane.fmu through fmpy instead (built into ``--out``): the
+wheel centre's state at each step's start and the road as a host that owns it gives it, its
+heights where the FMU asks (``road_x_i``, at most the contact points' spacing apart), which
+the in-process tire reads as window means of the exact profile.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from tire_fmu.core.parameters import DEFAULT_LOAD_N
+from tire_fmu.fmu.interface import ROAD_QUERIES
 
 from .outputs import check_output_folder, run_folder
 
@@ -207,6 +208,15 @@ def _simulator(settings, model, deflection, speed, obstacle=None, ahead_m=ROAD_A
                             obstacle_ahead_m=ahead_m, f_max_hz=settings.f_max_hz)
 
 
+def _deflection_at(settings, model, speed) -> float:
+    """The rim's deflection (m) whose footprint carries the load at ``speed`` on the reduced
+    tire the runs step, as TireInPlane.fmu built at that speed finds it (rim_Fz starts at the
+    load, and the FMU and the core run the same tire)."""
+    from tire_fmu.core.inplane_contact import deflection_carrying
+
+    return deflection_carrying(_simulator(settings, model, 0.0, speed), settings.load_n)
+
+
 def rough_road(settings: BrakingSettings):
     """The ISO 8608 profile under the braking run, level for its first ``road_fade_in_m``
     (a half-cosine rise), long enough for the run at the start speed."""
@@ -223,13 +233,15 @@ def rough_road(settings: BrakingSettings):
 
 
 class FmuTire:
-    """TireInPlane.fmu through fmpy, advanced as :class:`InPlaneStepper` is: the rim's
-    motion and the torque at each communication step's start (the values at t, as a master
-    sets them), the road (``sim``'s obstacle, ``sim.obstacle_ahead_m`` ahead at t = 0) given
-    at the zone front as a host gives it. ``sim`` is the same tire in process: its zone says
-    where the front is."""
+    """TireInPlane.fmu through fmpy, advanced as :class:`InPlaneStepper` is (the rim's
+    deviation from rolling steadily at ``sim.speed_m_s`` at the static load, the torque), as a
+    master drives it: the wheel centre's state at each communication step's start (the values
+    at t: along the road from 0, at the FMU's ``loaded_radius`` plus the rim's lift) and the
+    host's road (``sim``'s obstacle, its start ``sim.obstacle_ahead_m`` ahead of the wheel
+    centre's start) given by position where the FMU asks for it (``road_x_i`` out,
+    ``road_z_i`` in). ``sim`` is the same tire in process."""
 
-    INPUTS = ("rim_z", "rim_vz", "road_z", "road_vz", "rim_x", "rim_vx", "wheel_torque")
+    CENTRE = ("wheel_x", "wheel_vx", "wheel_z", "wheel_vz", "wheel_torque")
     OUTPUTS = ("rim_Fz", "rim_Fx", "rim_My", "contact_Fz", "contact_Fx", "wheel_spin",
                "sliding_points")
 
@@ -248,27 +260,36 @@ class FmuTire:
         self.slave.enterInitializationMode()
         reals = {"load": settings.load_n, "speed": sim.speed_m_s, "f_max": settings.f_max_hz,
                  "contact_zone_length": sim.zone_length_m,
-                 "contact_point_spacing": settings.point_spacing_m, "step_size": settings.step_s}
+                 "contact_point_spacing": settings.point_spacing_m, "step_size": settings.step_s,
+                 "wheel_x": 0.0, "wheel_vx": sim.speed_m_s}
         self.slave.setReal([self._vr[k] for k in reals], list(reals.values()))
         self.slave.setInteger([self._vr["n_elements"]], [settings.n_elements])
         self.slave.setBoolean([self._vr["wheel_free"]], [wheel_free])
         self.slave.exitInitializationMode()
         self.sim, self.time_s = sim, 0.0
-        self._front = float(sim._x_hi.max())
-        self._inputs = [self._vr[n] for n in self.INPUTS]
+        # where the wheel centre carries the load: the rim's lift is from there
+        self.loaded_radius_m = self.slave.getReal([self._vr["loaded_radius"]])[0]
+        self._centre = [self._vr[n] for n in self.CENTRE]
+        self._asked = [self._vr[f"road_x_{i}"] for i in range(1, ROAD_QUERIES + 1)]
+        self._heights = [self._vr[f"road_z_{i}"] for i in range(1, ROAD_QUERIES + 1)]
         self._outputs = [self._vr[n] for n in self.OUTPUTS]
+
+    def road_m(self, x_m: np.ndarray) -> np.ndarray:
+        """The road's height (m) at ``x_m`` along it (the wheel centre starts at 0)."""
+        sim = self.sim
+        if sim.obstacle is None:
+            return np.zeros_like(x_m)
+        return sim.obstacle.profile(x_m - sim.obstacle_ahead_m)[0]
 
     def advance(self, step_s, x_m=0.0, vx_m_s=0.0, z_m=0.0, vz_m_s=0.0, torque_n_m=0.0):
         from tire_fmu.core.inplane_contact import InPlaneOutputs
 
         sim, end = self.sim, self.time_s + step_s
-        road_z = road_vz = 0.0
-        if sim.obstacle is not None:  # the road at the zone front now, where the FMU reads it
-            at = sim.speed_m_s * self.time_s + x_m + self._front - sim.obstacle_ahead_m
-            height, slope = sim.obstacle.profile(np.array([at]))
-            road_z, road_vz = float(height[0]), float(slope[0]) * (sim.speed_m_s + vx_m_s)
-        self.slave.setReal(self._inputs, [z_m, vz_m_s, road_z, road_vz, x_m, vx_m_s,
-                                          torque_n_m])
+        self.slave.setReal(self._centre, [sim.speed_m_s * self.time_s + x_m,
+                                          sim.speed_m_s + vx_m_s, self.loaded_radius_m + z_m,
+                                          vz_m_s, torque_n_m])
+        asked = np.array(self.slave.getReal(self._asked))
+        self.slave.setReal(self._heights, self.road_m(asked).tolist())
         self.slave.doStep(self.time_s, step_s)
         self.time_s = end
         fz, fx, my, cfz, cfx, spin, sliding = self.slave.getReal(self._outputs)
@@ -381,7 +402,7 @@ def _run_braking(settings: BrakingSettings, out: Path, final: Path, started: flo
     from scipy.signal import periodogram
 
     from tire_fmu.core.inplane import InPlaneTire
-    from tire_fmu.core.inplane_contact import deflection_for_load, steady_rolling
+    from tire_fmu.core.inplane_contact import steady_rolling
     from tire_fmu.core.obstacles import cleat
     from tire_fmu.plots import plot_inplane_cleat
 
@@ -390,9 +411,7 @@ def _run_braking(settings: BrakingSettings, out: Path, final: Path, started: flo
 
     model = settings.tire or InPlaneTire()
     # on the reduced tire the runs step, as TireInPlane.fmu solves it: rim_Fz starts at the load
-    deflection = deflection_for_load(model, settings.load_n, settings.n_elements,
-                                     point_spacing_m=settings.point_spacing_m,
-                                     f_max_hz=settings.f_max_hz)
+    deflection = _deflection_at(settings, model, settings.speed_m_s)
     fmu_path = None
     if settings.fmu:
         from tire_fmu.fmu.builder import build_inplane_fmu
@@ -420,7 +439,7 @@ def _run_braking(settings: BrakingSettings, out: Path, final: Path, started: flo
     # the classic cleat test: the axle held, the wheel free, the road's speed constant
     speed = settings.cleat_test_speed_m_s
     ahead = 0.4
-    sim = _simulator(settings, model, deflection, speed,
+    sim = _simulator(settings, model, _deflection_at(settings, model, speed), speed,
                      cleat(settings.cleat_height_m, settings.cleat_length_m), ahead)
     duration = (ahead + 0.3 + settings.cleat_length_m) / speed + 0.1
     with step_bar(int(round(duration / settings.step_s)), settings.progress, "cleat test") as bar:
