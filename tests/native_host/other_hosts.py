@@ -4,8 +4,10 @@ aborts its process on an FMU error, and ecospy needs libtbb on LD_LIBRARY_PATH a
     python other_hosts.py FMU HOST LOAD SPEED STEPS OUT.json [inplane]
         (HOST: fmpy, libcosimpy, ecospy)
 
-Every host runs the same loop: set road_z, step h = 1e-4 s, read the outputs. ``inplane``: the
-in-plane FMU's outputs, and its wheel braked too (wheel_torque set with road_z).
+Every host runs the same loop: set the inputs, step h = 1e-4 s, read the outputs. The radial
+FMU: road_z drops. ``inplane``: the in-plane FMU's outputs, its wheel centre rolling at
+``speed`` along a level host road (road_z_i left at 0), lifted off the road and put back, and
+braked.
 """
 
 import json
@@ -28,12 +30,17 @@ def torque(k: int) -> float:
     return -2500.0 if k >= 50 else 0.0
 
 
+#: In-plane only: the speed and the wheel centre's height at load (its start value)
+ROLLING = {"speed": 0.0, "height": 0.0}
+
+
 def inputs(k: int) -> dict[str, float]:
-    """The inputs each host sets before step k."""
-    values = {"road_z": road(k)}
-    if NAMES is INPLANE:
-        values["wheel_torque"] = torque(k)
-    return values
+    """The inputs each host sets before step k (their values at k H)."""
+    if NAMES is not INPLANE:
+        return {"road_z": road(k)}
+    speed = ROLLING["speed"]
+    return {"wheel_x": speed * k * H, "wheel_vx": speed,
+            "wheel_z": ROLLING["height"] - road(k), "wheel_torque": torque(k)}
 
 
 def with_libcosimpy(fmu, load, speed, steps):
@@ -107,7 +114,12 @@ def with_fmpy(fmu, load, speed, steps):
 if __name__ == "__main__":
     fmu, host, load, speed, steps, out = sys.argv[1:7]
     if sys.argv[7:] == ["inplane"]:
+        from fmpy import read_model_description
+
         NAMES = INPLANE
+        ROLLING["speed"] = float(speed)
+        ROLLING["height"] = float(next(v.start for v in read_model_description(fmu)
+                                       .modelVariables if v.name == "wheel_z"))
     run = {"fmpy": with_fmpy, "libcosimpy": with_libcosimpy, "ecospy": with_ecospy}[host]
     rows = run(fmu, float(load), float(speed), int(steps))
     with open(out, "w") as stream:

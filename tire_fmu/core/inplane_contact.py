@@ -1190,7 +1190,7 @@ class InPlaneStepper:
         reach = front + abs(wheel_vx_m_s) * step_s + spacing
         held = self.position_road.s if hasattr(self.position_road, "s") else np.zeros(0)
         newest = float(held[-1]) if held.size else -math.inf
-        if newest >= reach or not held.size:  # the zone itself
+        if newest >= reach - ROAD_QUERY_SLACK_M or not held.size:  # the zone itself
             return rear + (front - rear) * np.arange(count) / (count - 1)
         gap = max(spacing, (reach - newest) / count)
         return newest + gap * np.arange(1, count + 1)
@@ -1420,6 +1420,11 @@ class InPlaneStepper:
 
 #: The speed below which the slip is taken over this one (m/s): rest has no slip.
 SLIP_SPEED_FLOOR_M_S = 0.1
+#: The host road's samples reach where the next step needs them when they end at most this
+#: short of it (m, far below any road's resolution): the tie a step's travel that is a whole
+#: number of point spacings makes is decided alike however the positions round (the native
+#: FMU's differ from these by 1e-13 m), so both runtimes ask for the same road.
+ROAD_QUERY_SLACK_M = 1e-6
 #: A host's road is kept this far behind the zone's rear (m): the rim may move back by up to
 #: the largest displacement an FMU input takes.
 HOST_ROAD_MARGIN_M = 1.0

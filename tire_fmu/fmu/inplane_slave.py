@@ -306,9 +306,8 @@ def _road(named: dict, zone_length_m: float) -> tuple:
     except (RoadFileError, OSError) as error:
         text = str(error)
         what = text[len(path) + 2:] if text.startswith(f"{path}: ") else text
-        return PositionRoad(1.0), None, [Problem(
-            "road_file", path, "", "an OpenCRG .crg or a two-column profile (distance m, "
-            "height m) file that can be read", what)]
+        return PositionRoad(1.0), None, [Problem("road_file", path, "",
+                                                 MESSAGES["ROAD_FILE_ALLOWED"], what)]
     return road_file.road, road_file, []
 
 

@@ -25,14 +25,14 @@ from ..core.contract import StepContract
 from .contract import to_ctypes
 
 #: The C files of the kernel library, and what they include.
-KERNEL_SOURCES = ("kernel.c", "road.c", "numerics.c", "memory.c", "inplane_step.c",
-                  "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c", "inplane_build.c",
-                  "inplane_static.c", "contact.c", "inplane_points.c", "inplane_terms.c",
-                  "inplane_model.c")
-KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h", "inplane_step.h",
-                  "inplane_ring.h",
-                  "inplane_ritz.h", "inplane_critical.h", "inplane_build.h", "inplane_static.h",
-                  "inplane_points.h", "inplane_terms.h", "inplane_model.h")
+KERNEL_SOURCES = ("kernel.c", "road.c", "road_samples.c", "numerics.c", "memory.c",
+                  "inplane_step.c", "inplane_ring.c", "inplane_ritz.c", "inplane_critical.c",
+                  "inplane_build.c", "inplane_static.c", "contact.c", "inplane_points.c",
+                  "inplane_terms.c", "inplane_model.c")
+KERNEL_HEADERS = ("kernel.h", "contract.h", "tire.h", "numerics.h", "spec.h", "road_samples.h",
+                  "inplane_step.h", "inplane_ring.h", "inplane_ritz.h", "inplane_critical.h",
+                  "inplane_build.h", "inplane_static.h", "inplane_points.h", "inplane_terms.h",
+                  "inplane_model.h")
 KERNEL_FLAGS = ("-shared", "-fPIC", "-O2", "-std=c99", "-Wl,--no-undefined")
 LIBRARY_NAME = "tire_kernel"
 #: The compiler, flags and file name of the kernel library per FMI platform (mingw's own

@@ -44,11 +44,7 @@ int inplane_step(const InPlaneStep* d, const InPlaneState* s, InPlaneState* out,
                  const double* height, const double* rate, double torque,
                  const double* rim_old, const double* rim, double* work, int* iwork);
 
-/* The host road (n samples: distances s ascending, heights z, running integral at) read over
- * p windows [x_lo + shift, x_hi + shift]: the mean height over each and its rate as the road
- * passes at speed (core/obstacles.py's HostRoad.window_reads). */
-void host_road_window_reads(const double* s, const double* z, const double* at, int n,
-                            const double* x_lo, const double* x_hi, int p, double shift,
-                            double speed, double* mean, double* rate);
+/* The host road's window reads (host_road_window_reads) are road_samples.h's. */
+#include "road_samples.h"
 
 #endif
