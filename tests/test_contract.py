@@ -405,6 +405,7 @@ def reference_contract(case: dict, m: int) -> StepContract | None:
         point_sec=1.0 / np.cos(theta), point_x_road=-height * np.tan(theta),
         point_stiffness=np.full(n_points, k), point_damping=np.full(n_points, tire.beta * k),
         f_static=forces, pen_static=pen, window_early_s=early, window_late_s=late,
+        window_lo_m=x_lo, window_hi_m=x_hi,
         static_ring_out=np.array([np.cos(points["node_theta"]) @ node_forces,
                                   np.sin(points["node_theta"]) @ node_forces,
                                   compliance[half] @ node_forces]))

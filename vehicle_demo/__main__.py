@@ -1,5 +1,5 @@
 """``python -m vehicle_demo [--out DIR] [--quick]``, ``python -m vehicle_demo sweep ...`` and
-``python -m vehicle_demo braking ...``.
+``python -m vehicle_demo braking ...``, ``python -m vehicle_demo truck ...``.
 
 Only parses arguments and delegates to :mod:`vehicle_demo.demo`, :mod:`vehicle_demo.sweep` and
 :mod:`vehicle_demo.braking`.
@@ -141,6 +141,47 @@ def _braking_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _truck_parser() -> argparse.ArgumentParser:
+    from .truck import TIRE_FMUS
+
+    p = Parser(
+        prog="python -m vehicle_demo truck",
+        description="A two-axle truck (heave, pitch, roll, four wheels) on four tire FMUs over "
+                    "an OpenCRG road (written to OUT/truck_road.crg unless --road is given: "
+                    "independent ISO 8608 left and right tracks), stepped by fmpy and, with "
+                    "--host both, by libcosim too, whose outputs are compared. Prints the ride "
+                    "figures and the real-time factor; writes truck.png and summary.json.")
+    p.add_argument("--out", type=Path, default=Path("truck_output"),
+                   help="output folder (default: truck_output)")
+    p.add_argument("--tire", choices=TIRE_FMUS, default=TIRE_FMUS[0],
+                   help=f"the tire FMU, built into OUT/fmus (default {TIRE_FMUS[0]})")
+    p.add_argument("--host", choices=("fmpy", "libcosim", "both"), default="fmpy",
+                   help="the master (default fmpy; both: fmpy, then libcosim, compared)")
+    p.add_argument("--speed", type=float, default=15.0, help="truck speed in m/s (default 15)")
+    p.add_argument("--duration", type=float, default=3.0, help="run length in s (default 3)")
+    p.add_argument("--step", type=float, default=1e-3,
+                   help="host communication step in s (default 0.001)")
+    p.add_argument("--road", type=Path,
+                   help="an OpenCRG road (at least the track wide: the wheels run at v = "
+                        "±track/2), instead of the generated one")
+    p.add_argument("--road-class", choices=list("ABCDEFGH"), default="C",
+                   help="ISO 8608 class of the generated road (default C)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    return p
+
+
+def _truck(argv) -> int:
+    from .truck import format_truck, run_truck_demo
+
+    args = _truck_parser().parse_args(argv)
+    summary = run_truck_demo(args.out, tire=args.tire, host=args.host, speed_m_s=args.speed,
+                             duration_s=args.duration, step_s=args.step, road=args.road,
+                             road_class=args.road_class, progress=not args.no_progress,
+                             log=say)
+    say(format_truck(summary))
+    return 0
+
+
 #: The braking demo's settings under the names of their options, for error messages.
 BRAKING_OPTION_NAMES = {"speed_m_s": "--speed", "brake_torque_n_m": "--torque",
                         "duration_s": "--duration", "road_class": "--road-class",
@@ -235,9 +276,10 @@ def _main(argv: list[str]) -> int:
     from .quarter_car import QuarterCarError
     from .road import RoadError
     from .sweep import SweepError
+    from .truck import TruckError
 
     user_errors = (DemoError, SweepError, RoadError, QuarterCarError, CoSimError,
-                   BrakingError, ContactSetError, ParameterError, FileContentError,
+                   BrakingError, TruckError, ContactSetError, ParameterError, FileContentError,
                    FileNotFoundError, PermissionError)
     warnings.filterwarnings("ignore", category=DeprecationWarning)
     try:
@@ -245,6 +287,8 @@ def _main(argv: list[str]) -> int:
             return _sweep(argv[1:])
         if argv[:1] == ["braking"]:
             return _braking(argv[1:])
+        if argv[:1] == ["truck"]:
+            return _truck(argv[1:])
         return _demo(argv)
     except user_errors as error:
         print(f"{PROG}: error: {error}", file=sys.stderr)

@@ -188,6 +188,8 @@ class FmuInstance:
                     self.fmu.setInteger([vr], [int(value)])
                 elif kind == "Boolean":
                     self.fmu.setBoolean([vr], [bool(value)])
+                elif kind == "String":
+                    self.fmu.setString([vr], [str(value)])
                 else:
                     raise CoSimError(f"{name}: {kind} parameters are not supported")
             self.fmu.exitInitializationMode()

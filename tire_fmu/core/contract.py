@@ -29,6 +29,10 @@ Conventions (SI, θ from the contact centre in the direction of rotation, zone f
   at z and the road at height r under it, is Σ w_support·weight - (z - r)·sec + pen_static
   - (the static rim and road, zero as deviations); its law is
   f = max(0, k p + c ṗ) while p > 0.
+- The road under point p is the mean height over its window: by time, the road that passed
+  the zone front between ``window_late_s`` and ``window_early_s`` ago (the road by time); by
+  position, the road [x + window_lo_m, x + window_hi_m] with the wheel centre at x along it
+  (the road by position, issue 37): the stretch its arc covers at the static deflection.
 """
 
 from __future__ import annotations
@@ -95,6 +99,10 @@ class StepContract:
     pen_static: np.ndarray = _field("float", ("n_points",), "static penetration (m)")
     window_early_s: np.ndarray = _field("float", ("n_points",), "road delay, window front (s)")
     window_late_s: np.ndarray = _field("float", ("n_points",), "road delay, window rear (s)")
+    window_lo_m: np.ndarray = _field("float", ("n_points",),
+                                     "its window's rear end, x from the wheel centre (m)")
+    window_hi_m: np.ndarray = _field("float", ("n_points",),
+                                     "its window's front end, x from the wheel centre (m)")
     # the static state
     static_ring_out: np.ndarray = _field("float", ("3",),
                                          "static rim_Fz, rim_Fx, tread_deflection")
@@ -184,6 +192,8 @@ def build_contract(contact) -> StepContract:
     pen_static = (patch.footprint.penetration_m if patch.footprint is not None
                   else patch.forces_n / zone.stiffness_n_per_m)
     statics = patch.static_outputs()
+    # the road each point reads by position: its arc's stretch of road at the deflection
+    window_lo, window_hi = zone.road_windows_m(patch.deflection_m)
     arrays = dict(
         order_start=modes.order_start().astype(np.int32),
         lam=modes.eigenvalues, beta=modes.beta, gamma=modes.gamma, eta=modes.eta,
@@ -195,6 +205,7 @@ def build_contract(contact) -> StepContract:
         point_stiffness=zone.stiffness_n_per_m, point_damping=zone.damping_n_s_per_m,
         f_static=patch.forces_n, pen_static=pen_static,
         window_early_s=patch.road.early_s, window_late_s=patch.road.late_s,
+        window_lo_m=window_lo, window_hi_m=window_hi,
         static_ring_out=np.array([statics["rim_Fz"], statics["rim_Fx"],
                                   statics["deflection"]]),
     )

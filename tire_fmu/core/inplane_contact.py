@@ -63,6 +63,7 @@ from .inplane import InPlaneRing, InPlaneTire, hysteresis_share, quadratic_in_sp
 from .obstacles import HostRoad, Obstacle
 from .parameters import ParameterError, Problem
 from .step_limits import MAX_HISTORY_SAMPLES
+from .wheel_centre import effective_rolling_radius, longitudinal_slip, road_queries
 
 #: The arithmetic a step runs on: the C of native/c/inplane_step.c, numpy's (the readable
 #: reference), or the C when it can be had.
@@ -1168,32 +1169,21 @@ class InPlaneStepper:
         on = np.flatnonzero(st.f_n > 0.0)
         return {
             "loaded_radius": float(wheel_z_m - self.road_height(wheel_x_m)),
-            "effective_rolling_radius": (float(wheel_vx_m_s / spin) if abs(spin) > 1e-9
-                                         else radius),
-            "longitudinal_slip": float((spin * radius - wheel_vx_m_s)
-                                       / max(abs(wheel_vx_m_s), SLIP_SPEED_FLOOR_M_S)),
+            "effective_rolling_radius": float(effective_rolling_radius(wheel_vx_m_s, spin,
+                                                                       radius)),
+            "longitudinal_slip": float(longitudinal_slip(spin, radius, wheel_vx_m_s)),
             "contact_length": (float(sim._x_hi[on].max() - sim._x_lo[on].min()) if on.size
                                else 0.0),
         }
 
     def road_queries(self, count: int, wheel_x_m: float, wheel_vx_m_s: float,
                      step_s: float) -> np.ndarray:
-        """Where the tire needs the host's road next (m along it), ``count`` positions: ahead of
-        the newest sample it holds, at most the contact points' spacing apart (closer when a
-        step covers less; farther when the wheel outruns them), covering the zone's front and
-        the wheel's travel over the step; the whole zone before the first samples and while the
-        wheel does not get ahead of them (at rest: the host's road moves under a still tire)."""
+        """Where the tire needs the host's road next (m along it): :func:`.wheel_centre.
+        road_queries` for this tire's contact zone and points."""
         sim = self.sim
-        spacing = sim.point_spacing_m
-        rear = wheel_x_m + float(sim._x_lo.min())
-        front = wheel_x_m + float(sim._x_hi.max())
-        reach = front + abs(wheel_vx_m_s) * step_s + spacing
         held = self.position_road.s if hasattr(self.position_road, "s") else np.zeros(0)
-        newest = float(held[-1]) if held.size else -math.inf
-        if newest >= reach - ROAD_QUERY_SLACK_M or not held.size:  # the zone itself
-            return rear + (front - rear) * np.arange(count) / (count - 1)
-        gap = max(spacing, (reach - newest) / count)
-        return newest + gap * np.arange(1, count + 1)
+        return road_queries(count, wheel_x_m, wheel_vx_m_s, step_s, float(sim._x_lo.min()),
+                            float(sim._x_hi.max()), sim.point_spacing_m, held)
 
     def _road_store(self):
         """The road whose samples are part of the state: the legacy HostRoad, or the host's
@@ -1418,13 +1408,6 @@ class InPlaneStepper:
             store.restore(road)
 
 
-#: The speed below which the slip is taken over this one (m/s): rest has no slip.
-SLIP_SPEED_FLOOR_M_S = 0.1
-#: The host road's samples reach where the next step needs them when they end at most this
-#: short of it (m, far below any road's resolution): the tie a step's travel that is a whole
-#: number of point spacings makes is decided alike however the positions round (the native
-#: FMU's differ from these by 1e-13 m), so both runtimes ask for the same road.
-ROAD_QUERY_SLACK_M = 1e-6
 #: A host's road is kept this far behind the zone's rear (m): the rim may move back by up to
 #: the largest displacement an FMU input takes.
 HOST_ROAD_MARGIN_M = 1.0

@@ -5,15 +5,21 @@ dense matrices and no caching, the C with the order structure and caches, and a 
 them to 1e-10 of each other. Over a communication step h, split into n equal substeps of at
 most the contract's ``substep_s``:
 
-1. the road under each contact point is read at the current time (its window average of the
-   host's road history, :mod:`.road`);
+1. the road under each contact point is read at the current time: the mean height over its
+   window of road and that mean's rate, by time (the host's road height at the zone front,
+   its history read through each point's window delays, :mod:`.road`) or by position (a road
+   along which the wheel centre is at x moving at vx, read over each point's window
+   [x + window_lo_m, x + window_hi_m] of the contract, :meth:`NumpyKernel.set_road`);
 2. the contact forces at the current time are solved again for the inputs given now (the last
    substep's end re-solved: the penetrations move with the inputs' change and with the end
    forces through that substep's own interface flexibility), or, after a reset, taken from the
    law at the instant;
 3. each substep advances the modal state exactly with the rim and the force deviations ramped
    from their values at its start to their values at its end, those end forces solving the
-   law at the end:
+   law at the end with the road at the substep's end (by time: ramped on at its rate from the
+   communication point; by position: read again where the wheel centre's path along the road
+   is then, at the path's rate, so that a cleat is resolved at a substep's travel whatever the
+   host's step):
 
        q(t+h) = e^{λh} q + hφ₁ b_rim z + h²φ₂ b_rim ż + h(φ₁-φ₂) B Δf(t) + hφ₂ B Δf(t+h),
        [σ; p; ṗ](t+h) = base + M f(t+h),  f = max(0, σ) where p > 0 and σ > 0, else 0,
@@ -49,6 +55,11 @@ PGS_TOLERANCE = 1e-13
 SUBSTEP_SLACK = 1e-12
 #: Communication step sizes whose coefficients are kept (a host varying h evicts the oldest).
 KERNEL_CACHE_SIZE = 32
+#: With the road by position, the index of x among a step's inputs (rim_z, rim_vz, x, vx).
+INPUT_X = 2
+#: step_problems' bit of a kernel reading the road the other way (kernel.h's
+#: KERNEL_OTHER_ROAD): a step by time with a road by position set, or one by position without.
+OTHER_ROAD = 256
 
 
 class _Interface:
@@ -117,7 +128,9 @@ class _Interface:
 class NumpyKernel:
     """Steps a contract: the same calls and state as the C kernel (``kernel.h``)."""
 
-    def __init__(self, contract: StepContract, start_time: float = 0.0):
+    def __init__(self, contract: StepContract, start_time: float = 0.0, road=None):
+        """A kernel for ``contract`` whose clock starts at ``start_time``; ``road``: the road by
+        position (:meth:`set_road`), else it reads the road by time (:meth:`step`)."""
         self.contract = c = contract
         n_orders = np.repeat(np.arange(c.n_orders), np.diff(c.order_start))
         theta = c.zone_offset * (2 * np.pi / c.n_elements)
@@ -146,11 +159,15 @@ class NumpyKernel:
         windows = RoadWindows(c.window_early_s, c.window_late_s, 0.0)
         self.road = RoadReader(windows)
         self.horizon_s = windows.horizon_s
+        self.window_lo, self.window_hi = c.window_lo_m, c.window_hi_m
+        self.road_by_position = None
         self._interfaces: dict[float, tuple[int, _Interface]] = {}
         self._instant = _Interface(self, 0.0, instant=True) if self.truncated else None
         self.solver_fallbacks = 0
         self.fallback_only = False  # tests: every solve by the Gauss-Seidel fallback
         self.reset(start_time)
+        if road is not None:
+            self.set_road(road)
 
     # -- state ---------------------------------------------------------------------------
     def reset(self, start_time: float = 0.0) -> None:
@@ -167,6 +184,10 @@ class NumpyKernel:
         # the rim's rate given at the last communication point, its last change over the step
         # it was made in and that step's length (0: none yet): the extension's history
         self.given_vz, self.change, self.h_change = 0.0, 0.0, 0.0
+        # the road by position: where along the road (and at what rate) the road was read
+        # last, the position's rate given at the last communication point and its last change
+        # (its step is the rim's h_change): all 0 with the road by time
+        self.seen_x, self.seen_vx, self.given_vx, self.change_vx = 0.0, 0.0, 0.0, 0.0
         self.ring_out = np.zeros(3)
         self.last: _Interface | None = None
         self.last_step = math.nan
@@ -205,11 +226,48 @@ class NumpyKernel:
         self.road.read(self.elapsed_s, self._road_z, self._road_vz, h, out)
         return out[:p].copy(), out[p:].copy()
 
-    def step_problems(self, h: float, inputs) -> int:
+    # -- the road by position --------------------------------------------------------------
+    def set_road(self, road) -> None:
+        """Read the road by position from now on: ``road`` has ``window_reads(s_lo, s_hi,
+        speed_m_s) -> (means, rates)``, the mean height over each window [s_lo, s_hi] of road
+        and its rate as the road passes at the speed (core/obstacles.py's ProfileRoad,
+        PositionRoad; the C reads the same samples with the same arithmetic). It is read
+        where it is at each read, so a road that changes (a host's samples) is read as it is
+        then. The kernel then steps with :meth:`step_on_road` only (:meth:`reset` keeps the
+        road); ValueError for a kernel that has read the road by time."""
+        if self.road_by_position is None and self.last is not None:
+            raise ValueError("this kernel has read the road by time: a road by position is "
+                             "set before its first step or after a reset")
+        if not callable(getattr(road, "window_reads", None)):
+            raise TypeError(f"road: {type(road).__name__} has no window_reads(s_lo, s_hi, "
+                            "speed_m_s)")
+        self.road_by_position = road
+
+    @property
+    def road_position(self) -> float:
+        """Where along the road the road was read last (m): the last step's end, or the x of
+        :meth:`outputs_on_road`."""
+        return self.seen_x
+
+    def _read_road_at(self, x: float, vx: float) -> tuple[np.ndarray, np.ndarray]:
+        """(means, rates) under the points with the wheel centre at x moving at vx."""
+        means, rates = self.road_by_position.window_reads(self.window_lo + x,
+                                                          self.window_hi + x, vx)
+        self.seen_x, self.seen_vx = x, vx
+        return np.array(means, dtype=float), np.array(rates, dtype=float)
+
+    def step_problems(self, h: float, inputs, at: bool = False) -> int:
         """Why a step is refused, as the bits of kernel.h's kernel_step_problems (0: it is
         not): h not finite and > 0 (1), shorter than the contract's shortest step (2), not
-        resolved by the clock (4); input i not finite or beyond its limit (8 << i)."""
-        from .step_limits import MAX_DISPLACEMENT_M, MAX_STEP_WORK, MAX_VELOCITY_M_S
+        resolved by the clock (4); input i not finite or beyond its limit (8 << i; with the
+        road by position, ``at``, input 2 is x, limited to MAX_ROAD_POSITION_M); the kernel
+        reading the road the other way (256)."""
+        from .step_limits import (
+            MAX_DISPLACEMENT_M,
+            MAX_ROAD_POSITION_M,
+            MAX_STEP_WORK,
+            MAX_VELOCITY_M_S,
+        )
 
         problems = 0
         c = self.contract
@@ -222,40 +280,72 @@ class NumpyKernel:
         elif math.ceil(h / c.substep_s * (1 - SUBSTEP_SLACK)) * c.substep_work > MAX_STEP_WORK:
             problems |= 128
         for i, value in enumerate(inputs):
-            if not abs(value) <= (MAX_VELOCITY_M_S if i % 2 else MAX_DISPLACEMENT_M):
+            limit = (MAX_VELOCITY_M_S if i % 2 else
+                     MAX_ROAD_POSITION_M if at and i == INPUT_X else MAX_DISPLACEMENT_M)
+            if not abs(value) <= limit:
                 problems |= 8 << i
+        if bool(at) != (self.road_by_position is not None):
+            problems |= OTHER_ROAD
         return problems
 
     def step(self, h: float, inputs) -> np.ndarray | None:
         """One communication step from ``time`` with the inputs (rim_z, rim_vz, road_z,
-        road_vz) given at ``time``; the outputs at the new time, or None (nothing changed)
-        for a step step_problems finds fault with."""
+        road_vz) given at ``time``, the road by time; the outputs at the new time, or None
+        (nothing changed) for a step step_problems finds fault with."""
+        return self._advance(h, inputs, False)
+
+    def step_on_road(self, h: float, z: float, vz: float, x: float, vx: float
+                     ) -> np.ndarray | None:
+        """One communication step from ``time`` with the road by position: the rim at z
+        moving at vz, the wheel centre at x along the road moving at vx, given at ``time``
+        (x extended over the step as z is); the outputs at the new time, or None (nothing
+        changed) for a step step_problems(h, inputs, at=True) finds fault with."""
+        return self._advance(h, (z, vz, x, vx), True)
+
+    def _advance(self, h: float, inputs, at: bool) -> np.ndarray | None:
         inputs = tuple(float(x) for x in inputs)
-        if self.step_problems(h, inputs):
+        if self.step_problems(h, inputs, at):
             return None
         # a host's h that is a whole number of substeps to its clock's resolution is that
         # number: the tire's clock stays on its grid from any start time (host_inputs.on_grid)
         h = on_grid(h, self.contract.substep_s, self.time)
-        z, vz, self._road_z, self._road_vz = inputs
+        z, vz, third, fourth = inputs
         n_sub, interface = self.interface(h)
-        # the rim extended over the step (host_inputs), each substep on its chord
+        # the inputs extended over the step (host_inputs), each substep on its chord
         h_before = self.last_step if self.last is not None else 0.0
         (accel,), (jerk,) = rate_changes([vz], [self.given_vz], h_before, [self.change],
                                          self.h_change)
         path = input_path(z, vz, accel, jerk)
         ends = [path(i * interface.h) for i in range(n_sub + 1)]
-        heights, slopes = self._road(h)
+        if at:
+            (accel_x,), (jerk_x,) = rate_changes([fourth], [self.given_vx], h_before,
+                                                 [self.change_vx], self.h_change)
+            path_x = input_path(third, fourth, accel_x, jerk_x)
+            heights, slopes = self._read_road_at(third, fourth)
+        else:
+            self._road_z, self._road_vz = third, fourth
+            heights, slopes = self._road(h)
         self._start(z, vz, heights, slopes)
         position = z
         for i in range(n_sub):
+            if at:
+                # the road at the substep's end, the wheel centre there on its path along the
+                # road moving at the path's rate: the road resolved at each substep's travel
+                x_end, vx_end, _ = path_x((i + 1) * interface.h)
+                heights, slopes = self._read_road_at(x_end, vx_end)
+            else:
+                heights = heights + interface.h * slopes  # ramped on at its rate
             # the ring integrated on the chord; the rate at the substep's end in the direct
             # terms and the penetrations' rates
             chord = (ends[i + 1][0] - position) / interface.h
-            heights, slopes = self._substep(interface, position, chord, heights, slopes,
-                                            ends[i + 1][1])
+            self._substep(interface, position, chord, heights, slopes, ends[i + 1][1])
             position = ends[i + 1][0]
         self.change = (vz - self.given_vz) / h_before if h_before > 0.0 else 0.0
-        self.given_vz, self.h_change = vz, h_before
+        self.given_vz = vz
+        if at:
+            self.change_vx = (fourth - self.given_vx) / h_before if h_before > 0.0 else 0.0
+            self.given_vx = fourth
+        self.h_change = h_before
         self.elapsed_s, self.carry_s = clock.advance(self.elapsed_s, self.carry_s, h)
         self.last_step = h
         self.outputs = self._outputs()
@@ -265,13 +355,14 @@ class NumpyKernel:
         out = self.step(h, (z, vz, road_z, road_vz))
         return None if out is None else [float(x) for x in out]
 
-    def raw_step(self):
+    def raw_step(self, at: bool = False):
         """(function, handle, inputs, report): the compiled kernel's hot-path calling
-        convention (native/kernel.py) over this kernel, for callers written against it."""
+        convention (native/kernel.py) over this kernel, for callers written against it; ``at``:
+        kernel_step_at's (inputs rim_z, rim_vz, x, vx) rather than kernel_step's."""
         inputs, report = [0.0] * 4, [0.0] * 8  # plain floats, as the ctypes arrays read
 
         def step(handle, h, inputs, report):
-            out = self.step(h, inputs)
+            out = self._advance(h, inputs, at)
             if out is None:
                 return -3
             report[:6] = [float(x) for x in out]
@@ -283,13 +374,24 @@ class NumpyKernel:
 
     def outputs_with(self, inputs) -> np.ndarray | None:
         """The outputs at ``time`` for inputs given there (the forces stay re-solved), or
-        None if an input is refused."""
+        None if an input is refused. The road by time."""
+        return self._outputs_for(inputs, False)
+
+    def outputs_on_road(self, z: float, vz: float, x: float, vx: float) -> np.ndarray | None:
+        """:meth:`outputs_with` with the road by position: the road read at x (rate at vx)."""
+        return self._outputs_for((z, vz, x, vx), True)
+
+    def _outputs_for(self, inputs, at: bool) -> np.ndarray | None:
         inputs = tuple(float(x) for x in inputs)
         # only the inputs are judged here: no step is taken, however long it would be
-        if self.step_problems(1.0, inputs) & ~(2 | 4 | 128):
+        if self.step_problems(1.0, inputs, at) & ~(2 | 4 | 128):
             return None
-        z, vz, self._road_z, self._road_vz = inputs
-        heights, slopes = self._road(self.last_step)
+        z, vz, third, fourth = inputs
+        if at:
+            heights, slopes = self._read_road_at(third, fourth)
+        else:
+            self._road_z, self._road_vz = third, fourth
+            heights, slopes = self._road(self.last_step)
         self._start(z, vz, heights, slopes)
         self.outputs = self._outputs()
         return self.outputs.copy()
@@ -324,7 +426,9 @@ class NumpyKernel:
         self.penetration, self.rate = pen, rate
         self.seen = (z, vz, heights.copy(), slopes.copy())
 
-    def _substep(self, k: _Interface, z, vz, heights, slopes, vz_end=None):
+    def _substep(self, k: _Interface, z, vz, heights, slopes, vz_end=None) -> None:
+        """One substep with the rim at z moving at vz (its chord) and at vz_end at its end;
+        ``heights`` and ``slopes``: the road under the points at its end and their rates."""
         h = k.h
         vz_end = vz if vz_end is None else vz_end
         p = self.contract.n_points
@@ -333,7 +437,7 @@ class NumpyKernel:
         y = np.real(self.c_ring @ self.q) + self.d_rim * (z + h * vz) + self.e_rim * vz_end \
             - self.e_f @ df_nodes / h
         w_pt, r_pt = self.interp @ y[self.w_rows], self.interp @ y[self.r_rows]
-        pen0 = w_pt - self.sec * (z + h * vz) + self.sec * (heights + h * slopes) + k.pen_const
+        pen0 = w_pt - self.sec * (z + h * vz) + self.sec * heights + k.pen_const
         rate0 = r_pt - self.sec * vz_end + self.sec * slopes + k.rate_const
         base = np.concatenate([self.k * pen0 + self.c * rate0, pen0, rate0])
         f, combined = self._solve(k, base)
@@ -342,10 +446,8 @@ class NumpyKernel:
         self.ring_out = y[:3] + k.out_f @ df_end
         self.df = df_end
         self.penetration, self.rate = combined[p:2 * p], combined[2 * p:]
-        heights = heights + h * slopes  # the road ramps on into the next substep
         self.seen = (z + h * vz, vz_end, heights.copy(), slopes.copy())
         self.last = k
-        return heights, slopes
 
     def _solve(self, k: _Interface, base: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Total end forces with [σ; p; ṗ] = base + M f and the law (two-sided springs on the
@@ -430,7 +532,8 @@ class NumpyKernel:
             "last_step_s": self.last_step if self.last is not None else math.nan,
             "seen_z": self.seen[0], "seen_vz": self.seen[1], "ring_out": self.ring_out,
             "outputs": self.outputs, "given_vz": self.given_vz, "change": self.change,
-            "h_change": self.h_change, "q": self.q, "df": self.df,
+            "h_change": self.h_change, "seen_x": self.seen_x, "seen_vx": self.seen_vx,
+            "given_vx": self.given_vx, "change_vx": self.change_vx, "q": self.q, "df": self.df,
             "penetration": self.penetration, "rate": self.rate, "seen_heights": self.seen[2],
             "seen_slopes": self.seen[3], "history_t": t, "history_z": z, "history_v": v,
             "active": self.active})
@@ -453,6 +556,8 @@ class NumpyKernel:
             fields.df, fields.penetration, fields.rate))
         self.seen = (fields.seen_z, fields.seen_vz, fields.heights.copy(), fields.slopes.copy())
         self.given_vz, self.change, self.h_change = fields.given_vz, fields.change, fields.h_change
+        self.seen_x, self.seen_vx = fields.seen_x, fields.seen_vx
+        self.given_vx, self.change_vx = fields.given_vx, fields.change_vx
         self.road.reset(self.start_time)
         self.road.history_t, self.road.history_z, self.road.history_v = (
             x.copy() for x in (fields.t, fields.z, fields.v))
@@ -462,11 +567,13 @@ class NumpyKernel:
 
 #: The state layout (kernel.c's kernel_state_write): four int32 (modes, points, road samples,
 #: whether a step was taken), the head's doubles, the arrays of doubles, then one byte per
-#: contact point (pushing or not). Names as ContactState.fields gives them.
+#: contact point (pushing or not). Names as ContactState.fields gives them. The road by
+#: position's four (seen_x .. change_vx) are 0 with the road by time, whose history is empty
+#: with the road by position.
 _STATE_INTS = 4
 STATE_HEAD = ("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z", "seen_vz",
               "ring_out", "ring_out", "ring_out", *("outputs",) * 6, "given_vz", "change",
-              "h_change")
+              "h_change", "seen_x", "seen_vx", "given_vx", "change_vx")
 _STATE_HEAD = len(STATE_HEAD)
 STATE_ARRAYS = ("q", "df", "penetration", "rate", "seen_heights", "seen_slopes", "history_t",
                 "history_z", "history_v")
@@ -483,7 +590,9 @@ def state_fields(data: bytes) -> dict:
            "last_step_s": float(head[3]) if has_last else math.nan,
            "seen_z": float(head[4]), "seen_vz": float(head[5]),
            "ring_out": head[6:9].copy(), "outputs": head[9:15].copy(),
-           "given_vz": float(head[15]), "change": float(head[16]), "h_change": float(head[17])}
+           "given_vz": float(head[15]), "change": float(head[16]), "h_change": float(head[17]),
+           "seen_x": float(head[18]), "seen_vx": float(head[19]), "given_vx": float(head[20]),
+           "change_vx": float(head[21])}
     rest = values[_STATE_HEAD:]
     out["q"] = rest[:2 * modes].copy().view(complex)
     sizes = (points,) * 5 + (history,) * 3
@@ -504,7 +613,8 @@ def state_data(fields: dict) -> bytes:
     head = [fields["start_time"], fields["elapsed_s"], fields["carry_s"],
             last if has_last else 0.0, fields["seen_z"], fields["seen_vz"],
             *fields["ring_out"], *fields["outputs"], fields.get("given_vz", 0.0),
-            fields.get("change", 0.0), fields.get("h_change", 0.0)]
+            fields.get("change", 0.0), fields.get("h_change", 0.0),
+            *(fields.get(name, 0.0) for name in ("seen_x", "seen_vx", "given_vx", "change_vx"))]
     active = np.asarray(fields["active"])
     return b"".join([
         struct.pack("<4i", q.size, active.size, history, int(has_last)),
@@ -525,6 +635,8 @@ class _StateFields:
         self.last = f["last_step_s"] if self.has_last else 0.0
         self.seen_z, self.seen_vz = f["seen_z"], f["seen_vz"]
         self.given_vz, self.change, self.h_change = f["given_vz"], f["change"], f["h_change"]
+        self.seen_x, self.seen_vx = f["seen_x"], f["seen_vx"]
+        self.given_vx, self.change_vx = f["given_vx"], f["change_vx"]
         self.ring_out, self.outputs, self.q = f["ring_out"], f["outputs"], f["q"]
         self.df, self.penetration, self.rate = f["df"], f["penetration"], f["rate"]
         self.heights, self.slopes = f["seen_heights"], f["seen_slopes"]
@@ -589,6 +701,7 @@ def state_problems(kernel: NumpyKernel, data: bytes) -> list[str]:
                         "clock does not resolve it")
     problems += _history_problems(kernel, s, MAX_HISTORY_SAMPLES, MAX_DELAY_STEPS,
                                   MAX_DISPLACEMENT_M, MAX_VELOCITY_M_S)
+    problems += _position_problems(kernel, s)
     length, rate = MAX_STATE_DISPLACEMENT_M, MAX_STATE_VELOCITY_M_S
     forces = kernel.f_static + s.df
     bound = kernel.f_static + kernel.k * (length + np.abs(c.pen_static)) + kernel.c * rate
@@ -651,6 +764,9 @@ def _history_problems(kernel: NumpyKernel, s: _StateFields, max_samples: int,
     the oldest within the windows' reach, samples within the inputs' limits."""
     horizon = kernel.horizon_s
     history = s.history
+    if kernel.road_by_position is not None:
+        return [f"its road history holds {history} samples, but this kernel reads the road by "
+                "position and keeps none"] if history else []
     if not kernel.road.delayed:
         return [f"its road history holds {history} samples, but at rest the whole zone reads "
                 "the road at the instant and keeps none"] if history else []
@@ -682,3 +798,23 @@ def _history_problems(kernel: NumpyKernel, s: _StateFields, max_samples: int,
         problems.append(f"its road samples go beyond the inputs' limits ({max_height:g} m, "
                         f"{max_rate:g} m/s)")
     return problems
+
+
+def _position_problems(kernel: NumpyKernel, s: _StateFields) -> list[str]:
+    """The road by position's part of the head: where the road was read, within what a host
+    gives; none with the road by time (kernel.c's position_problems)."""
+    from .step_limits import MAX_ROAD_POSITION_M, MAX_VELOCITY_M_S
+
+    where = f"{s.seen_x!r} m"
+    if kernel.road_by_position is not None:
+        if not (abs(s.seen_x) <= MAX_ROAD_POSITION_M and abs(s.seen_vx) <= MAX_VELOCITY_M_S
+                and abs(s.given_vx) <= MAX_VELOCITY_M_S):
+            return [f"the position along the road it read the road at, {where}, its rate "
+                    f"there, {s.seen_vx!r} m/s, or the rate given last, {s.given_vx!r} m/s, is "
+                    f"beyond what a host gives ({MAX_ROAD_POSITION_M:g} m, "
+                    f"{MAX_VELOCITY_M_S:g} m/s)"]
+        return []
+    if s.seen_x != 0.0 or s.seen_vx != 0.0 or s.given_vx != 0.0 or s.change_vx != 0.0:
+        return [f"it holds a position along the road ({where}) or its rates ({s.seen_vx!r} "
+                f"m/s, given {s.given_vx!r} m/s), but this kernel reads the road by time"]
+    return []

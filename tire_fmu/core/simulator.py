@@ -116,8 +116,9 @@ class ContactState:
     def fields(self) -> dict:
         """What the state holds, by name (the layout of kernel.c; kernel_numpy.state_fields):
         start_time, elapsed_s, carry_s, last_step_s (nan: no step yet), seen_z, seen_vz,
-        ring_out, outputs, q, df, penetration, rate, seen_heights, seen_slopes, history_t,
-        history_z, history_v, active."""
+        ring_out, outputs, given_vz, change, h_change, seen_x, seen_vx, given_vx, change_vx,
+        q, df, penetration, rate, seen_heights, seen_slopes, history_t, history_z, history_v,
+        active."""
         return state_fields(self.data)
 
     def replaced(self, **changes) -> ContactState:
@@ -141,7 +142,9 @@ class ContactState:
 
 
 _FIELD_NAMES = frozenset(("start_time", "elapsed_s", "carry_s", "last_step_s", "seen_z",
-                          "seen_vz", "ring_out", "outputs", "q", "df", "penetration", "rate",
+                          "seen_vz", "ring_out", "outputs", "given_vz", "change", "h_change",
+                          "seen_x", "seen_vx", "given_vx", "change_vx", "q", "df",
+                          "penetration", "rate",
                           "seen_heights", "seen_slopes", "history_t", "history_z", "history_v",
                           "active"))
 

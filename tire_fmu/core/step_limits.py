@@ -19,6 +19,12 @@ MAX_HISTORY_SAMPLES = MAX_DELAY_STEPS + 3
 #: finite enough that no product inside a step can overflow.
 MAX_DISPLACEMENT_M = 10.0
 MAX_VELOCITY_M_S = 1000.0
+#: The largest position along the road a step accepts and a state holds (m), the wheel
+#: centre's when the road is read by position: the road files' own limit on distances
+#: (road_files.MAX_ABS_DISTANCE_M), 10 000 km, where a double still resolves 2e-9 m.
+MAX_ROAD_POSITION_M = 1.0e7
+#: The largest height above the road's datum a wheel-centre input takes (m): any road on Earth.
+MAX_ROAD_HEIGHT_M = 1.0e4
 #: The largest torque on the wheel an FMU takes (N m): ten times a truck wheel's brake.
 MAX_TORQUE_N_M = 3.0e5
 #: Largest displacement and rate a state may hold (m, m/s): the tread's excursion at the zone

@@ -49,6 +49,8 @@ from ..core.step_limits import (  # noqa: E402, F401
     MAX_DELAY_STEPS,
     MAX_DISPLACEMENT_M,
     MAX_HISTORY_SAMPLES,
+    MAX_ROAD_HEIGHT_M,
+    MAX_ROAD_POSITION_M,
     MAX_STEP_S,
     MAX_TORQUE_N_M,
     MAX_VELOCITY_M_S,
@@ -300,10 +302,6 @@ def unit_definitions(units) -> ElementTree.Element:
 #: 1 ms step the wheel travels 40 mm, four of the in-plane tire's 10 mm contact points and
 #: sixteen of the radial tire's 2.5 mm ones.
 ROAD_QUERIES = 16
-#: The largest position and height a wheel-centre input takes (m): a road of ten thousand
-#: kilometres at a double's 2e-9 m there, heights of any road on Earth.
-MAX_ROAD_POSITION_M = 1.0e7
-MAX_ROAD_HEIGHT_M = 1.0e4
 
 
 #: wheel_z's start value in the in-plane FMUs built for the default tire (m): its loaded radius

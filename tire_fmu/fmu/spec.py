@@ -45,6 +45,7 @@ from ..core import (
     standing_waves,
     step_limits,
     stepping,
+    wheel_centre,
 )
 from .interface import (
     FMU_NAMES,
@@ -93,6 +94,7 @@ CONSTANTS: dict[str, float | int] = {
     # the inputs a step accepts (beyond them a product inside the step could overflow)
     "MAX_DISPLACEMENT_M": contact_dynamics.MAX_DISPLACEMENT_M,
     "MAX_VELOCITY_M_S": contact_dynamics.MAX_VELOCITY_M_S,
+    "MAX_ROAD_POSITION_M": step_limits.MAX_ROAD_POSITION_M,
     "MAX_TORQUE_N_M": step_limits.MAX_TORQUE_N_M,
     # what an FMU state may hold (a state is checked for what it means)
     "MAX_STATE_DISPLACEMENT_M": contact_dynamics.MAX_STATE_DISPLACEMENT_M,
@@ -153,8 +155,8 @@ CONSTANTS: dict[str, float | int] = {
     "INPLANE_MAX_FORCE_LOADS": inplane_contact.MAX_FORCE_LOADS,
     "INPLANE_STATE_DEFORMATION_FRACTION": inplane_contact.STATE_DEFORMATION_FRACTION,
     "INPLANE_MAX_ROAD_SAMPLES": inplane_contact.MAX_ROAD_SAMPLES,
-    "INPLANE_SLIP_SPEED_FLOOR_M_S": inplane_contact.SLIP_SPEED_FLOOR_M_S,
-    "INPLANE_ROAD_QUERY_SLACK_M": inplane_contact.ROAD_QUERY_SLACK_M,
+    "INPLANE_SLIP_SPEED_FLOOR_M_S": wheel_centre.SLIP_SPEED_FLOOR_M_S,
+    "INPLANE_ROAD_QUERY_SLACK_M": wheel_centre.ROAD_QUERY_SLACK_M,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,

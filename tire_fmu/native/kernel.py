@@ -159,6 +159,17 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.kernel_outputs_with.argtypes = [handle, p_double, p_double]
     lib.kernel_step_problems.restype = ctypes.c_int
     lib.kernel_step_problems.argtypes = [handle, double, p_double]
+    lib.kernel_step_at.restype = ctypes.c_int
+    lib.kernel_step_at.argtypes = [handle, double, p_double, p_double]
+    lib.kernel_outputs_at.restype = ctypes.c_int
+    lib.kernel_outputs_at.argtypes = [handle, p_double, p_double]
+    lib.kernel_step_at_problems.restype = ctypes.c_int
+    lib.kernel_step_at_problems.argtypes = [handle, double, p_double]
+    lib.kernel_set_road.restype = ctypes.c_int
+    lib.kernel_set_road.argtypes = [handle, p_double, p_double, p_double, ctypes.c_int,
+                                    ctypes.c_char_p, size]
+    lib.kernel_road_position.restype = double
+    lib.kernel_road_position.argtypes = [handle]
     lib.kernel_outputs.restype = None
     lib.kernel_outputs.argtypes = [handle, p_double]
     for name in ("kernel_time", "kernel_start_time", "kernel_elapsed", "kernel_min_step",
@@ -166,7 +177,7 @@ def _declare(lib: ctypes.CDLL) -> None:
         getattr(lib, name).restype = double
         getattr(lib, name).argtypes = [handle]
     for name in ("kernel_in_contact", "kernel_at_zone_edge", "kernel_cached_steps",
-                 "kernel_delay_line_on"):
+                 "kernel_delay_line_on", "kernel_road_on"):
         getattr(lib, name).restype = ctypes.c_int
         getattr(lib, name).argtypes = [handle]
     lib.kernel_solver_fallbacks.restype = ctypes.c_long
@@ -185,12 +196,29 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.kernel_state_apply.argtypes = [handle, p_byte]
 
 
+def road_samples(road) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(positions, heights, running integral): the samples through which the C reads a road by
+    position (road_samples.h), those the road's own ``window_reads`` reads: a
+    :class:`~tire_fmu.core.obstacles.ProfileRoad`'s knots, or the samples a road that keeps
+    them gives by ``state()`` (PositionRoad, HostRoad)."""
+    state = getattr(road, "state", None)
+    if callable(state):
+        samples = np.asarray(state(), dtype=float).reshape(-1, 3)
+        return tuple(np.ascontiguousarray(samples[:, i]) for i in range(3))
+    knots = getattr(road, "_at_knots", None)
+    if knots is None:
+        raise TypeError(f"road: a {type(road).__name__} is no sampled road (a ProfileRoad, a "
+                        "PositionRoad or a HostRoad)")
+    return tuple(np.ascontiguousarray(a, dtype=float)
+                 for a in (road.distances_m, road.heights_m, knots))
+
+
 class CompiledKernel:
     """The C kernel stepping one contract: the calls of :class:`~tire_fmu.core.kernel_numpy.
     NumpyKernel`, each one call into the library."""
 
     def __init__(self, contract: StepContract, start_time: float = 0.0,
-                 library: ctypes.CDLL | None = None):
+                 library: ctypes.CDLL | None = None, road=None):
         self.contract = contract
         self._lib = lib = library or load_library()
         why = ctypes.create_string_buffer(_WHY_SIZE)
@@ -204,6 +232,10 @@ class CompiledKernel:
         self._out = (ctypes.c_double * REPORT)()
         self._step = lib.kernel_step
         self.horizon_s = lib.kernel_horizon(handle)
+        self.road_by_position = None
+        self._road_arrays = None  # the samples the C reads in place: kept alive here
+        if road is not None:
+            self.set_road(road)
 
     def __del__(self):
         handle, self._handle = getattr(self, "_handle", None), None
@@ -241,11 +273,79 @@ class CompiledKernel:
             self._check(status, "kernel_step")
         return self._out[0:N_OUTPUTS]
 
-    def raw_step(self):
+    def raw_step(self, at: bool = False):
         """(function, handle, inputs, report) of the hot path: function(handle, h, inputs,
         report) steps with the four inputs in ``inputs`` and writes the report (the outputs,
-        the time, the zone-edge flag) into ``report``; 0, or -3 refused, or -1 no memory."""
-        return self._step, self._handle, self._in, self._out
+        the time, the zone-edge flag) into ``report``; 0, or -3 refused, or -1 no memory.
+        ``at``: kernel_step_at's, the road by position (inputs rim_z, rim_vz, x, vx; a road
+        that changes is set again, :meth:`set_road`, before the call)."""
+        return (self._lib.kernel_step_at if at else self._step), self._handle, self._in, \
+            self._out
+
+    # -- the road by position ------------------------------------------------------------------
+    def set_road(self, road) -> None:
+        """Read the road by position from now on (kernel_set_road), through its samples
+        (:func:`road_samples`); a road that keeps samples (a PositionRoad) is read again at
+        each :meth:`step_on_road`, so that the C reads it as it is then. ValueError with the
+        kernel's reason for bad samples or a kernel that has read the road by time."""
+        self._load_road(road)
+        self.road_by_position = road
+
+    def _load_road(self, road) -> None:
+        arrays = road_samples(road)
+        pointer = ctypes.POINTER(ctypes.c_double)
+        why = ctypes.create_string_buffer(_WHY_SIZE)
+        status = self._lib.kernel_set_road(self._handle, *(a.ctypes.data_as(pointer)
+                                                           for a in arrays),
+                                           int(arrays[0].size), why, _WHY_SIZE)
+        if status:
+            raise ValueError(f"road: {why.value.decode(errors='replace')}")
+        self._road_arrays = arrays
+
+    def _refresh_road(self) -> None:
+        road = self.road_by_position
+        if road is not None and callable(getattr(road, "state", None)):
+            self._load_road(road)
+
+    @property
+    def road_on(self) -> bool:
+        return bool(self._lib.kernel_road_on(self._handle))
+
+    @property
+    def road_position(self) -> float:
+        """Where along the road the road was read last (m)."""
+        return self._lib.kernel_road_position(self._handle)
+
+    def step_on_road(self, h: float, z: float, vz: float, x: float, vx: float):
+        """One communication step with the road by position (kernel_step_at); the outputs at
+        the new time, or None (nothing changed) for a step the kernel refuses."""
+        self._refresh_road()
+        inputs = self._in
+        inputs[0], inputs[1], inputs[2], inputs[3] = z, vz, x, vx
+        status = self._lib.kernel_step_at(self._handle, h, inputs, self._out)
+        if status:
+            if status == REFUSED:
+                return None
+            self._check(status, "kernel_step_at")
+        return np.array(self._out[0:N_OUTPUTS])
+
+    def outputs_on_road(self, z: float, vz: float, x: float, vx: float):
+        """The outputs at the current time for inputs given there, the road by position
+        (kernel_outputs_at), or None if refused."""
+        self._refresh_road()
+        self._in[:] = [float(z), float(vz), float(x), float(vx)]
+        status = self._lib.kernel_outputs_at(self._handle, self._in, self._out)
+        if status == REFUSED:
+            return None
+        self._check(status, "kernel_outputs_at")
+        return np.array(self._out[0:N_OUTPUTS])
+
+    def step_problems(self, h: float, inputs, at: bool = False) -> int:
+        """kernel_step_problems (``at``: kernel_step_at_problems): why a step is refused, as
+        bits (kernel.h), 0 if it is not."""
+        values = (ctypes.c_double * N_INPUTS)(*(float(x) for x in inputs))
+        call = self._lib.kernel_step_at_problems if at else self._lib.kernel_step_problems
+        return int(call(self._handle, float(h), values))
 
 
     def outputs_with(self, inputs):

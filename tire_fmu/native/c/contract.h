@@ -9,7 +9,7 @@
 #error "include numerics.h before contract.h"
 #endif
 
-#define TIRE_CONTRACT_VERSION 195522104u
+#define TIRE_CONTRACT_VERSION 150399721u
 
 typedef struct {
     unsigned int version; /* TIRE_CONTRACT_VERSION */
@@ -49,6 +49,8 @@ typedef struct {
     const double* pen_static; /* [n_points] static penetration (m) */
     const double* window_early_s; /* [n_points] road delay, window front (s) */
     const double* window_late_s; /* [n_points] road delay, window rear (s) */
+    const double* window_lo_m; /* [n_points] its window's rear end, x from the wheel centre (m) */
+    const double* window_hi_m; /* [n_points] its window's front end, x from the wheel centre (m) */
     const double* static_ring_out; /* [3] static rim_Fz, rim_Fx, tread_deflection */
 } TireContract;
 
@@ -75,6 +77,8 @@ typedef struct {
     X(pen_static) \
     X(window_early_s) \
     X(window_late_s) \
+    X(window_lo_m) \
+    X(window_hi_m) \
     X(static_ring_out)
 
 #endif

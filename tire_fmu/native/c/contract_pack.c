@@ -1,7 +1,8 @@
 /* contract_pack.c: the native FMU's builder hands its model to the step kernel as a contract
  * (contract.h), the same fields core/contract.py's build_contract fills in Python, from the
  * same quantities: the free ring's modes grouped by order (ring.c), the zone, its contact
- * points and the static footprint on them (contact.c), the points' road windows. */
+ * points and the static footprint on them (contact.c), the points' road windows (by time and
+ * by position). */
 #include <string.h>
 
 #include "contract_pack.h"
@@ -40,7 +41,9 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
     cx *lam, *beta, *gamma, *eta, *b_rim, *c_rim;
     double *d, *e, *point_weight, *point_cos, *point_sec, *point_x_road, *point_stiffness;
     double *point_damping, *f_static, *pen_static, *window_early_s, *window_late_s;
-    double* static_ring_out;
+    double *window_lo_m, *window_hi_m, *static_ring_out;
+    /* each point's arc [theta_p -+ dtheta / 2m] on the road, as contact.c's windows_build */
+    double height = zone->radius - deflection, half = 0.5 * zone->dtheta / zone->per_node;
     memset(c, 0, sizeof *c);
     c->version = TIRE_CONTRACT_VERSION;
     c->n_elements = ring->n_elements;
@@ -64,7 +67,7 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
         NEW(point_weight, P * S) || NEW(point_cos, P) || NEW(point_sec, P) || NEW(point_x_road, P) ||
         NEW(point_stiffness, P) || NEW(point_damping, P) || NEW(f_static, P) ||
         NEW(pen_static, P) || NEW(window_early_s, P) || NEW(window_late_s, P) ||
-        NEW(static_ring_out, 3)) {
+        NEW(window_lo_m, P) || NEW(window_hi_m, P) || NEW(static_ring_out, 3)) {
         contract_free(c, mem);
         return -1;
     }
@@ -95,6 +98,8 @@ int contract_pack(TireContract* c, const Memory* mem, const Ring* ring, const Zo
         pen_static[p] = fp->penetration[p];
         window_early_s[p] = windows->early[p];
         window_late_s[p] = windows->late[p];
+        window_lo_m[p] = -height * tan(zone->point_theta[p] + half);
+        window_hi_m[p] = -height * tan(zone->point_theta[p] - half);
     }
     /* the static outputs: the points' forces on the rim and the tread's compression at the
      * centre node, (G I^T f)_centre */

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "kernel.h"
+#include "road_samples.h"
 #include "spec.h"
 
 /* The points' interface is I W I^T of the zone nodes' W (I: the points' interpolation, P x Z,
@@ -70,6 +71,13 @@ struct TireKernel {
     char* static_active;
     double static_ring[3];
     Windows windows;
+    double *x_lo, *x_hi; /* P: each point's window of road, x from the wheel centre (m) */
+    /* the road by position (kernel_set_road): its samples, read in place, and whether the
+     * kernel reads the road so (else by time, through road) */
+    int road_on;
+    const double *road_s, *road_z, *road_at;
+    int road_n;
+    int road_guess;  /* where the last read's search ended (only speeds the next one up) */
     /* derived */
     double* cos_nm;    /* cos and sin of n m dtheta: [m * n_orders + n], m = 0 .. 2 half */
     double* sin_nm;
@@ -89,6 +97,10 @@ struct TireKernel {
     /* the rim's rate given at the last communication point, its last change over the step it
      * was made in and that step's length (0: none yet): the extension's history (host_inputs) */
     double given_vz, change, h_change;
+    /* the road by position: the wheel centre's position along the road where the road was
+     * read last (that of seen_heights) and the rate it was read at; the position's rate given
+     * at the last communication point and its last change (over the same step as the rim's) */
+    double seen_x, seen_vx, given_vx, change_vx;
     double* seen_heights;
     double* seen_slopes;
     double ring_out[3];
@@ -841,8 +853,8 @@ static int start(TireKernel* kn, double z, double vz, const double* heights,
     return 0;
 }
 
-/* one substep of length k->h with the rim at z moving at vz; the road in kn->heights and
- * kn->slopes, which ramp on into the next substep */
+/* one substep of length k->h with the rim at z moving at vz (on its chord) and at vz_end at
+ * its end; the road under the points at its end in kn->heights and kn->slopes (their rates) */
 static int substep(TireKernel* kn, Interface* k, double z, double vz, double vz_end)
 {
     int P = kn->P, Z = kn->Z, n, q, j, i, l, rows = kn->rows;
@@ -934,8 +946,7 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz, double vz_
     /* the interface at t + h for zero total end forces: [sigma0; p0; p0'] */
     for (j = 0; j < P; j++) {
         double sec = kn->sec[j];
-        double p = w_pt[j] - sec * (z + h * vz) + sec * (kn->heights[j] + h * kn->slopes[j])
-                   + k->pen_const[j];
+        double p = w_pt[j] - sec * (z + h * vz) + sec * kn->heights[j] + k->pen_const[j];
         double r = r_pt[j] - sec * vz_end + sec * kn->slopes[j] + k->rate_const[j];
         base[j] = kn->k[j] * p + kn->c[j] * r;
         base[P + j] = p;
@@ -956,7 +967,6 @@ static int substep(TireKernel* kn, Interface* k, double z, double vz, double vz_
         kn->df[j] = df_end[j];
         kn->penetration[j] = combined[P + j];
         kn->rate[j] = combined[2 * P + j];
-        kn->heights[j] += h * kn->slopes[j];
         kn->seen_heights[j] = kn->heights[j];
         kn->seen_slopes[j] = kn->slopes[j];
     }
@@ -1049,7 +1059,10 @@ void kernel_forces(const TireKernel* kn, double* forces)
     for (j = 0; j < kn->P; j++) forces[j] = kn->f_static[j] + kn->df[j];
 }
 
-int kernel_step_problems(const TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS])
+/* why a step is refused (kernel.h's bits); at: a step with the road by position, whose
+ * inputs are rim_z, rim_vz, x, vx */
+static int step_problems(const TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
+                         int at)
 {
     int problems = 0, i;
     if (!(h > 0.0 && h <= DBL_MAX)) {
@@ -1063,10 +1076,24 @@ int kernel_step_problems(const TireKernel* kn, double h, const double inputs[KER
         problems |= KERNEL_LONG_H;
     }
     for (i = 0; i < KERNEL_N_INPUTS; i++) {
-        double limit = i % 2 ? SPEC_MAX_VELOCITY_M_S : SPEC_MAX_DISPLACEMENT_M;
+        double limit = i % 2 ? SPEC_MAX_VELOCITY_M_S
+                             : (at && i == KERNEL_INPUT_X ? SPEC_MAX_ROAD_POSITION_M
+                                                          : SPEC_MAX_DISPLACEMENT_M);
         if (!(fabs(inputs[i]) <= limit)) problems |= KERNEL_BAD_INPUT << i;
     }
+    if (at != kn->road_on) problems |= KERNEL_OTHER_ROAD;
     return problems;
+}
+
+int kernel_step_problems(const TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS])
+{
+    return step_problems(kn, h, inputs, 0);
+}
+
+int kernel_step_at_problems(const TireKernel* kn, double h,
+                            const double inputs[KERNEL_N_INPUTS])
+{
+    return step_problems(kn, h, inputs, 1);
 }
 
 static void fill_report(const TireKernel* kn, double report[KERNEL_REPORT])
@@ -1114,41 +1141,70 @@ static double on_grid(double h, double grid, double time)
     return count >= 1.0 && fabs(count * grid - h) <= slack ? count * grid : h;
 }
 
-int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
-                double report[KERNEL_REPORT])
+/* the road by position under the points with the wheel centre at x moving at vx along it,
+ * into kn->heights and kn->slopes (core/obstacles.py's sampled_window_reads) */
+static void read_road_at(TireKernel* kn, double x, double vx)
+{
+    road_samples_window_reads(kn->road_s, kn->road_z, kn->road_at, kn->road_n, kn->x_lo,
+                              kn->x_hi, kn->P, x, vx, kn->heights, kn->slopes, &kn->road_guess);
+    kn->seen_x = x;
+    kn->seen_vx = vx;
+}
+
+/* one communication step of h with the road by time (at = 0: inputs rim_z, rim_vz, road_z,
+ * road_vz) or by position (at = 1: rim_z, rim_vz, x, vx) */
+static int advance(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS], int at,
+                   double report[KERNEL_REPORT])
 {
     Interface* k;
-    int i;
-    double h_before, accel, jerk, z0, z1;
-    if (kernel_step_problems(kn, h, inputs) != 0) return KERNEL_REFUSED;
+    int i, j;
+    double h_before, accel, jerk, accel_x = 0.0, jerk_x = 0.0, z0, z1;
+    if (step_problems(kn, h, inputs, at) != 0) return KERNEL_REFUSED;
     /* a host's h that is a whole number of substeps to its clock's resolution is that number:
      * the tire's clock stays on its grid from any start time */
     h = on_grid(h, kn->substep_s, kn->start_time + kn->elapsed);
     k = step_interface(kn, h);
     if (k == NULL) return KERNEL_NO_MEMORY;
-    if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
-                  kn->slopes) != 0) {
-        return KERNEL_NO_MEMORY;
-    }
-    /* the rim extended over the step (core/host_inputs.py), each substep on its chord */
+    /* the inputs extended over the step (core/host_inputs.py) */
     h_before = kn->has_last ? kn->last_step : 0.0;
     rate_changes(inputs[1], kn->given_vz, h_before, kn->change, kn->h_change, &accel, &jerk);
+    if (at) {
+        rate_changes(inputs[3], kn->given_vx, h_before, kn->change_vx, kn->h_change, &accel_x,
+                     &jerk_x);
+        read_road_at(kn, inputs[2], inputs[3]);
+    } else if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h,
+                         kn->heights, kn->slopes) != 0) {
+        return KERNEL_NO_MEMORY;
+    }
     z0 = inputs[0];
     z1 = path_position(inputs[0], inputs[1], accel, jerk, k->h);
     if (start(kn, z0, inputs[1], kn->heights, kn->slopes) != 0) return KERNEL_NO_MEMORY;
     for (i = 0; i < k->n_sub; i++) {
+        double tau = (i + 1) * k->h;
         if (i > 0) {
             z0 = z1;
-            z1 = path_position(inputs[0], inputs[1], accel, jerk, (i + 1) * k->h);
+            z1 = path_position(inputs[0], inputs[1], accel, jerk, tau);
+        }
+        if (at) {
+            /* the road at the substep's end, the wheel centre there on its path along the
+             * road moving at the path's rate: the road resolved at each substep's travel */
+            read_road_at(kn, path_position(inputs[2], inputs[3], accel_x, jerk_x, tau),
+                         path_rate(inputs[3], accel_x, jerk_x, tau));
+        } else {
+            /* the road ramps on at its rate from the communication point */
+            for (j = 0; j < kn->P; j++) kn->heights[j] += k->h * kn->slopes[j];
         }
         /* the ring integrated on the chord; the rate at the substep's end in the direct terms
          * and the penetrations' rates */
-        if (substep(kn, k, z0, (z1 - z0) / k->h,
-                    path_rate(inputs[1], accel, jerk, (i + 1) * k->h)) != 0)
+        if (substep(kn, k, z0, (z1 - z0) / k->h, path_rate(inputs[1], accel, jerk, tau)) != 0)
             return KERNEL_NO_MEMORY;
     }
     kn->change = h_before > 0.0 ? (inputs[1] - kn->given_vz) / h_before : 0.0;
     kn->given_vz = inputs[1];
+    if (at) {
+        kn->change_vx = h_before > 0.0 ? (inputs[3] - kn->given_vx) / h_before : 0.0;
+        kn->given_vx = inputs[3];
+    }
     kn->h_change = h_before;
     {   /* elapsed += h, compensated (core/clock.py: advance) */
         double y = h - kn->carry, total = kn->elapsed + y;
@@ -1162,16 +1218,31 @@ int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
     return KERNEL_OK;
 }
 
-int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
-                        double report[KERNEL_REPORT])
+int kernel_step(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
+                double report[KERNEL_REPORT])
+{
+    return advance(kn, h, inputs, 0, report);
+}
+
+int kernel_step_at(TireKernel* kn, double h, const double inputs[KERNEL_N_INPUTS],
+                   double report[KERNEL_REPORT])
+{
+    return advance(kn, h, inputs, 1, report);
+}
+
+/* the outputs at kernel_time for inputs given there, the road by time or by position (at) */
+static int outputs_for(TireKernel* kn, const double inputs[KERNEL_N_INPUTS], int at,
+                       double report[KERNEL_REPORT])
 {
     double h = kn->has_last ? kn->last_step : NAN;
-    if ((kernel_step_problems(kn, 1.0, inputs) &
+    if ((step_problems(kn, 1.0, inputs, at) &
          ~(KERNEL_SHORT_H | KERNEL_UNRESOLVED_H | KERNEL_LONG_H)) != 0) {
         return KERNEL_REFUSED;  /* the inputs alone are checked: there is no step */
     }
-    if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h, kn->heights,
-                  kn->slopes) != 0) {
+    if (at) {
+        read_road_at(kn, inputs[2], inputs[3]);
+    } else if (road_read(&kn->road, &kn->mem, kn->elapsed, inputs[2], inputs[3], h,
+                         kn->heights, kn->slopes) != 0) {
         return KERNEL_NO_MEMORY;
     }
     if (start(kn, inputs[0], inputs[1], kn->heights, kn->slopes) != 0) return KERNEL_NO_MEMORY;
@@ -1179,6 +1250,59 @@ int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
     fill_report(kn, report);
     return KERNEL_OK;
 }
+
+int kernel_outputs_with(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
+                        double report[KERNEL_REPORT])
+{
+    return outputs_for(kn, inputs, 0, report);
+}
+
+int kernel_outputs_at(TireKernel* kn, const double inputs[KERNEL_N_INPUTS],
+                      double report[KERNEL_REPORT])
+{
+    return outputs_for(kn, inputs, 1, report);
+}
+
+int kernel_set_road(TireKernel* kn, const double* s, const double* z, const double* at, int n,
+                    char* why, size_t why_size)
+{
+    char text[256] = "", a[40], b[40];
+    int i;
+    if (n < 0 || (n > 0 && (s == NULL || z == NULL || at == NULL))) {
+        snprintf(text, sizeof text, "the road's samples: %d of them, or an array missing (a "
+                 "count >= 0 and three arrays of it)", n);
+    } else if (!kn->road_on && kn->has_last) {
+        snprintf(text, sizeof text, "this kernel has read the road by time: a road by "
+                 "position is set before its first step or after a reset");
+    }
+    for (i = 0; i < n && text[0] == '\0'; i++) {
+        if (!(fabs(s[i]) <= DBL_MAX) || (i > 0 && !(s[i] > s[i - 1]))) {
+            py_repr(s[i], a, sizeof a);
+            py_repr(i > 0 ? s[i - 1] : -INFINITY, b, sizeof b);
+            snprintf(text, sizeof text, "the road's sample %d is at %s m, after %s m: its "
+                     "positions must be finite and increase", i, a, b);
+        } else if (!(fabs(z[i]) <= SPEC_MAX_STATE_DISPLACEMENT_M) || !(fabs(at[i]) <= DBL_MAX)) {
+            py_repr(z[i], a, sizeof a);
+            py_repr(at[i], b, sizeof b);
+            snprintf(text, sizeof text, "the road's sample %d has the height %s m and the "
+                     "integral %s m^2: a height is finite and within %g m", i, a, b,
+                     SPEC_MAX_STATE_DISPLACEMENT_M);
+        }
+    }
+    if (why != NULL && why_size > 0) snprintf(why, why_size, "%s", text);
+    if (text[0] != '\0') return KERNEL_REFUSED;
+    kn->road_on = 1;
+    kn->road_s = s;
+    kn->road_z = z;
+    kn->road_at = at;
+    kn->road_n = n;
+    kn->road_guess = n / 2;
+    return KERNEL_OK;
+}
+
+int kernel_road_on(const TireKernel* kn) { return kn->road_on; }
+
+double kernel_road_position(const TireKernel* kn) { return kn->seen_x; }
 
 /* q with the pending ramp added (the state the reference kernel holds) */
 static void settle(TireKernel* kn)
@@ -1210,6 +1334,7 @@ void kernel_reset(TireKernel* kn, double start_time)
     }
     kn->seen_z = kn->seen_vz = 0.0;
     kn->given_vz = kn->change = kn->h_change = 0.0;
+    kn->seen_x = kn->seen_vx = kn->given_vx = kn->change_vx = 0.0;
     kn->ring_out[0] = kn->ring_out[1] = kn->ring_out[2] = 0.0;
     kn->last = NULL;
     kn->has_last = 0;
@@ -1308,6 +1433,8 @@ void kernel_destroy(TireKernel* kn)
     mem_free(&mem, kn->cos);
     mem_free(&mem, kn->sec);
     mem_free(&mem, kn->x_road);
+    mem_free(&mem, kn->x_lo);
+    mem_free(&mem, kn->x_hi);
     mem_free(&mem, kn->k);
     mem_free(&mem, kn->c);
     mem_free(&mem, kn->f_static);
@@ -1374,6 +1501,7 @@ int kernel_create(const TireContract* c, const Memory* mem, double start_time,
         COPY(d, d, kn->rows * kn->cols) || COPY(e, e, kn->rows * kn->cols) ||
         COPY(weight, point_weight, P * S) || COPY(cos, point_cos, P) ||
         COPY(sec, point_sec, P) || COPY(x_road, point_x_road, P) ||
+        COPY(x_lo, window_lo_m, P) || COPY(x_hi, window_hi_m, P) ||
         COPY(k, point_stiffness, P) || COPY(c, point_damping, P) ||
         COPY(f_static, f_static, P) || COPY(pen_static, pen_static, P)) {
         goto memory;
@@ -1486,12 +1614,14 @@ memory:
 /* -- the kernel's state -------------------------------------------------------------------------
  * int32: K, P, history length, has_last; then doubles: start time, elapsed time, its carry,
  * last step, seen z and z', ring_out (3), outputs (6), the rim's rate given last, its last
- * change and that change's step, q (2K), df, penetration, rate, seen
+ * change and that change's step, the road by position's seen x and x' (where the road was read
+ * last), the x rate given last and its last change (all 0 with the road by time), q (2K), df,
+ * penetration, rate, seen
  * heights, seen slopes (P each), history t, z, v; then the active flags (P bytes). All
  * little-endian as x86-64 and arm64 write them; the numpy kernel writes the same bytes. */
 
 #define STATE_INTS 4
-#define STATE_HEAD 18
+#define STATE_HEAD 22
 
 static const char* const OUTPUT_NAMES[KERNEL_N_OUTPUTS] = {
     "rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"};
@@ -1545,6 +1675,10 @@ void kernel_state_write(TireKernel* kn, unsigned char* out)
     head[15] = kn->given_vz;
     head[16] = kn->change;
     head[17] = kn->h_change;
+    head[18] = kn->seen_x;
+    head[19] = kn->seen_vx;
+    head[20] = kn->given_vx;
+    head[21] = kn->change_vx;
     put_doubles(&out, head, STATE_HEAD);
     put_doubles(&out, (const double*)kn->q, 2 * K);
     put_doubles(&out, kn->df, P);
@@ -1608,6 +1742,14 @@ static void history_problems(const TireKernel* kn, const unsigned char* in, size
     double slack = SPEC_SAME_POINT_EPS * (fabs(now) + w->horizon + 1.0), newest, earliest;
     char text[512];
     int i, increasing = 1;
+    if (kn->road_on) {
+        if (history > 0) {
+            snprintf(text, sizeof text, "its road history holds %d samples, but this kernel "
+                     "reads the road by position and keeps none", history);
+            add_why(why, why_size, text);
+        }
+        return;
+    }
     if (!w->delayed) {
         if (history > 0) {
             snprintf(text, sizeof text, "its road history holds %d samples, but at rest the "
@@ -1664,6 +1806,33 @@ static void history_problems(const TireKernel* kn, const unsigned char* in, size
     }
 }
 
+/* the road by position's part of the head: where the road was read, within what a host gives;
+ * none with the road by time (core: kernel_numpy._position_problems) */
+static void position_problems(const TireKernel* kn, const unsigned char* in, char* why,
+                              size_t why_size)
+{
+    double x = get_double(in, 18), vx = get_double(in, 19), given = get_double(in, 20);
+    double change = get_double(in, 21);
+    char text[512], a[40], b[40], c[40];
+    py_repr(x, a, sizeof a);
+    py_repr(vx, b, sizeof b);
+    py_repr(given, c, sizeof c);
+    if (kn->road_on) {
+        if (!(fabs(x) <= SPEC_MAX_ROAD_POSITION_M && fabs(vx) <= SPEC_MAX_VELOCITY_M_S &&
+              fabs(given) <= SPEC_MAX_VELOCITY_M_S)) {
+            snprintf(text, sizeof text, "the position along the road it read the road at, %s "
+                     "m, its rate there, %s m/s, or the rate given last, %s m/s, is beyond what "
+                     "a host gives (%g m, %g m/s)", a, b, c, SPEC_MAX_ROAD_POSITION_M,
+                     SPEC_MAX_VELOCITY_M_S);
+            add_why(why, why_size, text);
+        }
+    } else if (x != 0.0 || vx != 0.0 || given != 0.0 || change != 0.0) {
+        snprintf(text, sizeof text, "it holds a position along the road (%s m) or its rates "
+                 "(%s m/s, given %s m/s), but this kernel reads the road by time", a, b, c);
+        add_why(why, why_size, text);
+    }
+}
+
 /* what the state holds against what a state of this tire means: a clock a run reaches, a road
  * history as the reader keeps it, forces that do not pull, displacements and rates within the
  * spec's bounds, and outputs that are the ones its own values give */
@@ -1706,6 +1875,7 @@ static void meaning_problems(const TireKernel* kn, const unsigned char* in, char
         add_why(why, why_size, text);
     }
     history_problems(kn, in, o_t, history, elapsed, last, has_last, why, why_size);
+    position_problems(kn, in, why, why_size);
     for (j = 0; j < P; j++) {
         double f = kn->f_static[j] + get_double(in, o_df + (size_t)j);
         double bound = kn->f_static[j] + kn->k[j] * (length + fabs(kn->pen_static[j]))
@@ -1890,6 +2060,10 @@ int kernel_state_apply(TireKernel* kn, const unsigned char* in)
     kn->given_vz = head[15];
     kn->change = head[16];
     kn->h_change = head[17];
+    kn->seen_x = head[18];
+    kn->seen_vx = head[19];
+    kn->given_vx = head[20];
+    kn->change_vx = head[21];
     memcpy(kn->q, p, sizeof(double) * (size_t)(2 * K));
     p += sizeof(double) * (size_t)(2 * K);
 #define TAKE(field)                                        \
