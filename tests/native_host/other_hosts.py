@@ -6,11 +6,12 @@ aborts its process on an FMU error, and ecospy needs libtbb on LD_LIBRARY_PATH a
 
 Every host runs the same loop: set the inputs, step h = 1e-4 s, read the outputs. The radial
 FMU: road_z drops. ``inplane``: the in-plane FMU's outputs, its wheel centre rolling at
-``speed`` along a level host road (road_z_i left at 0), lifted off the road and put back, and
-braked.
+``speed`` along a level host road (road_z_i left at 0), lifted off the road and put back
+(lift), and braked.
 """
 
 import json
+import math
 import sys
 
 RADIAL = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"]
@@ -23,6 +24,24 @@ H = 1e-4
 def road(k: int) -> float:
     """A 5 cm drop of the road for 15 ms: the tread leaves the road and lands."""
     return -0.05 if 100 <= k < 250 else 0.0
+
+
+#: In-plane only: the wheel centre's lift (m), when it starts and ends (steps), how long its way
+#: up and down takes (steps)
+LIFT_M, UP, DOWN, UP_STEPS, DOWN_STEPS = 0.025, 100, 220, 100, 150
+
+
+def lift(k: int) -> tuple[float, float]:
+    """In-plane only: the wheel centre lifted off the road (2.5 cm, the static deflection 1.6
+    cm) from 10 ms on and put back from 22 ms on, on (1 - cos) ramps: its height and its rate,
+    a wheel the host moves (it lands at about 2 m/s), not a jump, which no tire's inertia
+    follows."""
+    def ramp(j, steps):
+        u = min(max(j / steps, 0.0), 1.0)
+        return (0.5 * LIFT_M * (1.0 - math.cos(math.pi * u)),
+                0.5 * LIFT_M * math.pi / (steps * H) * math.sin(math.pi * u))
+    up, down = ramp(k - UP, UP_STEPS), ramp(k - DOWN, DOWN_STEPS)
+    return up[0] - down[0], up[1] - down[1]
 
 
 def torque(k: int) -> float:
@@ -38,9 +57,9 @@ def inputs(k: int) -> dict[str, float]:
     """The inputs each host sets before step k (their values at k H)."""
     if NAMES is not INPLANE:
         return {"road_z": road(k)}
-    speed = ROLLING["speed"]
-    return {"wheel_x": speed * k * H, "wheel_vx": speed,
-            "wheel_z": ROLLING["height"] - road(k), "wheel_torque": torque(k)}
+    speed, (height, rate) = ROLLING["speed"], lift(k)
+    return {"wheel_x": speed * k * H, "wheel_vx": speed, "wheel_z": ROLLING["height"] + height,
+            "wheel_vz": rate, "wheel_torque": torque(k)}
 
 
 def with_libcosimpy(fmu, load, speed, steps):

@@ -236,7 +236,8 @@ class TireInPlane(TireModal):
         beyond = road_file.leaves_extent(x + float(sim._x_lo.min()), x + float(sim._x_hi.max()))
         if beyond and self._extent_warning_armed:
             first, last = road_file.extent_m
-            self.log(MESSAGES["ROAD_EXTENT"] % (repr(self._now), repr(x), str(road_file.path),
+            self.log(MESSAGES["ROAD_EXTENT"] % (repr(float(self._now)), repr(float(x)),
+                                                str(road_file.path),
                                                 first, last), Fmi2Status.warning)
         self._extent_warning_armed = not beyond
 
