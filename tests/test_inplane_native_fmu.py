@@ -180,6 +180,10 @@ RUNS = {  # parameters, inputs at t, the host's road (or a road file), step, ste
     "cleat in the host's road": ({"speed": 10.0}, on_the_cleat, host_cleat, 1e-3, 110),
     "cleat in a profile file": ({"speed": 10.0}, on_the_cleat, "cleat.txt", 1e-3, 110),
     "cleat in an OpenCRG file": ({"speed": 10.0}, on_the_cleat, "cleat.crg", 1e-3, 110),
+    # at a tenth of the host step: the road read alike whatever the step cuts it into
+    "cleat in the host's road, 0.1 ms": ({"speed": 10.0}, on_the_cleat, host_cleat, 1e-4, 1100),
+    "cleat in an OpenCRG file, 0.1 ms": ({"speed": 10.0}, on_the_cleat, "cleat.crg", 1e-4,
+                                         1100),
     "brake": ({"speed": 10.0}, braking, None, 5e-4, 200),
     "wheel motion": ({"speed": 10.0}, wheel_moving, None, 1e-3, 100),
     "held wheel": ({"speed": 10.0, "wheel_free": False},
