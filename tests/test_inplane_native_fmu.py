@@ -784,3 +784,57 @@ def test_win64_under_wine_gives_the_linux64_and_fmpys_outputs(native_path, tmp_p
 
     assert said(linux) == said(windows)
     assert said(linux).count("status step 0") == steps
+
+
+def test_a_plain_c_host_gives_road_file_and_saves_and_restores_the_state(native_path,
+                                                                         road_files, tmp_path):
+    """native_host/host.c sets road_file with fmi2SetString (and reads it back), rolls over
+    the cleat in the file, serialises a state, steps on, restores the state from its bytes
+    and steps again: the same outputs to the bit, fmpy's outputs, and (under valgrind where
+    it is installed) no invalid access and no leak in the String and state code."""
+    zipfile.ZipFile(native_path).extractall(tmp_path)
+    guid = read_model_description(str(native_path)).guid
+    vr = {v.name: i for i, v in enumerate(inplane_fmu_variables())}
+    h, road_file = 1e-3, road_files["cleat.crg"]
+
+    def steps(first, last):
+        lines = []
+        for k in range(first, last):
+            given = wheel_inputs(10.0, k * h, **on_the_cleat(k * h))
+            lines += [f"real {vr[name]} {value!r}" for name, value in zip(WHEEL, given)]
+            lines.append(f"step {k * h!r} {h!r}")
+        return lines
+
+    commands = tmp_path / "commands.txt"
+    commands.write_text("\n".join([f"real {vr['speed']} 10.0",
+                                   f"string {vr['road_file']} {road_file}", "init"] +
+                                  steps(0, 60) + ["save"] + steps(60, 110) + ["restore"] +
+                                  steps(60, 110) + [f"string {vr['road_file']} other.crg",
+                                                    f"getstring {vr['road_file']}"])
+                        + "\n")
+    host = compile_host(tmp_path, windows=False)
+    binary = tmp_path / "binaries" / "linux64" / "TireInPlaneNative.so"
+    if shutil.which("valgrind"):
+        done = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full",
+                               "--errors-for-leak-kinds=definite,indirect", "-q", str(host),
+                               str(binary), guid, str(commands)],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-3000:]
+        lines = done.stdout.splitlines()
+    else:
+        lines = run_host(host, binary, guid, commands)
+    assert f"string {road_file}" in lines  # got back as set
+    assert any(f"road {road_file} (KDBI" in line for line in lines)  # the file it stepped on
+    statuses = [line for line in lines if line.startswith("status ")]
+    assert statuses[:3] == ["status real 0", "status string 0", "status init 0"]
+    assert "status save 0" in statuses and "status restore 0" in statuses
+    # fixed after initialisation: refused, the value kept
+    assert statuses[-2:] == ["status string 3", "status getstring 0"]
+    out = host_outputs(lines)[:, :len(OUTPUTS)]
+    assert out.shape[0] == 160
+    assert np.array_equal(out[60:110], out[110:])  # the restored state: the same bits
+    fmpy_run, _, _, _ = outputs_of(native_path, {"speed": 10.0}, on_the_cleat, "cleat.crg", h,
+                                   110, road_files)
+    # (valgrind runs the arithmetic on its own CPU: the same to rounding, not to the bit)
+    assert scaled_difference(out[:110], fmpy_run[1:], 10.0).max() < TOLERANCE
+    assert out[:, 0].max() > 1.5 * LOAD  # the cleat in the file was felt
