@@ -844,7 +844,7 @@ static void road_queries(const Model* model, int count, double x, double vx, dou
     double reach = front + fabs(vx) * step_s + spacing, newest, gap;
     int n = position_road_count(&model->road), i;
     newest = n > 0 ? position_road_s(&model->road)[n - 1] : -HUGE_VAL;
-    if (newest >= reach - SPEC_INPLANE_ROAD_QUERY_SLACK_M || n == 0) { /* the zone itself */
+    if (newest >= reach - SPEC_ROAD_QUERY_SLACK_M || n == 0) { /* the zone itself */
         for (i = 0; i < count; i++) out[i] = rear + (front - rear) * (double)i / (count - 1);
         return;
     }
@@ -900,7 +900,7 @@ static void show_outputs(const Model* model, double* values, double step_s)
     values[SPEC_VR_EFFECTIVE_ROLLING_RADIUS] = fabs(spin) > SPIN_AT_REST_RAD_S ? vx / spin
                                                                                : model->radius;
     values[SPEC_VR_LONGITUDINAL_SLIP] = (spin * model->radius - vx) /
-                                        fmax(fabs(vx), SPEC_INPLANE_SLIP_SPEED_FLOOR_M_S);
+                                        fmax(fabs(vx), SPEC_SLIP_SPEED_FLOOR_M_S);
     values[SPEC_VR_CONTACT_LENGTH] = hi > lo ? hi - lo : 0.0;
     if (model->file_open) {
         for (i = 0; i < ROAD_QUERIES; i++) values[SPEC_VR_ROAD_X_1 + i] = 0.0;
