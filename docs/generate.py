@@ -117,6 +117,8 @@ def _start_text(v) -> str:
         return "calculated"
     if isinstance(v.start, bool):
         return str(v.start).lower()
+    if isinstance(v.start, str):
+        return f'"{v.start}"'
     return f"{v.start:g}"
 
 
@@ -140,6 +142,31 @@ def inplane_fmu_variables_table() -> str:
     from tire_fmu.fmu.interface import inplane_fmu_variables
 
     return _variables_table(inplane_fmu_variables())
+
+
+#: The user's examples of docs/fmu.md, one per FMU, each a script run by
+#: tests/test_docs_examples.py and shown whole.
+EXAMPLES = {"example-tire-modal": "tire_modal_cleat.py",
+            "example-tire-modal-native": "tire_modal_native_quarter_car.py",
+            "example-tire-inplane": "tire_inplane_braking.py",
+            "example-tire-inplane-native": "tire_inplane_native_host_road.py"}
+
+
+def _example(file: str) -> str:
+    text = (ROOT / "docs" / "examples" / file).read_text().rstrip("\n")
+    return f"`docs/examples/{file}`:\n\n```python\n{text}\n```"
+
+
+for _name, _file in EXAMPLES.items():
+    generator(_name)(functools.partial(_example, _file))
+
+
+@value("radial-speed-slack")
+def _radial_speed_slack() -> str:
+    from tire_fmu.core.wheel_centre import RADIAL_SPEED_SLACK_FRACTION, RADIAL_SPEED_SLACK_M_S
+
+    return (f"{100 * RADIAL_SPEED_SLACK_FRACTION:g} % of `speed` or "
+            f"{RADIAL_SPEED_SLACK_M_S:g} m/s")
 
 
 @value("inplane-critical-fraction")

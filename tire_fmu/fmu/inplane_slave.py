@@ -237,8 +237,8 @@ class TireInPlane(TireModal):
         if beyond and self._extent_warning_armed:
             first, last = road_file.extent_m
             self.log(MESSAGES["ROAD_EXTENT"] % (repr(float(self._now)), repr(float(x)),
-                                                str(road_file.path),
-                                                first, last), Fmi2Status.warning)
+                                                str(road_file.path), first, last),
+                     Fmi2Status.warning)
         self._extent_warning_armed = not beyond
 
     def _refresh(self) -> bool:
@@ -307,8 +307,9 @@ def _road(named: dict, zone_length_m: float) -> tuple:
     except (RoadFileError, OSError) as error:
         text = str(error)
         what = text[len(path) + 2:] if text.startswith(f"{path}: ") else text
-        return PositionRoad(1.0), None, [Problem("road_file", path, "",
-                                                 MESSAGES["ROAD_FILE_ALLOWED"], what)]
+        return PositionRoad(1.0), None, [Problem(
+            "road_file", path, "", "an OpenCRG .crg or a two-column profile (distance m, "
+            "height m) file that can be read", what)]
     return road_file.road, road_file, []
 
 

@@ -1,0 +1,30 @@
+"""TireModal.fmu over a cleat in a road file, through fmpy's simulate_fmu.
+
+    python build_fmu.py -o dist                        # dist/TireModal.fmu
+    tire-fmu road cleat --out cleat.crg --lead-in 2    # 20 mm x 20 mm, 2 m along the road
+    python docs/examples/tire_modal_cleat.py dist/TireModal.fmu cleat.crg
+
+The cleat test of SAE J2730: the wheel centre held at the tire's loaded radius, rolling at
+10 m/s. wheel_z is left at its start value, the default tire's loaded radius at the default
+load, so the axle is where the tire carries that load.
+"""
+
+import sys
+
+import numpy as np
+from fmpy import simulate_fmu
+
+fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireModal.fmu", "cleat.crg")
+speed, h = 10.0, 1e-3                                  # m/s; the host's step, s
+t = np.arange(0.0, 0.4, h)
+signals = np.zeros(t.size, dtype=[("time", float), ("wheel_x", float), ("wheel_vx", float)])
+signals["time"] = t
+signals["wheel_x"] = 0.5 + speed * t                   # the wheel centre along the road, m
+signals["wheel_vx"] = speed
+result = simulate_fmu(fmu, start_values={"speed": speed, "road_file": road},
+                      input=signals, output=["rim_Fz", "rim_Fx", "loaded_radius", "in_contact"],
+                      output_interval=h, stop_time=t[-1])
+print(f"{fmu}: rim_Fz from {result['rim_Fz'][0]:.0f} N to a peak of "
+      f"{result['rim_Fz'].max():.0f} N over the cleat, rim_Fx from "
+      f"{result['rim_Fx'].min():.0f} to {result['rim_Fx'].max():.0f} N, loaded radius "
+      f"{result['loaded_radius'][0]:.4f} m")
