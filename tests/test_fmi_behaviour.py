@@ -1125,7 +1125,10 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "INPLANE_MAX_DEFLECTION_FRACTION", "INPLANE_HOST_ROAD_MARGIN_M",
              "INPLANE_SPIN_REBUILD_FRACTION", "INPLANE_RING_REBUILD_FRACTION",
              "INPLANE_MAX_SET_PASSES", "INPLANE_SETTLE_PASSES", "INPLANE_MIN_ENTERING_FRACTION",
-             "INPLANE_STATE_SPIN_FACTOR"}
+             "INPLANE_STATE_SPIN_FACTOR",
+             # the wheel centre's (core/wheel_centre.py, both tires): what slip reads at rest,
+             # how the road's query points decide a tie
+             "SLIP_SPEED_FLOOR_M_S", "ROAD_QUERY_SLACK_M"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)
 
 

@@ -6,11 +6,17 @@
  *
  * Commands, one per line:
  *   real VR VALUE | integer VR VALUE | boolean VR 0|1   set a variable (any phase)
+ *   string VR TEXT                                       set a String (TEXT: the rest of the
+ *                                                        line)
+ *   getstring VR                                         print fmi2GetString of it
  *   init                                                 setup, enter and exit initialisation
  *   step T H                                             doStep, then print the outputs
  *                                                        (the block spec.h of the FMU's
  *                                                        sources names: radial or in-plane)
- *   get VR...                                            print fmi2GetReal of the references
+ *   save                                                 fmi2GetFMUstate, serialise it, free
+ *                                                        it (the bytes kept)
+ *   restore                                              deserialise the bytes saved, set
+ *                                                        that state and free it
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,6 +81,16 @@ int main(int argc, char** argv)
         GET(fmi2DoStepTYPE*, fmi2DoStep)
         GET(fmi2TerminateTYPE*, fmi2Terminate)
         GET(fmi2FreeInstanceTYPE*, fmi2FreeInstance)
+        GET(fmi2SetStringTYPE*, fmi2SetString)
+        GET(fmi2GetStringTYPE*, fmi2GetString)
+        GET(fmi2GetFMUstateTYPE*, fmi2GetFMUstate)
+        GET(fmi2SetFMUstateTYPE*, fmi2SetFMUstate)
+        GET(fmi2FreeFMUstateTYPE*, fmi2FreeFMUstate)
+        GET(fmi2SerializedFMUstateSizeTYPE*, fmi2SerializedFMUstateSize)
+        GET(fmi2SerializeFMUstateTYPE*, fmi2SerializeFMUstate)
+        GET(fmi2DeSerializeFMUstateTYPE*, fmi2DeSerializeFMUstate)
+        fmi2Byte* saved = NULL;
+        size_t saved_size = 0;
         c = fmi2Instantiate("host", fmi2CoSimulation, argv[2], "", &callbacks, fmi2False, fmi2True);
         if (!c) {
             printf("instantiate failed\n");
@@ -99,6 +115,30 @@ int main(int argc, char** argv)
                 fmi2ValueReference r = vr;
                 fmi2Boolean v = x != 0.0;
                 status = fmi2SetBoolean(c, &r, 1, &v);
+            } else if (strcmp(word, "string") == 0 && sscanf(line, "%*s %u %n", &vr, &i) == 1) {
+                fmi2ValueReference r = vr;
+                fmi2String text = line + i;
+                line[strcspn(line, "\r\n")] = '\0';
+                status = fmi2SetString(c, &r, 1, &text);
+            } else if (strcmp(word, "getstring") == 0 && sscanf(line, "%*s %u", &vr) == 1) {
+                fmi2ValueReference r = vr;
+                fmi2String got = NULL;
+                status = fmi2GetString(c, &r, 1, &got);
+                printf("string %s\n", got != NULL ? got : "(null)");
+            } else if (strcmp(word, "save") == 0) {
+                fmi2FMUstate state = NULL;
+                status = fmi2GetFMUstate(c, &state);
+                status |= fmi2SerializedFMUstateSize(c, state, &saved_size) << 4;
+                free(saved);
+                saved = (fmi2Byte*)malloc(saved_size);
+                if (saved == NULL) return 2;
+                status |= fmi2SerializeFMUstate(c, state, saved, saved_size) << 8;
+                status |= fmi2FreeFMUstate(c, &state) << 12;
+            } else if (strcmp(word, "restore") == 0 && saved != NULL) {
+                fmi2FMUstate state = NULL;
+                status = fmi2DeSerializeFMUstate(c, saved, saved_size, &state);
+                status |= fmi2SetFMUstate(c, state) << 4;
+                status |= fmi2FreeFMUstate(c, &state) << 8;
             } else if (strcmp(word, "init") == 0) {
                 status = fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
                 status |= fmi2EnterInitializationMode(c) << 4;
@@ -116,6 +156,7 @@ int main(int argc, char** argv)
             printf("status %s %d\n", word, status);
         }
         fclose(commands);
+        free(saved);
         fmi2Terminate(c);
         fmi2FreeInstance(c);
     }

@@ -4,11 +4,14 @@ aborts its process on an FMU error, and ecospy needs libtbb on LD_LIBRARY_PATH a
     python other_hosts.py FMU HOST LOAD SPEED STEPS OUT.json [inplane]
         (HOST: fmpy, libcosimpy, ecospy)
 
-Every host runs the same loop: set road_z, step h = 1e-4 s, read the outputs. ``inplane``: the
-in-plane FMU's outputs, and its wheel braked too (wheel_torque set with road_z).
+Every host runs the same loop: set the inputs, step h = 1e-4 s, read the outputs. The radial
+FMU: road_z drops. ``inplane``: the in-plane FMU's outputs, its wheel centre rolling at
+``speed`` along a level host road (road_z_i left at 0), lifted off the road and put back
+(lift), and braked.
 """
 
 import json
+import math
 import sys
 
 RADIAL = ["rim_Fz", "rim_Fx", "contact_Fz", "deflection", "contact_length", "tread_deflection"]
@@ -23,17 +26,40 @@ def road(k: int) -> float:
     return -0.05 if 100 <= k < 250 else 0.0
 
 
+#: In-plane only: the wheel centre's lift (m), when it starts and ends (steps), how long its way
+#: up and down takes (steps)
+LIFT_M, UP, DOWN, UP_STEPS, DOWN_STEPS = 0.025, 100, 220, 100, 150
+
+
+def lift(k: int) -> tuple[float, float]:
+    """In-plane only: the wheel centre lifted off the road (2.5 cm, the static deflection 1.6
+    cm) from 10 ms on and put back from 22 ms on, on (1 - cos) ramps: its height and its rate,
+    a wheel the host moves (it lands at about 2 m/s), not a jump, which no tire's inertia
+    follows."""
+    def ramp(j, steps):
+        u = min(max(j / steps, 0.0), 1.0)
+        return (0.5 * LIFT_M * (1.0 - math.cos(math.pi * u)),
+                0.5 * LIFT_M * math.pi / (steps * H) * math.sin(math.pi * u))
+    up, down = ramp(k - UP, UP_STEPS), ramp(k - DOWN, DOWN_STEPS)
+    return up[0] - down[0], up[1] - down[1]
+
+
 def torque(k: int) -> float:
     """In-plane only: a brake torque from 5 ms on."""
     return -2500.0 if k >= 50 else 0.0
 
 
+#: In-plane only: the speed and the wheel centre's height at load (its start value)
+ROLLING = {"speed": 0.0, "height": 0.0}
+
+
 def inputs(k: int) -> dict[str, float]:
-    """The inputs each host sets before step k."""
-    values = {"road_z": road(k)}
-    if NAMES is INPLANE:
-        values["wheel_torque"] = torque(k)
-    return values
+    """The inputs each host sets before step k (their values at k H)."""
+    if NAMES is not INPLANE:
+        return {"road_z": road(k)}
+    speed, (height, rate) = ROLLING["speed"], lift(k)
+    return {"wheel_x": speed * k * H, "wheel_vx": speed, "wheel_z": ROLLING["height"] + height,
+            "wheel_vz": rate, "wheel_torque": torque(k)}
 
 
 def with_libcosimpy(fmu, load, speed, steps):
@@ -107,7 +133,12 @@ def with_fmpy(fmu, load, speed, steps):
 if __name__ == "__main__":
     fmu, host, load, speed, steps, out = sys.argv[1:7]
     if sys.argv[7:] == ["inplane"]:
+        from fmpy import read_model_description
+
         NAMES = INPLANE
+        ROLLING["speed"] = float(speed)
+        ROLLING["height"] = float(next(v.start for v in read_model_description(fmu)
+                                       .modelVariables if v.name == "wheel_z"))
     run = {"fmpy": with_fmpy, "libcosimpy": with_libcosimpy, "ecospy": with_ecospy}[host]
     rows = run(fmu, float(load), float(speed), int(steps))
     with open(out, "w") as stream:

@@ -542,6 +542,8 @@ class PositionRoad(_WindowMeans):
                     grown = np.zeros((3, max(64, 2 * live + 2)))
                     grown[:, :live] = b[:, lo:hi]
                     k -= lo
+                    if first_changed is not None:  # its index moves with the samples
+                        first_changed -= lo
                     self._buffer, b, self._lo, self._hi, lo, hi = grown, grown, 0, live, 0, live
                 b[:, k + 1:hi + 1] = b[:, k:hi].copy()
                 b[0, k], b[1, k] = x, z

@@ -23,6 +23,11 @@ SLIP_SPEED_FLOOR_M_S = 0.1
 #: costs).
 RADIAL_SPEED_SLACK_M_S = 0.5
 RADIAL_SPEED_SLACK_FRACTION = 0.1
+#: The host road's samples reach where the next step needs them when they end at most this
+#: short of it (m, far below any road's resolution): the tie a step's travel that is a whole
+#: number of point spacings makes is decided alike however the positions round (the native
+#: FMUs' differ from the Python ones' by 1e-13 m), so both runtimes ask for the same road.
+ROAD_QUERY_SLACK_M = 1e-6
 
 
 def longitudinal_slip(spin_rad_s: float, radius_m: float, speed_m_s: float) -> float:
@@ -55,7 +60,7 @@ def road_queries(count: int, wheel_x_m: float, wheel_vx_m_s: float, step_s: floa
     rear, front = wheel_x_m + rear_m, wheel_x_m + front_m
     reach = front + abs(wheel_vx_m_s) * step_s + spacing_m
     newest = float(held_m[-1]) if len(held_m) else -math.inf
-    if newest >= reach or not len(held_m):
+    if newest >= reach - ROAD_QUERY_SLACK_M or not len(held_m):
         return rear + (front - rear) * np.arange(count) / (count - 1)
     gap = max(spacing_m, (reach - newest) / count)
     return newest + gap * np.arange(1, count + 1)

@@ -148,16 +148,20 @@ def build_inplane_fmu(out: str | Path = ".", validate: bool = True, tire=None) -
 
 
 def inplane_loaded_radius(values: dict) -> float:
-    """The in-plane tire's loaded radius (m) with these tire data (the rest the FMUs'
-    defaults) at the default load and settings: wheel_z's start value, so that a host that
-    leaves it unset has the tire carry its load."""
+    """The in-plane tire's loaded radius (m) with these values by FMU parameter name: the
+    tire data, and the operating point (load, speed, n_elements, ...) where given (the rest
+    the FMUs' defaults): wheel_z's start value, so that a host that leaves it unset has the
+    tire carry its load."""
     from ..core.inplane import TANGENTIAL_RANGES
-    from ..core.inplane_host import HostSettings, build_host_stepper
+    from ..core.inplane_host import FMU_NAMES, HostSettings, build_host_stepper
     from ..core.parameters import TIRE_FIELDS
 
+    operating = {core: values[name] for core, name in FMU_NAMES.items() if name in values}
+    if "n_elements" in operating:
+        operating["n_elements"] = int(operating["n_elements"])
     settings = HostSettings(tire={k: v for k, v in values.items() if k in TIRE_FIELDS},
                             tangential={k: v for k, v in values.items()
-                                        if k in TANGENTIAL_RANGES})
+                                        if k in TANGENTIAL_RANGES}, **operating)
     return build_host_stepper(settings, "numpy").stepper.loaded_radius_m
 
 

@@ -47,10 +47,13 @@ def same_fixed_value(given: float, fixed: float) -> bool:
 
 from ..core.step_limits import (  # noqa: E402, F401
     MAX_DELAY_STEPS,
+    MAX_DISPLACEMENT_M,
     MAX_HISTORY_SAMPLES,
     MAX_ROAD_HEIGHT_M,
     MAX_ROAD_POSITION_M,
     MAX_STEP_S,
+    MAX_TORQUE_N_M,
+    MAX_VELOCITY_M_S,
 )
 
 #: The core's names for the inputs where the FMU variables differ, and the value that means
@@ -361,9 +364,20 @@ def road_parameters() -> list[FmuVariable]:
 
 
 #: The largest magnitude of an input, by name where it differs from its unit's
-#: (slave.INPUT_LIMITS): positions along the road, heights above its datum.
+#: (INPUT_UNIT_LIMITS): positions along the road, heights above its datum.
 INPUT_NAME_LIMITS = {"wheel_x": MAX_ROAD_POSITION_M, "wheel_z": MAX_ROAD_HEIGHT_M,
                      **{f"road_z_{i}": MAX_ROAD_HEIGHT_M for i in range(1, ROAD_QUERIES + 1)}}
+#: The largest magnitude of an input by its unit (beyond it a product inside a step could
+#: overflow); a unit not listed: a displacement's.
+INPUT_UNIT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TORQUE_N_M,
+                     "rad/s": MAX_VELOCITY_M_S}
+
+
+def input_limit(v: FmuVariable) -> float:
+    """The largest magnitude input ``v`` takes (spec INPUT_RANGE beyond it): by its name
+    (INPUT_NAME_LIMITS), else by its unit. Both runtimes check this one rule: the Python FMUs
+    here, the native ones on the limit spec.h's variable rows carry."""
+    return INPUT_NAME_LIMITS.get(v.name) or INPUT_UNIT_LIMITS.get(v.unit, MAX_DISPLACEMENT_M)
 
 
 # -- the in-plane tire's FMU (TireInPlane): the ring with tangential motion, friction, Fx, My --

@@ -59,14 +59,13 @@ from tire_fmu.core.contact_dynamics import (
 )
 from tire_fmu.core.free_ring import RingTruncation
 from tire_fmu.core.parameters import TIRE_FIELDS, ParameterError, validate, value_text
-from tire_fmu.core.step_limits import MAX_TORQUE_N_M
 from tire_fmu.file_checks import FileContentError, load_json, read_text
 from tire_fmu.fmu.interface import (
     BAKED_PARAMETERS_FILE,
     FMU_NAMES,
     FMU_UNSET,
     IN_CONTACT,
-    INPUT_NAME_LIMITS,
+    INPUT_UNIT_LIMITS,
     INPUTS,
     MAX_DELAY_STEPS,
     MAX_STEP_S,
@@ -75,6 +74,7 @@ from tire_fmu.fmu.interface import (
     TIME_REL_TOLERANCE,
     FmuVariable,
     fmu_variables,
+    input_limit,
 )
 from tire_fmu.fmu.spec import (
     CALL_MASKS,
@@ -766,14 +766,13 @@ def _model_part_problem(simulator: ContactSimulator, model: bytes, values: list,
     return "; ".join(problems) or None
 
 
-#: What an input may be, by its unit (beyond it a product inside a step could overflow).
-INPUT_LIMITS = {"m": MAX_DISPLACEMENT_M, "m/s": MAX_VELOCITY_M_S, "N.m": MAX_TORQUE_N_M,
-                "rad/s": MAX_VELOCITY_M_S}
+#: What an input may be, by its unit (interface.INPUT_UNIT_LIMITS; by name: input_limit).
+INPUT_LIMITS = INPUT_UNIT_LIMITS
 
 
 def _input_problem(v: FmuVariable, value) -> str | None:
     """Why input ``v`` cannot take ``value`` (spec INPUT_RANGE), or None."""
-    limit = INPUT_NAME_LIMITS.get(v.name) or INPUT_LIMITS.get(v.unit, MAX_DISPLACEMENT_M)
+    limit = input_limit(v)
     if abs(value) <= limit:
         return None
     return MESSAGES["INPUT_RANGE"] % (v.name, repr(float(value)), v.unit, limit, limit, v.unit)

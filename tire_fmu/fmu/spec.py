@@ -45,6 +45,7 @@ from ..core import (
     standing_waves,
     step_limits,
     stepping,
+    wheel_centre,
 )
 from .interface import (
     FMU_NAMES,
@@ -59,6 +60,7 @@ from .interface import (
     TIME_REL_TOLERANCE,
     FmuVariable,
     fmu_variables,
+    input_limit,
 )
 
 #: Core names -> the FMU's names for the same thing, applied to every core message an FMU logs.
@@ -153,6 +155,8 @@ CONSTANTS: dict[str, float | int] = {
     "INPLANE_MAX_FORCE_LOADS": inplane_contact.MAX_FORCE_LOADS,
     "INPLANE_STATE_DEFORMATION_FRACTION": inplane_contact.STATE_DEFORMATION_FRACTION,
     "INPLANE_MAX_ROAD_SAMPLES": inplane_contact.MAX_ROAD_SAMPLES,
+    "SLIP_SPEED_FLOOR_M_S": wheel_centre.SLIP_SPEED_FLOOR_M_S,
+    "ROAD_QUERY_SLACK_M": wheel_centre.ROAD_QUERY_SLACK_M,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,
@@ -284,6 +288,8 @@ MESSAGES: dict[str, str] = {
     "PARAMETER_FIXED": "%s = %s: parameters are fixed after initialisation (they define the "
                        "model built there); reset the FMU to change them",
     "NO_STRINGS": "%s has no String variables",
+    "ROAD_FILE_ALLOWED": "an OpenCRG .crg or a two-column profile (distance m, height m) "
+                         "file that can be read",
     "ROAD_EXTENT": "at t = %s s the contact zone (wheel_x = %s m) reaches beyond the road file "
                    "%s (%.6g to %.6g m along it): the road is level at its end heights there "
                    "(said again if it leaves the file's road again after coming back)",
@@ -567,8 +573,9 @@ _C_CAUSALITY = {"input": "SPEC_INPUT", "output": "SPEC_OUTPUT", "parameter": "SP
 
 def _variable_row(v: FmuVariable) -> str:
     start = 0.0 if v.start is None or v.type == "String" else float(v.start)
+    limit = input_limit(v) if v.causality == "input" else 0.0
     return (f"    {{{_c_string(v.name)}, {_C_TYPES[v.type]}, {_C_CAUSALITY[v.causality]}, "
-            f"{_c_number(start)}, {_c_string(v.unit)}}},")
+            f"{_c_number(start)}, {_c_string(v.unit)}, {_c_number(float(limit))}}},")
 
 
 def _field_row(f: parameters.FieldSpec, name: str) -> str:
@@ -607,6 +614,7 @@ def c_header(variables: tuple[FmuVariable, ...] | None = None) -> str:
         "    SpecCausality causality;",
         "    double start; /* the default; an export's own start values are in export.h */",
         "    const char* unit;",
+        "    double limit; /* an input's largest magnitude (interface.input_limit), else 0 */",
         "} SpecVariable;",
         "",
         "static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {",

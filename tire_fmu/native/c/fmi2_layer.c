@@ -29,6 +29,9 @@
 /* export.h holds one start value per variable of spec.h */
 typedef char export_matches_spec[sizeof EXPORT_START_VALUES / sizeof EXPORT_START_VALUES[0]
                                  == SPEC_N_VARIABLES ? 1 : -1];
+typedef char export_strings_match_spec[sizeof EXPORT_START_STRINGS /
+                                       sizeof EXPORT_START_STRINGS[0] == SPEC_N_VARIABLES
+                                       ? 1 : -1];
 
 #define MESSAGE_SIZE 2048
 
@@ -44,8 +47,8 @@ typedef struct {
     double time, start_time;
     int stale;            /* inputs set since the outputs were computed */
     double values[SPEC_N_VARIABLES];
-    /* the String variables' values (NULL: ""), those the model was built with, and while a
-     * state's model is built the state's (string_view) */
+    /* the String variables' values (NULL: the export's start value), those the model was
+     * built with, and while a state's model is built the state's (string_view) */
     char* strings[SPEC_N_VARIABLES];
     char* built_strings[SPEC_N_VARIABLES];
     char* const* string_view;
@@ -237,10 +240,16 @@ static void start_values(Instance* inst)
     set_reason(inst, NULL);
 }
 
+/* a String variable's value in texts (NULL: its start value) */
+static const char* text_of(char* const* texts, int vr)
+{
+    if (texts[vr] != NULL) return texts[vr];
+    return EXPORT_START_STRINGS[vr] != NULL ? EXPORT_START_STRINGS[vr] : "";
+}
+
 static const char* string_of(const Instance* inst, int vr)
 {
-    const char* text = inst->string_view != NULL ? inst->string_view[vr] : inst->strings[vr];
-    return text != NULL ? text : "";
+    return text_of(inst->string_view != NULL ? inst->string_view : inst->strings, vr);
 }
 
 /* ModelHost.string: a String parameter's value as the model is built with it */
@@ -263,14 +272,15 @@ static void release_strings(Instance* inst, char** strings)
     }
 }
 
-/* strings[] := the texts (NULL entries: ""); 0, or -1 out of memory (nothing changed) */
+/* strings[] := copies of the texts (NULL entries, the start values, stay NULL); 0, or -1 out
+ * of memory (nothing changed) */
 static int take_strings(Instance* inst, char** strings, char* const* texts)
 {
     char* copies[SPEC_N_VARIABLES];
     int vr;
     for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
         copies[vr] = NULL;
-        if (texts[vr] == NULL || texts[vr][0] == '\0') continue;
+        if (texts[vr] == NULL) continue;
         copies[vr] = copy_text(inst, texts[vr]);
         if (copies[vr] == NULL) {
             release_strings(inst, copies);
@@ -510,22 +520,13 @@ static const char* type_name(SpecType type)
                                   : "Boolean";
 }
 
-/* The largest magnitude an input may have: a position (m), a rate (m/s, rad/s) or a torque
- * (N.m), as the Python FMU's INPUT_LIMITS. NaN fails the comparison with it, so one test
- * refuses both. */
-static double input_limit(const SpecVariable* v)
-{
-    size_t n = strlen(v->unit);
-    if (v->unit[0] == 'N') return SPEC_MAX_TORQUE_N_M;
-    return n >= 2 && v->unit[n - 2] == '/' && v->unit[n - 1] == 's' ? SPEC_MAX_VELOCITY_M_S
-                                                                     : SPEC_MAX_DISPLACEMENT_M;
-}
-
-/* why input v cannot take x (SPEC_MSG_INPUT_RANGE), or NULL */
+/* why input v cannot take x (SPEC_MSG_INPUT_RANGE), or NULL: beyond the largest magnitude
+ * its row carries (the Python FMUs' rule, interface.input_limit: by name, else by unit). NaN
+ * fails the comparison with it, so one test refuses both. */
 static const char* input_problem(const SpecVariable* v, double x, char* why, size_t size)
 {
     char text[40];
-    double limit = input_limit(v);
+    double limit = v->limit;
     if (fabs(x) <= limit) return NULL;
     number(text, x);  /* as the core's StepError shows it: repr, then the unit */
     snprintf(why, size, SPEC_MSG_INPUT_RANGE, v->name, text, v->unit, limit, limit, v->unit);
@@ -1045,7 +1046,8 @@ static int same_strings(char* const* a, char* const* b)
 {
     int vr;
     for (vr = 0; vr < SPEC_N_VARIABLES; vr++) {
-        if (strcmp(a[vr] != NULL ? a[vr] : "", b[vr] != NULL ? b[vr] : "") != 0) return 0;
+        if (SPEC_VARIABLES[vr].type == SPEC_STRING && strcmp(text_of(a, vr), text_of(b, vr)) != 0)
+            return 0;
     }
     return 1;
 }

@@ -5,19 +5,24 @@
  * At initialisation the parameters are checked as core/inplane_host.py's build_host_stepper
  * checks them, in its order and words (every problem of the data at once; then the critical
  * speed, which needs the tire; then what needs the built model: the deflection and the
- * footprint against the zone), and the model is built by one call, inplane_model_build. Each
- * step then does what core/inplane_contact.py's InPlaneStepper.advance does, line for line:
- * the host's values taken as those at the step's start (the rim's jump from where the last
- * step's extension left it taken off the tire's coordinates), extended over the step along
- * their rates and the rates' last change (input_path), cut into the tire's own steps
- * (substeps: whole step_size steps, or equal shorter ones ending exactly at t + h), a free
- * wheel's step
- * following its spin (_follow_spin: the tread's terms rebuilt when the spin has moved by
- * SPEC_INPLANE_SPIN_REBUILD_FRACTION, the ring's by SPEC_INPLANE_RING_REBUILD_FRACTION), the
- * host's road kept along the road as it passes (HostRoad), and inplane_step.c's step. A step
- * whose sets do not settle is undone and refused (MODEL_DISCARD), as the Python FMU rolls
- * back. The FMU state's model part is the Python stepper's state bytes (INPLANE2) after the
- * layer's two flags. */
+ * footprint against the zone), and the model is built by one call, inplane_model_build; the
+ * road is the road_file's (road_file.c, refused naming road_file, the path and what is wrong,
+ * with the other problems) or the host's (position_road.c). Each step then does what
+ * core/inplane_contact.py's InPlaneStepper.advance_wheel and advance do, line for line: the
+ * host's road samples taken in (road_z_i at the road_x_i last asked for), the wheel centre
+ * mapped onto the rim's deviations from the origin (its position and the road's height under
+ * it at the first step), the host's values taken as those at the step's start (the rim's jump
+ * from where the last step's extension left it taken off the tire's coordinates), extended
+ * over the step along their rates and the rates' last change (input_path), cut into the
+ * tire's own steps (substeps: whole step_size steps, or equal shorter ones ending exactly at
+ * t + h), a free wheel's step following its spin (_follow_spin: the tread's terms rebuilt when
+ * the spin has moved by SPEC_INPLANE_SPIN_REBUILD_FRACTION, the ring's by
+ * SPEC_INPLANE_RING_REBUILD_FRACTION), the road read by position under every contact point
+ * at each of them (road_samples.c), and inplane_step.c's step. A step whose sets do not
+ * settle is undone and refused (MODEL_DISCARD), as the Python FMU rolls back. The outputs
+ * are the Python FMU's (_show_outputs: the stepper's wheel_outputs and road_queries). The FMU
+ * state's model part is the Python stepper's state bytes (INPLANE3) after the layer's two
+ * flags. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -30,11 +35,17 @@
 #include "inplane_step.h"
 #include "model.h"
 #include "model_problems.h"
+#include "position_road.h"
+#include "road_file.h"
+#include "road_samples.h"
 #include "spec.h"
 
 #define MESSAGE_SIZE 1024
 #define FLAGS SPEC_STATE_MODEL_FLAGS
-#define ROAD_MIN_CAPACITY 64
+/* the host road's heights a step takes (road_z_i at road_x_i) */
+#define ROAD_QUERIES (SPEC_VR_ROAD_Z_16 - SPEC_VR_ROAD_Z_1 + 1)
+/* below this spin (rad/s) the effective rolling radius is R (InPlaneStepper.wheel_outputs) */
+#define SPIN_AT_REST_RAD_S 1e-9
 
 /* the stepper part of a state (core/inplane_contact.py's STEPPER_STATE_HEAD "<8sIIIqII":
  * magic, coordinates, points, road samples, steps taken, the tire's absolute DOFs, its basis'
@@ -43,8 +54,10 @@
 #define STEPPER_HEAD (8 + 4 + 4 + 4 + 8 + 4 + 4)
 /* given (6), rim (6), spin, road speed, the ring's spin, the wheel_rate given, the last host
  * step, the elapsed time, its carry, the tire's step length, the rates' last change (3) and
- * the step it was made over (STEPPER_SCALARS in the core) */
-#define STEPPER_SCALARS 24
+ * the step it was made over, the origin (position, road height; NaN before the first step)
+ * (STEPPER_SCALARS in the core) */
+#define STEPPER_SCALARS 26
+#define ORIGIN_AT 24
 
 struct Model {
     ModelHost host;
@@ -78,11 +91,19 @@ struct Model {
     double rate_given, h_given, elapsed, carry, saved_clock[5];
     double accel[3], h_accel, saved_accel[4]; /* the rates' last change and its step */
     double spin_now, speed_now, saved_spin, saved_speed, saved_ring_spin;
-    /* the host's road: rows s, z, at of road_capacity each, live samples [road_lo, road_hi) */
-    double* road;
-    int road_capacity, road_lo, road_hi, saved_lo, saved_hi;
-    double saved_last[3];
-    double front_m, keep_m;
+    /* the road: the road_file's (file_open; its path as given, for the warning), else the
+     * host's samples (road); the segment a read found last (where the next starts) */
+    RoadFile file;
+    int file_open;
+    char* road_path;
+    PositionRoad road, saved_road;
+    int road_guess;
+    /* the wheel-centre mode's origin (the wheel's position and the road's height under it at
+     * the first step; NaN before it), the contact points' reach behind and ahead of the
+     * wheel centre (m), the contact_point_spacing (m), whether the extent warning may be said */
+    double origin[2], saved_origin[2];
+    double rear_m, front_m, spacing_m;
+    int extent_armed;
     double start_time;
     int in_contact;
     char refusal[MESSAGE_SIZE];
@@ -107,10 +128,13 @@ static void model_clear(Model* model)
     const Memory* mem = &model->host.mem;
     void* owned[] = {model->cos_theta, model->x_lo, model->x_hi, model->height, model->rate,
                      model->rim_rows, model->projection, model->work, model->iwork, model->build_work,
-                     model->build_iwork, model->state_doubles, model->state_ints, model->road};
+                     model->build_iwork, model->state_doubles, model->state_ints, model->road_path};
     size_t i;
     inplane_model_free(&model->m);
     for (i = 0; i < sizeof owned / sizeof owned[0]; i++) mem_free(mem, owned[i]);
+    if (model->file_open) road_file_free(&model->file);
+    position_road_free(&model->road);
+    position_road_free(&model->saved_road);
     {
         ModelHost host = model->host;
         memset(model, 0, sizeof *model);
@@ -469,88 +493,6 @@ static void rim_force(const Model* model, const double* y, const double* yd, con
 #undef ROW
 }
 
-/* -- the host's road (core/obstacles.py's HostRoad) ----------------------------------------------
- * Samples are forgotten (road_lo moves on) as HostRoad forgets them, but the buffer is only
- * compacted at a step's start, so that a step's checkpoint is the live range and the newest
- * sample: a step only appends samples or rewrites its newest. */
-
-static double* road_s(const Model* model) { return model->road; }
-static double* road_z(const Model* model) { return model->road + model->road_capacity; }
-static double* road_at(const Model* model) { return model->road + 2 * (size_t)model->road_capacity; }
-
-/* a buffer of capacity samples holding the samples from index `from` on (from = road_lo
- * compacts; from = 0 keeps every index, as a step's checkpoint needs) */
-static int road_reserve(Model* model, int capacity, int from)
-{
-    const Memory* mem = &model->host.mem;
-    int kept = model->road_hi - from, row;
-    double* grown = (double*)mem_alloc(mem, 3 * (size_t)capacity, sizeof(double));
-    if (grown == NULL) return -1;
-    for (row = 0; row < 3 && model->road != NULL && kept > 0; row++)
-        memcpy(grown + (size_t)row * capacity,
-               model->road + (size_t)row * model->road_capacity + from,
-               (size_t)kept * sizeof(double));
-    mem_free(mem, model->road);
-    model->road = grown;
-    model->road_capacity = capacity;
-    model->road_lo -= from;
-    model->road_hi = kept;
-    return 0;
-}
-
-/* HostRoad.record: the host's height at the front when the tire has travelled distance_m */
-static int road_record(Model* model, double distance_m, double height_m)
-{
-    double s = distance_m + model->front_m, *rs = road_s(model), *rz, *ra;
-    int lo = model->road_lo, hi = model->road_hi;
-    if (hi > lo && s <= rs[hi - 1] + 1e-12 * fmax(1.0, fabs(s))) {
-        rz = road_z(model);
-        ra = road_at(model);
-        rz[hi - 1] = height_m;
-        if (hi - lo > 1)
-            ra[hi - 1] = ra[hi - 2] + 0.5 * (rs[hi - 1] - rs[hi - 2]) * (rz[hi - 1] + rz[hi - 2]);
-        return 0;
-    }
-    {   /* forget what lies behind the reach, keeping the sample just before it */
-        int a = lo, b = hi;
-        double reach = s - model->keep_m;
-        while (a < b) {
-            int mid = a + (b - a) / 2;
-            if (rs[mid] <= reach) a = mid + 1;
-            else b = mid;
-        }
-        model->road_lo = a - 1 > lo ? a - 1 : lo;
-    }
-    if (hi == model->road_capacity && road_reserve(model, 2 * hi + 2, 0) != 0) return -1;
-    rs = road_s(model);
-    rz = road_z(model);
-    ra = road_at(model);
-    rs[hi] = s;
-    rz[hi] = height_m;
-    ra[hi] = hi > model->road_lo ? ra[hi - 1] + 0.5 * (s - rs[hi - 1]) * (height_m + rz[hi - 1])
-                                 : 0.0;
-    model->road_hi = hi + 1;
-    return 0;
-}
-
-/* at a step's start: the forgotten samples go, and room for the step's own */
-static int road_compact(Model* model, int step_samples)
-{
-    int live = model->road_hi - model->road_lo, row;
-    int needed = live + step_samples + 2;
-    if (model->road_hi + step_samples + 2 <= model->road_capacity) return 0;
-    if (needed <= model->road_capacity && model->road_lo > 0) {
-        for (row = 0; row < 3; row++)
-            memmove(model->road + (size_t)row * model->road_capacity,
-                    model->road + (size_t)row * model->road_capacity + model->road_lo,
-                    (size_t)live * sizeof(double));
-        model->road_hi = live;
-        model->road_lo = 0;
-        return 0;
-    }
-    return road_reserve(model, needed > 2 * live + 2 ? needed : 2 * live + 2, model->road_lo);
-}
-
 /* -- building ------------------------------------------------------------------------------------ */
 
 static int allocate(Model* model)
@@ -591,7 +533,7 @@ static int allocate(Model* model)
         states[k]->contact = n;
         states[k]->stick = n + p;
     }
-    return road_reserve(model, ROAD_MIN_CAPACITY, 0);
+    return 0;
 }
 
 /* the road windows (core/contact.py's road_windows_m) on contact.c's zone */
@@ -610,15 +552,12 @@ static int windows(Model* model, const InPlaneRingData* data, const double* valu
     height = zone.radius - model->m.deflection_m;
     half = 0.5 * zone.dtheta / zone.per_node;
     model->front_m = -HUGE_VAL;
-    {
-        double rear = HUGE_VAL;
-        for (i = 0; i < model->np; i++) {
-            model->x_lo[i] = -height * tan(zone.point_theta[i] + half);
-            model->x_hi[i] = -height * tan(zone.point_theta[i] - half);
-            if (model->x_hi[i] > model->front_m) model->front_m = model->x_hi[i];
-            if (model->x_lo[i] < rear) rear = model->x_lo[i];
-        }
-        model->keep_m = model->front_m - rear + SPEC_INPLANE_HOST_ROAD_MARGIN_M;
+    model->rear_m = HUGE_VAL;
+    for (i = 0; i < model->np; i++) {
+        model->x_lo[i] = -height * tan(zone.point_theta[i] + half);
+        model->x_hi[i] = -height * tan(zone.point_theta[i] - half);
+        if (model->x_hi[i] > model->front_m) model->front_m = model->x_hi[i];
+        if (model->x_lo[i] < model->rear_m) model->rear_m = model->x_lo[i];
     }
     zone_free(&zone, &model->host.mem);
     return 0;
@@ -792,34 +731,182 @@ static int build(Model* model, const double* values, Problems* p)
     model->accel[0] = model->accel[1] = model->accel[2] = model->h_accel = 0.0;
     memset(model->given, 0, sizeof model->given);
     memset(model->rim, 0, sizeof model->rim);
-    model->road_lo = model->road_hi = 0;
-    if (road_record(model, 0.0, 0.0) != 0) {
-        PROBLEM(p, "out of memory while building the model (N = %d)", in.n_elements);
-        return MODEL_ERROR;
+    model->origin[0] = model->origin[1] = NAN;
+    model->spacing_m = in.point_spacing_m;
+    model->extent_armed = 1;
+    {   /* the host's samples, kept the zone and the margin behind the newest (inplane_slave's
+         * _road) */
+        double keep = in.zone_length_m + SPEC_INPLANE_HOST_ROAD_MARGIN_M;
+        if (position_road_init(&model->road, &model->host.mem, keep) != 0 ||
+            position_road_init(&model->saved_road, &model->host.mem, keep) != 0) {
+            PROBLEM(p, "out of memory while building the model (N = %d)", in.n_elements);
+            return MODEL_ERROR;
+        }
     }
     return MODEL_OK;
 }
 
-/* the outputs at the last step's end (no feed-through), in the table's order: rim_Fz,
- * rim_Fx, rim_My, contact_Fz, contact_Fx, wheel_spin, sliding_points; then in_contact */
-static void show_outputs(const Model* model, double* values)
+/* -- the road -------------------------------------------------------------------------------- */
+
+/* Python's repr of a text (the value a problem shows for a String, parameters.value_text):
+ * single quotes unless it holds one and no double quote, the backslash, the quote and the
+ * control characters escaped */
+static void text_repr(const char* text, char* out, size_t size)
+{
+    char quote = strchr(text, '\'') != NULL && strchr(text, '"') == NULL ? '"' : '\'';
+    size_t used = 0;
+    const unsigned char* c;
+#define PUT(...) \
+    used += (size_t)snprintf(out + (used < size ? used : size), used < size ? size - used : 0, \
+                             __VA_ARGS__)
+    PUT("%c", quote);
+    for (c = (const unsigned char*)text; *c != '\0'; c++) {
+        if (*c == '\\' || *c == (unsigned char)quote) PUT("\\%c", *c);
+        else if (*c == '\n') PUT("\\n");
+        else if (*c == '\r') PUT("\\r");
+        else if (*c == '\t') PUT("\\t");
+        else if (*c < 0x20 || *c == 0x7f) PUT("\\x%02x", *c);
+        else PUT("%c", *c);
+    }
+    PUT("%c", quote);
+#undef PUT
+}
+
+/* inplane_slave._road: the road_file's road, read at road_lateral_offset, or (no file) the
+ * host's; a file that cannot be used is a problem naming road_file, the path (the value) and
+ * what is wrong (road_file.c's words after the path); 1 with it added, else 0 */
+static int road_problem(Model* model, const double* values, Problems* p)
+{
+    const char* path = model->host.string != NULL
+                           ? model->host.string(model->host.layer, SPEC_VR_ROAD_FILE) : "";
+    /* (sized so that the problem's line holds them all: the path shown, then why) */
+    char why[PROBLEM_SIZE / 2 - 16], shown[PROBLEM_SIZE / 4], line[PROBLEM_SIZE / 2];
+    size_t length = strlen(path);
+    const char* what = why;
+    if (path[0] == '\0') return 0;
+    model->road_path = (char*)mem_alloc(&model->host.mem, length + 1, 1);
+    if (model->road_path == NULL) {
+        PROBLEM(p, "out of memory reading road_file");
+        return 1;
+    }
+    memcpy(model->road_path, path, length + 1);
+    if (road_file_open(path, values[SPEC_VR_ROAD_LATERAL_OFFSET], &model->host.mem,
+                       &model->file, why, sizeof why) == ROAD_FILE_OK) {
+        model->file_open = 1;
+        return 0;
+    }
+    if (strncmp(why, path, length) == 0 && why[length] == ':' && why[length + 1] == ' ')
+        what = why + length + 2;
+    text_repr(path, shown, sizeof shown);
+    snprintf(line, sizeof line, SPEC_MSG_PROBLEM, "road_file", shown,
+             SPEC_MSG_ROAD_FILE_ALLOWED);
+    PROBLEM(p, SPEC_MSG_REASON, line, what);
+    return 1;
+}
+
+/* the road's height (m) at x (m) along it: InPlaneStepper.road_height */
+static double road_height(const Model* model, double x)
+{
+    double height, integral;
+    if (model->file_open) {
+        road_samples_at(model->file.s, model->file.z, model->file.area, (int)model->file.n, x,
+                        &height, &integral);
+        return height;
+    }
+    return position_road_height(&model->road, x);
+}
+
+/* the mean height and its rate over each point's window, the wheel centre at shift along
+ * the road, the road passing at speed (the position road's window_reads) */
+static void road_reads(Model* model, double shift, double speed)
+{
+    if (model->file_open) {
+        road_samples_window_reads(model->file.s, model->file.z, model->file.area,
+                                  (int)model->file.n, model->x_lo, model->x_hi, model->np,
+                                  shift, speed, model->height, model->rate, &model->road_guess);
+    } else {
+        road_samples_window_reads(position_road_s(&model->road), position_road_z(&model->road),
+                                  position_road_at(&model->road),
+                                  position_road_count(&model->road), model->x_lo, model->x_hi,
+                                  model->np, shift, speed, model->height, model->rate,
+                                  &model->road_guess);
+    }
+}
+
+/* the loaded radius on a flat road (InPlaneStepper.loaded_radius_m) */
+static double loaded_radius(const Model* model) { return model->radius - model->m.deflection_m; }
+
+/* InPlaneStepper.road_queries: where the tire needs the host's road next, count positions */
+static void road_queries(const Model* model, int count, double x, double vx, double step_s,
+                         double* out)
+{
+    double spacing = model->spacing_m, rear = x + model->rear_m, front = x + model->front_m;
+    double reach = front + fabs(vx) * step_s + spacing, newest, gap;
+    int n = position_road_count(&model->road), i;
+    newest = n > 0 ? position_road_s(&model->road)[n - 1] : -HUGE_VAL;
+    if (newest >= reach - SPEC_ROAD_QUERY_SLACK_M || n == 0) { /* the zone itself */
+        for (i = 0; i < count; i++) out[i] = rear + (front - rear) * (double)i / (count - 1);
+        return;
+    }
+    gap = (reach - newest) / count;
+    if (gap < spacing) gap = spacing;
+    for (i = 0; i < count; i++) out[i] = newest + gap * (double)(i + 1);
+}
+
+/* InPlaneStepper.wheel_centre: where the last step left the wheel centre (position along
+ * the road, speed, height above the road's datum) */
+static void wheel_centre(const Model* model, double* x, double* vx, double* z)
+{
+    *x = model->origin[0] + model->speed * model->elapsed + model->rim[0];
+    *vx = model->speed + model->rim[1];
+    *z = model->origin[1] + loaded_radius(model) + model->rim[3];
+}
+
+/* the outputs at the last step's end (no feed-through) after a step of step_s, or before the
+ * first (the static tire, its wheel at the loaded radius above the road under wheel_x), as
+ * inplane_slave's _show_outputs: the forces, the wheel centre's outputs (wheel_outputs), where
+ * the host's road is wanted next (road_queries; 0 with a road file), in_contact */
+static void show_outputs(const Model* model, double* values, double step_s)
 {
     const InPlaneState* s = &model->now;
-    double f[3], fz = 0.0, fx = 0.0;
+    double f[3], fz = 0.0, fx = 0.0, x, vx, z, spin, lo = HUGE_VAL, hi = -HUGE_VAL;
     int i, sliding = 0;
     rim_force(model, s->y, s->yd, s->ydd, model->spin_now, model->rim, f);
     for (i = 0; i < model->np; i++) {
         fz += s->f_n[i];
         fx += model->m.points.kx[i] * s->e[i];
         sliding += s->contact[i] && !s->stick[i];
+        if (s->f_n[i] > 0.0) {
+            if (model->x_lo[i] < lo) lo = model->x_lo[i];
+            if (model->x_hi[i] > hi) hi = model->x_hi[i];
+        }
     }
+    spin = model->spin_now + (model->free_spin ? s->yd[model->ny - 1] : 0.0);
     values[SPEC_VR_RIM_FZ] = f[1];
     values[SPEC_VR_RIM_FX] = f[0];
     values[SPEC_VR_RIM_MY] = f[2];
     values[SPEC_VR_CONTACT_FZ] = fz;
     values[SPEC_VR_CONTACT_FX] = -fx;
-    values[SPEC_VR_WHEEL_SPIN] = model->spin_now + (model->free_spin ? s->yd[model->ny - 1] : 0.0);
+    values[SPEC_VR_WHEEL_SPIN] = spin;
     values[SPEC_VR_SLIDING_POINTS] = (double)sliding;
+    if (isnan(model->origin[0])) {
+        x = values[SPEC_VR_WHEEL_X];
+        vx = values[SPEC_VR_WHEEL_VX];
+        z = road_height(model, x) + loaded_radius(model);
+    } else {
+        wheel_centre(model, &x, &vx, &z);
+    }
+    values[SPEC_VR_LOADED_RADIUS] = z - road_height(model, x);
+    values[SPEC_VR_EFFECTIVE_ROLLING_RADIUS] = fabs(spin) > SPIN_AT_REST_RAD_S ? vx / spin
+                                                                               : model->radius;
+    values[SPEC_VR_LONGITUDINAL_SLIP] = (spin * model->radius - vx) /
+                                        fmax(fabs(vx), SPEC_SLIP_SPEED_FLOOR_M_S);
+    values[SPEC_VR_CONTACT_LENGTH] = hi > lo ? hi - lo : 0.0;
+    if (model->file_open) {
+        for (i = 0; i < ROAD_QUERIES; i++) values[SPEC_VR_ROAD_X_1 + i] = 0.0;
+    } else {
+        road_queries(model, ROAD_QUERIES, x, vx, step_s, values + SPEC_VR_ROAD_X_1);
+    }
     values[SPEC_VR_IN_CONTACT] = fz > 0.0 ? 1.0 : 0.0;
 }
 
@@ -828,11 +915,13 @@ int model_initialise(Model* model, const double* values, double start_time, doub
     Problems problems;
     char line[MESSAGE_SIZE + 64];
     clock_t started = clock();
-    int status = MODEL_OK, i, in_contact = 0;
+    int status = MODEL_OK, i, in_contact = 0, road;
     problems.count = 0;
     model_clear(model);
+    /* every problem at once, the road's first (inplane_slave._build) */
+    road = road_problem(model, values, &problems);
     data_problems(values, &problems);
-    if (problems.count == 0) status = build(model, values, &problems);
+    if (problems.count == road) status = build(model, values, &problems);
     if (problems.count) status = MODEL_ERROR;
     if (status != MODEL_OK) {
         for (i = 0; i < problems.count; i++) {
@@ -846,14 +935,27 @@ int model_initialise(Model* model, const double* values, double start_time, doub
     model->built = 1;
     memcpy(model->built_for, values, sizeof model->built_for);
     model->start_time = start_time;
-    show_outputs(model, out_values);
+    show_outputs(model, out_values, 0.0); /* no samples yet: the zone is asked for */
     model->in_contact = out_values[SPEC_VR_IN_CONTACT] != 0.0;
     for (i = 0; i < model->np; i++) in_contact += model->now.contact[i];
-    snprintf(line, sizeof line,
-             "TireInPlane (native) ready in %.3f s (CPU): N = %d, %d coordinates, %d contact "
-             "points (%d on the road), deflection %.4g mm, critical speed %.4g m/s",
-             (double)(clock() - started) / CLOCKS_PER_SEC, model->m.n_elements, model->ny,
-             model->np, in_contact, model->m.deflection_m * 1e3, model->critical);
+    {
+        char road_words[MESSAGE_SIZE / 2];
+        if (model->file_open) {
+            snprintf(road_words, sizeof road_words, "road %s (%s, %.6g to %.6g m along it)",
+                     model->road_path, model->file.format, model->file.s[0],
+                     model->file.s[model->file.n - 1]);
+        } else {
+            snprintf(road_words, sizeof road_words,
+                     "the host's road (%d heights a step at road_x_i)", ROAD_QUERIES);
+        }
+        snprintf(line, sizeof line,
+                 "TireInPlane (native) ready in %.3f s (CPU): N = %d, %d coordinates, %d "
+                 "contact points (%d on the road), deflection %.4g mm, critical speed %.4g "
+                 "m/s, loaded radius %.6g m, %s",
+                 (double)(clock() - started) / CLOCKS_PER_SEC, model->m.n_elements, model->ny,
+                 model->np, in_contact, model->m.deflection_m * 1e3, model->critical,
+                 loaded_radius(model), road_words);
+    }
     say(model, MODEL_OK, "logAll", line);
     return MODEL_OK;
 }
@@ -939,9 +1041,11 @@ static void copy_state(const Model* model, const InPlaneState* from, InPlaneStat
     memcpy(to->stick, from->stick, p * sizeof(int));
 }
 
-static void checkpoint(Model* model)
+/* InPlaneStepper.checkpoint (the host's samples too: a few hundred); 0, or -1 out of memory */
+static int checkpoint(Model* model)
 {
-    int hi = model->road_hi;
+    if (position_road_copy(&model->saved_road, &model->road) != 0) return -1;
+    memcpy(model->saved_origin, model->origin, sizeof model->origin);
     copy_state(model, &model->now, &model->saved);
     model->saved_steps = model->steps;
     memcpy(model->saved_given, model->given, sizeof model->given);
@@ -956,18 +1060,16 @@ static void checkpoint(Model* model)
     model->saved_spin = model->spin_now;
     model->saved_speed = model->speed_now;
     model->saved_ring_spin = model->m.build.ring_spin;
-    model->saved_lo = model->road_lo;
-    model->saved_hi = hi;
-    if (hi > model->road_lo) {
-        model->saved_last[0] = road_s(model)[hi - 1];
-        model->saved_last[1] = road_z(model)[hi - 1];
-        model->saved_last[2] = road_at(model)[hi - 1];
-    }
+    return 0;
 }
 
 static int rollback(Model* model)
 {
-    int hi = model->saved_hi, status;
+    int status;
+    PositionRoad road = model->road; /* the saved samples back: the two buffers swapped */
+    model->road = model->saved_road;
+    model->saved_road = road;
+    memcpy(model->origin, model->saved_origin, sizeof model->origin);
     status = take_spins(model, model->saved_ring_spin, model->saved_spin, model->saved_speed,
                         model->saved_clock[4]);
     copy_state(model, &model->saved, &model->now);
@@ -980,13 +1082,6 @@ static int rollback(Model* model)
     model->carry = model->saved_clock[3];
     memcpy(model->accel, model->saved_accel, sizeof model->accel);
     model->h_accel = model->saved_accel[3];
-    model->road_lo = model->saved_lo;
-    model->road_hi = hi;
-    if (hi > model->road_lo) {
-        road_s(model)[hi - 1] = model->saved_last[0];
-        road_z(model)[hi - 1] = model->saved_last[1];
-        road_at(model)[hi - 1] = model->saved_last[2];
-    }
     return status;
 }
 
@@ -1028,19 +1123,49 @@ static void clock_advance(Model* model, double h)
     model->elapsed = total;
 }
 
-/* InPlaneStepper.advance */
+/* inplane_slave's _extent_warning: said once when a contact point's road leaves the road
+ * file's (beyond it the road is level at its end heights), and again after it came back */
+static void extent_warning(Model* model)
+{
+    double x, vx, z, first, last;
+    int beyond;
+    char line[MESSAGE_SIZE], now[40], at[40];
+    wheel_centre(model, &x, &vx, &z);
+    road_file_extent(&model->file, &first, &last);
+    beyond = x + model->rear_m < first || x + model->front_m > last;
+    if (beyond && model->extent_armed) {
+        py_repr(model_time(model), now, sizeof now);
+        py_repr(x, at, sizeof at);
+        snprintf(line, sizeof line, SPEC_MSG_ROAD_EXTENT, now, at, model->road_path, first,
+                 last);
+        say(model, MODEL_WARNING, "logStatusWarning", line);
+    }
+    model->extent_armed = !beyond;
+}
+
+/* InPlaneStepper.advance_wheel, then advance */
 int model_step(Model* model, double step_s, double* values)
 {
-    double length, accel[3], jerk[3], x[3], z[3], front[3], rim_old[6];
+    double length, accel[3], jerk[3], x[3], z[3], rim_old[6];
     double start_s = model->elapsed;
     long long count = substeps(step_s, model->h, model_time(model), &length), k;
-    double torque = values[SPEC_VR_WHEEL_TORQUE], rate_given = values[SPEC_VR_WHEEL_RATE];
-    int plate = model->speed == 0.0, P = model->np, i, status = 0,
-        known = model->h_given > 0.0;
+    double torque = values[SPEC_VR_WHEEL_TORQUE], rate_given = 0.0;
+    int P = model->np, i, status = 0, known = model->h_given > 0.0;
     double spin_start = 0.0, spin_end = 0.0;
     model->refusal[0] = '\0';
-    if (road_compact(model, count < 1000000 ? (int)count : 1000000) != 0) return MODEL_ERROR;
-    checkpoint(model);
+    if (checkpoint(model) != 0) return MODEL_ERROR;
+    /* the host's road where the last outputs asked for it, taken before the step */
+    if (!model->file_open && position_road_set(&model->road, values + SPEC_VR_ROAD_X_1,
+                                               values + SPEC_VR_ROAD_Z_1, ROAD_QUERIES) != 0) {
+        rollback(model);
+        return MODEL_ERROR;
+    }
+    if (isnan(model->origin[0])) { /* the coordinates start here */
+        model->origin[0] = values[SPEC_VR_WHEEL_X];
+        model->origin[1] = road_height(model, values[SPEC_VR_WHEEL_X]);
+    }
+    /* a driven wheel's spin as the deviation from the built one advance takes */
+    if (model->driven) rate_given = values[SPEC_VR_WHEEL_RATE] - model->speed / model->radius;
     if (length != model->step.h &&
         take_spins(model, model->m.build.ring_spin, model->spin_now, model->speed_now,
                    length) != 0) {
@@ -1052,12 +1177,11 @@ int model_step(Model* model, double step_s, double* values)
     {   /* the host's values at the step's start; each position's acceleration over the step
          * is its rate's last change */
         double given[6];
-        given[0] = values[SPEC_VR_RIM_X];
-        given[1] = values[SPEC_VR_RIM_VX];
-        given[2] = values[SPEC_VR_RIM_Z];
-        given[3] = values[SPEC_VR_RIM_VZ];
-        given[4] = values[SPEC_VR_ROAD_Z];
-        given[5] = values[SPEC_VR_ROAD_VZ];
+        given[0] = values[SPEC_VR_WHEEL_X] - model->origin[0] - model->speed * model->elapsed;
+        given[1] = values[SPEC_VR_WHEEL_VX] - model->speed;
+        given[2] = values[SPEC_VR_WHEEL_Z] - model->origin[1] - loaded_radius(model);
+        given[3] = values[SPEC_VR_WHEEL_VZ];
+        given[4] = given[5] = 0.0; /* the deviation mode's road at the front: not read */
         for (i = 0; i < 3; i++) {
             rate_changes(given[2 * i + 1], model->given[2 * i + 1], model->h_given,
                          model->accel[i], model->h_accel, &accel[i], &jerk[i]);
@@ -1106,27 +1230,11 @@ int model_step(Model* model, double step_s, double* values)
             model->step.psi_new = model->now.y[model->ny - 1] +
                                   0.5 * length * (model->now.yd[model->ny - 1] + rate);
         }
+        /* the road under each point where the wheel centre is now, from the origin's height */
         distance = model->speed * time + model->rim[0];
-        input_path(model->given[4], model->given[5], accel[2], jerk[2], tau, front);
-        if (plate) {
-            for (i = 0; i < P; i++) {
-                model->height[i] = front[0];
-                model->rate[i] = front[1];
-            }
-        } else {
-            int lo;
-            if (road_record(model, distance, front[0]) != 0) {
-                rollback(model);
-                return MODEL_ERROR;
-            }
-            lo = model->road_lo;
-            host_road_window_reads(road_s(model) + lo, road_z(model) + lo, road_at(model) + lo,
-                                   model->road_hi - lo, model->x_lo, model->x_hi, P, distance,
-                                   model->speed_now + model->rim[1], model->height,
-                                   model->rate);
-        }
+        road_reads(model, model->origin[0] + distance, model->speed_now + model->rim[1]);
         for (i = 0; i < P; i++) {
-            model->height[i] -= model->rim[3];
+            model->height[i] = model->height[i] - model->origin[1] - model->rim[3];
             model->rate[i] -= model->rim[4];
         }
         {   /* InPlaneKernel.step: the spin's offsets from the ring's and the tread's */
@@ -1195,8 +1303,9 @@ int model_step(Model* model, double step_s, double* values)
     }
     model->rate_given = rate_given;
     model->h_given = step_s;
-    show_outputs(model, values);
+    show_outputs(model, values, step_s);
     contact_event(model, values);
+    if (model->file_open) extent_warning(model);
     return MODEL_OK;
 }
 
@@ -1248,8 +1357,8 @@ int model_step_work(const Model* model, double h, int* n_sub, double* substep, i
 /* -- the model's part of an FMU state --------------------------------------------------------
  * int32: a flag the layer's framing keeps (1), in contact (the last in_contact an event was
  * logged for); then core/inplane_contact.py's InPlaneStepper.state_bytes: its head, doubles
- * (the step's end inputs, the rim, the spins, y, yd, ydd, e, f_n, the road's samples) and int8
- * flags (contact, stick, slip sign). */
+ * (the step's end inputs, the rim, the spins, the clocks, the origin, y, yd, ydd, e, f_n, the
+ * host road's samples: none with a road file) and int8 flags (contact, stick, slip sign). */
 
 static size_t n_abs(const Model* model) { return (size_t)model->m.n_dof + 3; }
 
@@ -1268,7 +1377,7 @@ static size_t stepper_size(size_t ny, size_t np, size_t samples, size_t n_dof)
 size_t model_state_size(const Model* model)
 {
     return FLAGS * 4 + stepper_size((size_t)model->ny, (size_t)model->np,
-                                    (size_t)(model->road_hi - model->road_lo), n_abs(model));
+                                    (size_t)position_road_count(&model->road), n_abs(model));
 }
 
 static void put(unsigned char** out, const void* value, size_t size)
@@ -1286,7 +1395,7 @@ void model_state_write(const Model* model, unsigned char* out)
 {
     int32_t flag = 1, contact = model->in_contact;
     uint32_t ny = (uint32_t)model->ny, np = (uint32_t)model->np;
-    uint32_t samples = (uint32_t)(model->road_hi - model->road_lo);
+    uint32_t samples = (uint32_t)position_road_count(&model->road);
     uint32_t dofs = (uint32_t)n_abs(model);
     int64_t steps = (int64_t)model->steps;
     double spins[3], clocks[5], changes[4];
@@ -1316,16 +1425,18 @@ void model_state_write(const Model* model, unsigned char* out)
     memcpy(changes, model->accel, sizeof model->accel);
     changes[3] = model->h_accel;
     put_doubles(&out, changes, 4);
+    put_doubles(&out, model->origin, 2);
     put_doubles(&out, s->y, model->ny);
     put_doubles(&out, s->yd, model->ny);
     put_doubles(&out, s->ydd, model->ny);
     put_doubles(&out, s->e, model->np);
     put_doubles(&out, s->f_n, model->np);
-    for (i = model->road_lo; i < model->road_hi; i++) {
+    for (i = 0; i < (int)samples; i++) { /* as rows (s, z, at) */
+        const PositionRoad* road = &model->road;
         double sample[3];
-        sample[0] = road_s(model)[i];
-        sample[1] = road_z(model)[i];
-        sample[2] = road_at(model)[i];
+        sample[0] = position_road_s(road)[i];
+        sample[1] = position_road_z(road)[i];
+        sample[2] = position_road_at(road)[i];
         put_doubles(&out, sample, 3);
     }
     {   /* the coordinates in the tire's own DOFs: to_abs y, y', y'' */
@@ -1496,7 +1607,7 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
                  (unsigned long)n_abs(model), model->np);
         return MODEL_ERROR;
     }
-    if (samples == 0 || steps < 0) {
+    if ((samples > 0 && model->file_open) || steps < 0) {
         snprintf(why, why_size, "its stepper part's road or step count does not fit this tire");
         return MODEL_ERROR;
     }
@@ -1518,7 +1629,11 @@ int model_state_check(const Model* model, const unsigned char* in, size_t size,
     doubles = part + STEPPER_HEAD;
     n_doubles = stepper_doubles(ny, np, samples, dofs);
     for (i = 0; i < n_doubles; i++) {
-        if (!isfinite(get_double(doubles, i))) {
+        /* the origin: both finite, or both NaN before the first step */
+        int unset = (i == ORIGIN_AT || i == ORIGIN_AT + 1) &&
+                    isnan(get_double(doubles, ORIGIN_AT)) &&
+                    isnan(get_double(doubles, ORIGIN_AT + 1));
+        if (!isfinite(get_double(doubles, i)) && !unset) {
             snprintf(why, why_size, "its stepper part holds values that are not finite");
             return MODEL_ERROR;
         }
@@ -1639,6 +1754,8 @@ void model_state_apply(Model* model, const unsigned char* in)
                 "fmi2SetFMUstate: the step could not be rebuilt at the state's spin");
         for (i = 0; i < 3; i++) model->accel[i] = get_double(doubles, at++);
         model->h_accel = get_double(doubles, at++);
+        model->origin[0] = get_double(doubles, at++);
+        model->origin[1] = get_double(doubles, at++);
     }
     {   /* y, y', y'' here (checked by model_state_check: they fit) */
         double* scratch = (double*)mem_alloc(&model->host.mem, 3 * (size_t)ny, sizeof(double));
@@ -1658,19 +1775,15 @@ void model_state_apply(Model* model, const unsigned char* in)
     }
     for (i = 0; i < P; i++) s->e[i] = get_double(doubles, at++);
     for (i = 0; i < P; i++) s->f_n[i] = get_double(doubles, at++);
-    model->road_lo = model->road_hi = 0;
-    if ((int)samples + 2 > model->road_capacity &&
-        road_reserve(model, 2 * (int)samples + 2, 0) != 0) {
-        say(model, MODEL_ERROR, "logStatusError",
-            "fmi2SetFMUstate: out of memory restoring the road history");
-        samples = 0;
+    {   /* the host's samples, rows (s, z, at) */
+        double* rows = (double*)mem_alloc(&model->host.mem, 3 * (size_t)samples, sizeof(double));
+        for (i = 0; rows != NULL && i < 3 * (int)samples; i++) rows[i] = get_double(doubles, at + i);
+        if (rows == NULL || position_road_restore(&model->road, rows, (int)samples) != 0)
+            say(model, MODEL_ERROR, "logStatusError",
+                "fmi2SetFMUstate: out of memory restoring the road history");
+        mem_free(&model->host.mem, rows);
+        at += 3 * (size_t)samples;
     }
-    for (i = 0; i < (int)samples; i++) {
-        road_s(model)[i] = get_double(doubles, at++);
-        road_z(model)[i] = get_double(doubles, at++);
-        road_at(model)[i] = get_double(doubles, at++);
-    }
-    model->road_hi = (int)samples;
     at += 3 * (size_t)dofs; /* the DOFs: read through state_coordinates */
     flags = doubles + 8 * at;
     for (i = 0; i < P; i++) s->contact[i] = flags[i] == 1;
@@ -1682,4 +1795,5 @@ void model_state_apply(Model* model, const unsigned char* in)
     }
     model->steps = (long long)steps;
     model->in_contact = contact;
+    model->extent_armed = 1; /* inplane_slave's _restored */
 }

@@ -78,6 +78,8 @@
 #define SPEC_INPLANE_MAX_FORCE_LOADS 20.0
 #define SPEC_INPLANE_STATE_DEFORMATION_FRACTION 0.5
 #define SPEC_INPLANE_MAX_ROAD_SAMPLES 100003
+#define SPEC_SLIP_SPEED_FLOOR_M_S 0.1
+#define SPEC_ROAD_QUERY_SLACK_M 1e-06
 #define SPEC_MAX_STIFFNESS_RATIO 10000000000.0
 #define SPEC_MAX_EIGENVALUE_SPREAD 10000000000.0
 
@@ -133,45 +135,46 @@ typedef struct {
     SpecCausality causality;
     double start; /* the default; an export's own start values are in export.h */
     const char* unit;
+    double limit; /* an input's largest magnitude (interface.input_limit), else 0 */
 } SpecVariable;
 
 static const SpecVariable SPEC_VARIABLES[SPEC_N_VARIABLES] = {
-    {"rim_z", SPEC_REAL, SPEC_INPUT, 0.0, "m"},
-    {"rim_vz", SPEC_REAL, SPEC_INPUT, 0.0, "m/s"},
-    {"road_z", SPEC_REAL, SPEC_INPUT, 0.0, "m"},
-    {"road_vz", SPEC_REAL, SPEC_INPUT, 0.0, "m/s"},
-    {"rim_Fz", SPEC_REAL, SPEC_OUTPUT, 27654.753, "N"},
-    {"rim_Fx", SPEC_REAL, SPEC_OUTPUT, 0.0, "N"},
-    {"contact_Fz", SPEC_REAL, SPEC_OUTPUT, 27654.753, "N"},
-    {"deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
-    {"contact_length", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
-    {"tread_deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m"},
-    {"in_contact", SPEC_BOOLEAN, SPEC_OUTPUT, 1.0, ""},
-    {"load", SPEC_REAL, SPEC_PARAMETER, 27654.753, "N"},
-    {"speed", SPEC_REAL, SPEC_PARAMETER, 0.0, "m/s"},
-    {"n_elements", SPEC_INTEGER, SPEC_PARAMETER, 100.0, ""},
-    {"f_max", SPEC_REAL, SPEC_PARAMETER, 0.0, "Hz"},
-    {"n_modes", SPEC_INTEGER, SPEC_PARAMETER, 0.0, ""},
-    {"static_correction", SPEC_BOOLEAN, SPEC_PARAMETER, 1.0, ""},
-    {"allow_supercritical", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, ""},
-    {"contact_zone_length", SPEC_REAL, SPEC_PARAMETER, 0.6, "m"},
-    {"contact_point_spacing", SPEC_REAL, SPEC_PARAMETER, 0.0025, "m"},
-    {"linear_contact", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, ""},
-    {"R", SPEC_REAL, SPEC_PARAMETER, 0.65, "m"},
-    {"b", SPEC_REAL, SPEC_PARAMETER, 0.35, "m"},
-    {"inflation_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa"},
-    {"rhoA", SPEC_REAL, SPEC_PARAMETER, 19.64, "kg/m"},
-    {"m_s", SPEC_REAL, SPEC_PARAMETER, 10.0, "kg/m"},
-    {"k_r1", SPEC_REAL, SPEC_PARAMETER, 6686000.0, "N/m^2"},
-    {"k_r2", SPEC_REAL, SPEC_PARAMETER, 4431000.0, "N/m^2"},
-    {"EI", SPEC_REAL, SPEC_PARAMETER, 25.697, "N*m^2"},
-    {"k_cw", SPEC_REAL, SPEC_PARAMETER, 593000000.0, "N/m^2"},
-    {"alpha", SPEC_REAL, SPEC_PARAMETER, 8.2e-05, "1/s"},
-    {"beta", SPEC_REAL, SPEC_PARAMETER, 0.00011, "s"},
-    {"sidewall_shear", SPEC_REAL, SPEC_PARAMETER, 0.0, "N"},
-    {"sidewall_max_order", SPEC_REAL, SPEC_PARAMETER, 8.0, ""},
-    {"sidewall_pressure_exponent", SPEC_REAL, SPEC_PARAMETER, 0.0, ""},
-    {"reference_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa"},
+    {"rim_z", SPEC_REAL, SPEC_INPUT, 0.0, "m", 10.0},
+    {"rim_vz", SPEC_REAL, SPEC_INPUT, 0.0, "m/s", 1000.0},
+    {"road_z", SPEC_REAL, SPEC_INPUT, 0.0, "m", 10.0},
+    {"road_vz", SPEC_REAL, SPEC_INPUT, 0.0, "m/s", 1000.0},
+    {"rim_Fz", SPEC_REAL, SPEC_OUTPUT, 27654.753, "N", 0.0},
+    {"rim_Fx", SPEC_REAL, SPEC_OUTPUT, 0.0, "N", 0.0},
+    {"contact_Fz", SPEC_REAL, SPEC_OUTPUT, 27654.753, "N", 0.0},
+    {"deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m", 0.0},
+    {"contact_length", SPEC_REAL, SPEC_OUTPUT, 0.0, "m", 0.0},
+    {"tread_deflection", SPEC_REAL, SPEC_OUTPUT, 0.0, "m", 0.0},
+    {"in_contact", SPEC_BOOLEAN, SPEC_OUTPUT, 1.0, "", 0.0},
+    {"load", SPEC_REAL, SPEC_PARAMETER, 27654.753, "N", 0.0},
+    {"speed", SPEC_REAL, SPEC_PARAMETER, 0.0, "m/s", 0.0},
+    {"n_elements", SPEC_INTEGER, SPEC_PARAMETER, 100.0, "", 0.0},
+    {"f_max", SPEC_REAL, SPEC_PARAMETER, 0.0, "Hz", 0.0},
+    {"n_modes", SPEC_INTEGER, SPEC_PARAMETER, 0.0, "", 0.0},
+    {"static_correction", SPEC_BOOLEAN, SPEC_PARAMETER, 1.0, "", 0.0},
+    {"allow_supercritical", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, "", 0.0},
+    {"contact_zone_length", SPEC_REAL, SPEC_PARAMETER, 0.6, "m", 0.0},
+    {"contact_point_spacing", SPEC_REAL, SPEC_PARAMETER, 0.0025, "m", 0.0},
+    {"linear_contact", SPEC_BOOLEAN, SPEC_PARAMETER, 0.0, "", 0.0},
+    {"R", SPEC_REAL, SPEC_PARAMETER, 0.65, "m", 0.0},
+    {"b", SPEC_REAL, SPEC_PARAMETER, 0.35, "m", 0.0},
+    {"inflation_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa", 0.0},
+    {"rhoA", SPEC_REAL, SPEC_PARAMETER, 19.64, "kg/m", 0.0},
+    {"m_s", SPEC_REAL, SPEC_PARAMETER, 10.0, "kg/m", 0.0},
+    {"k_r1", SPEC_REAL, SPEC_PARAMETER, 6686000.0, "N/m^2", 0.0},
+    {"k_r2", SPEC_REAL, SPEC_PARAMETER, 4431000.0, "N/m^2", 0.0},
+    {"EI", SPEC_REAL, SPEC_PARAMETER, 25.697, "N*m^2", 0.0},
+    {"k_cw", SPEC_REAL, SPEC_PARAMETER, 593000000.0, "N/m^2", 0.0},
+    {"alpha", SPEC_REAL, SPEC_PARAMETER, 8.2e-05, "1/s", 0.0},
+    {"beta", SPEC_REAL, SPEC_PARAMETER, 0.00011, "s", 0.0},
+    {"sidewall_shear", SPEC_REAL, SPEC_PARAMETER, 0.0, "N", 0.0},
+    {"sidewall_max_order", SPEC_REAL, SPEC_PARAMETER, 8.0, "", 0.0},
+    {"sidewall_pressure_exponent", SPEC_REAL, SPEC_PARAMETER, 0.0, "", 0.0},
+    {"reference_pressure", SPEC_REAL, SPEC_PARAMETER, 790000.0, "Pa", 0.0},
 };
 
 /* tire data, in the order of the core's TIRE_FIELDS (the order of the problems) */
@@ -466,6 +469,7 @@ static const char* const SPEC_LOG_CATEGORIES[SPEC_N_LOG_CATEGORIES] = {
 #define SPEC_MSG_OUTPUT_SET "%s = %s: it is an output"
 #define SPEC_MSG_PARAMETER_FIXED "%s = %s: parameters are fixed after initialisation (they define the model built there); reset the FMU to change them"
 #define SPEC_MSG_NO_STRINGS "%s has no String variables"
+#define SPEC_MSG_ROAD_FILE_ALLOWED "an OpenCRG .crg or a two-column profile (distance m, height m) file that can be read"
 #define SPEC_MSG_ROAD_EXTENT "at t = %s s the contact zone (wheel_x = %s m) reaches beyond the road file %s (%.6g to %.6g m along it): the road is level at its end heights there (said again if it leaves the file's road again after coming back)"
 #define SPEC_MSG_STATE_NOT_OURS "it is not a state of this FMU (%s)"
 #define SPEC_MSG_STATE_TOO_SHORT "too short"
