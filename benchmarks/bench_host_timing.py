@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tire_fmu.fmu.interface import ROAD_QUERIES
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from record import cpu_model, load_average, write_record  # noqa: E402
 
@@ -102,8 +104,8 @@ def fmu_run(path, h: float) -> np.ndarray:
     fmu.exitInitializationMode()
     if centre:
         radius = fmu.getReal([vr["loaded_radius"]])[0]
-        asked = [vr[f"road_x_{i}"] for i in range(1, 17)]
-        heights = [vr[f"road_z_{i}"] for i in range(1, 17)]
+        asked = [vr[f"road_x_{i}"] for i in range(1, ROAD_QUERIES + 1)]
+        heights = [vr[f"road_z_{i}"] for i in range(1, ROAD_QUERIES + 1)]
     rows, outputs = [], [vr["rim_Fz"], vr["rim_Fx"]]
     for k in range(int(round(DURATION / h))):
         inputs = hop(k * h)

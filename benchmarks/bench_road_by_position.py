@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tire_fmu.fmu.interface import ROAD_QUERIES
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from record import cpu_model, load_average, write_record  # noqa: E402
 
@@ -96,8 +98,8 @@ def cleat_run(fmu_path, h: float, speed: float, road_file: str = "", road=None,
     host = Host(fmu_path, speed=speed, n_elements=n_elements, road_file=road_file)
     height = host.read(["loaded_radius"])[0]
     centre = [host.vr[n] for n in ("wheel_x", "wheel_vx", "wheel_z")]
-    asked = [host.vr[f"road_x_{i}"] for i in range(1, 17)]
-    heights = [host.vr[f"road_z_{i}"] for i in range(1, 17)]
+    asked = [host.vr[f"road_x_{i}"] for i in range(1, ROAD_QUERIES + 1)]
+    heights = [host.vr[f"road_z_{i}"] for i in range(1, ROAD_QUERIES + 1)]
     forces = [host.vr["rim_Fz"], host.vr["rim_Fx"]]
     rows = []
     for k in range(int(round(DURATION_S / h))):

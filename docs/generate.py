@@ -161,6 +161,20 @@ for _name, _file in EXAMPLES.items():
     generator(_name)(functools.partial(_example, _file))
 
 
+@value("road-queries")
+def _road_queries() -> str:
+    from tire_fmu.fmu.interface import ROAD_QUERIES
+
+    return f"{ROAD_QUERIES}"
+
+
+@value("road-query-gap-20-1")
+def _road_query_gap() -> str:
+    from tire_fmu.fmu.interface import ROAD_QUERIES
+
+    return f"one every {20.0 * 1e-3 / ROAD_QUERIES * 1e3:.2g} mm at 20 m/s and a 1 ms step"
+
+
 @value("radial-speed-slack")
 def _radial_speed_slack() -> str:
     from tire_fmu.core.wheel_centre import RADIAL_SPEED_SLACK_FRACTION, RADIAL_SPEED_SLACK_M_S

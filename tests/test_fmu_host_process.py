@@ -89,8 +89,9 @@ PAIR_HOST = """
         fmu.exitInitializationMode()
         if centre:
             radius = fmu.getReal([refs["loaded_radius"]])[0]
-            asked = [refs[f"road_x_{i}"] for i in range(1, 17)]
-            heights = [refs[f"road_z_{i}"] for i in range(1, 17)]
+            count = sum(name.startswith("road_x_") for name in refs)
+            asked = [refs[f"road_x_{i}"] for i in range(1, count + 1)]
+            heights = [refs[f"road_z_{i}"] for i in range(1, count + 1)]
         rows = []
         for k in range(steps):
             bump = 2e-3 * min(k / 40, 1.0)

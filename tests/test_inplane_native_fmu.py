@@ -270,7 +270,7 @@ def test_the_host_road_is_asked_for_at_the_contact_points_resolution(native_path
     holds, at most the contact point spacing apart, covering the zone's front over the step;
     the samples it keeps are the host's heights there (the native PositionRoad holds what the
     core's holds, checked through the state's road)."""
-    fmu = Wheel(native_path, speed=10.0, wheel_x=CLEAT_START_M).start()  # where it starts
+    fmu = Wheel(native_path, speed=10.0, x0=CLEAT_START_M).start()  # where it starts
     zone = fmu.asked()
     assert zone[0] < CLEAT_START_M < zone[-1] and np.allclose(np.diff(zone), np.diff(zone)[0])
     road = PositionRoad(TABLE["contact_zone_length"].start + 1.0)

@@ -4,9 +4,10 @@
     python docs/examples/tire_inplane_native_host_road.py dist/TireInPlaneNative.fmu bump.csv
 
 A host with its own road (a terrain, a test rig) leaves road_file empty: after each step the
-tire says where it needs the road next (road_x_1..16, m along the road) and the host gives the
-heights there (road_z_1..16) with the next step's inputs. The same road written as a profile
-file (distance m, height m) and given as road_file gives the same forces.
+tire says where it needs the road next (road_x_1, road_x_2, ..., m along the road) and the
+host gives the heights there (road_z_1, road_z_2, ...) with the next step's inputs. The same
+road written as a profile file (distance m, height m) and given as road_file gives the same
+forces.
 """
 
 import sys
@@ -43,8 +44,9 @@ for road_file in ("", profile):                        # the host's road, then t
     tire.setString([vr["road_file"]], [road_file])
     tire.exitInitializationMode()
     wheel_z = tire.getReal([vr["loaded_radius"]])[0]
-    asked = [vr[f"road_x_{k}"] for k in range(1, 17)]
-    given = [vr[f"road_z_{k}"] for k in range(1, 17)]
+    count = sum(name.startswith("road_x_") for name in vr)   # the FMU says how many
+    asked = [vr[f"road_x_{k}"] for k in range(1, count + 1)]
+    given = [vr[f"road_z_{k}"] for k in range(1, count + 1)]
     inputs = [vr[n] for n in ("wheel_x", "wheel_vx", "wheel_z", "wheel_vz")]
     rim_Fz, t = [], 0.0
     for _ in range(500):

@@ -56,6 +56,7 @@ from .interface import (
     MAX_HISTORY_SAMPLES,
     MAX_STEP_S,
     OUTPUTS,
+    ROAD_QUERIES,
     TIME_ABS_TOLERANCE_S,
     TIME_REL_TOLERANCE,
     FmuVariable,
@@ -157,6 +158,8 @@ CONSTANTS: dict[str, float | int] = {
     "INPLANE_MAX_ROAD_SAMPLES": inplane_contact.MAX_ROAD_SAMPLES,
     "SLIP_SPEED_FLOOR_M_S": wheel_centre.SLIP_SPEED_FLOOR_M_S,
     "ROAD_QUERY_SLACK_M": wheel_centre.ROAD_QUERY_SLACK_M,
+    "ROAD_QUERY_FLOOR_SHARE": wheel_centre.QUERY_FLOOR_SHARE,
+    "ROAD_QUERIES": ROAD_QUERIES,
     # what double precision resolves
     "MAX_STIFFNESS_RATIO": parameters.MAX_STIFFNESS_RATIO,
     "MAX_EIGENVALUE_SPREAD": model.MAX_EIGENVALUE_SPREAD,

@@ -43,7 +43,7 @@
 #define MESSAGE_SIZE 1024
 #define FLAGS SPEC_STATE_MODEL_FLAGS
 /* the host road's heights a step takes (road_z_i at road_x_i) */
-#define ROAD_QUERIES (SPEC_VR_ROAD_Z_16 - SPEC_VR_ROAD_Z_1 + 1)
+#define ROAD_QUERIES SPEC_ROAD_QUERIES
 /* below this spin (rad/s) the effective rolling radius is R (InPlaneStepper.wheel_outputs) */
 #define SPIN_AT_REST_RAD_S 1e-9
 
@@ -840,17 +840,8 @@ static double loaded_radius(const Model* model) { return model->radius - model->
 static void road_queries(const Model* model, int count, double x, double vx, double step_s,
                          double* out)
 {
-    double spacing = model->spacing_m, rear = x + model->rear_m, front = x + model->front_m;
-    double reach = front + fabs(vx) * step_s + spacing, newest, gap;
-    int n = position_road_count(&model->road), i;
-    newest = n > 0 ? position_road_s(&model->road)[n - 1] : -HUGE_VAL;
-    if (newest >= reach - SPEC_ROAD_QUERY_SLACK_M || n == 0) { /* the zone itself */
-        for (i = 0; i < count; i++) out[i] = rear + (front - rear) * (double)i / (count - 1);
-        return;
-    }
-    gap = (reach - newest) / count;
-    if (gap < spacing) gap = spacing;
-    for (i = 0; i < count; i++) out[i] = newest + gap * (double)(i + 1);
+    position_road_queries(&model->road, count, x, vx, step_s, model->rear_m, model->front_m,
+                          model->spacing_m, out);
 }
 
 /* InPlaneStepper.wheel_centre: where the last step left the wheel centre (position along

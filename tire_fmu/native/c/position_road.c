@@ -10,6 +10,7 @@
 
 #include "position_road.h"
 #include "road_samples.h"
+#include "spec.h"
 
 #define PR_MIN_CAPACITY 64
 
@@ -207,4 +208,24 @@ double position_road_height(const PositionRoad* road, double x)
     road_samples_at(position_road_s(road), position_road_z(road), position_road_at(road),
                     position_road_count(road), x, &height, &integral);
     return height;
+}
+
+void position_road_queries(const PositionRoad* road, int count, double x, double vx,
+                           double step_s, double rear_m, double front_m, double spacing_m,
+                           double* out)
+{
+    double rear = x + rear_m, front = x + front_m;
+    double reach = front + fabs(vx) * step_s + spacing_m, newest, gap;
+    int n = position_road_count(road), i;
+    newest = n > 0 ? position_road_s(road)[n - 1] : -HUGE_VAL;
+    if (newest >= reach - SPEC_ROAD_QUERY_SLACK_M || n == 0) { /* the zone itself */
+        for (i = 0; i < count; i++) out[i] = rear + (front - rear) * (double)i / (count - 1);
+        return;
+    }
+    gap = (reach - newest) / count;
+    /* never closer than a share of the points' spacing: a creeping wheel's samples */
+    if (gap < SPEC_ROAD_QUERY_FLOOR_SHARE * spacing_m) {
+        gap = SPEC_ROAD_QUERY_FLOOR_SHARE * spacing_m;
+    }
+    for (i = 0; i < count; i++) out[i] = newest + gap * (double)(i + 1);
 }

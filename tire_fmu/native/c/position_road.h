@@ -45,6 +45,14 @@ int position_road_restore(PositionRoad* road, const double* rows, int count);
 /* to := from's samples (keep_m too); 0, or -1 out of memory (to is then as it was). */
 int position_road_copy(PositionRoad* to, const PositionRoad* from);
 
+/* core/wheel_centre.py's road_queries: where a tire needs its host's road next, count
+ * positions into out, for the wheel centre at x moving at vx over a step of step_s, its
+ * contact zone from rear_m to front_m about it, its points spacing_m apart, the samples held
+ * in road. */
+void position_road_queries(const PositionRoad* road, int count, double x, double vx,
+                           double step_s, double rear_m, double front_m, double spacing_m,
+                           double* out);
+
 /* The height (m) at x (m): 0 with no samples. */
 double position_road_height(const PositionRoad* road, double x);
 
