@@ -144,10 +144,10 @@ def inplane_fmu_variables_table() -> str:
     return _variables_table(inplane_fmu_variables())
 
 
-#: The user's examples of docs/fmu.md, one per FMU, each a script run by
+#: The user's examples of docs/fmu.md, each a script run by
 #: tests/test_docs_examples.py and shown whole.
-EXAMPLES = {"example-tire-modal": "tire_modal_cleat.py",
-            "example-tire-modal-native": "tire_modal_native_quarter_car.py",
+EXAMPLES = {"example-cleat": "cleat_road_file.py",
+            "example-quarter-car": "quarter_car_road_file.py",
             "example-tire-inplane": "tire_inplane_braking.py",
             "example-tire-inplane-native": "tire_inplane_native_host_road.py"}
 
@@ -173,14 +173,6 @@ def _road_query_gap() -> str:
     from tire_fmu.fmu.interface import ROAD_QUERIES
 
     return f"one every {20.0 * 1e-3 / ROAD_QUERIES * 1e3:.2g} mm at 20 m/s and a 1 ms step"
-
-
-@value("radial-speed-slack")
-def _radial_speed_slack() -> str:
-    from tire_fmu.core.wheel_centre import RADIAL_SPEED_SLACK_FRACTION, RADIAL_SPEED_SLACK_M_S
-
-    return (f"{100 * RADIAL_SPEED_SLACK_FRACTION:g} % of `speed` or "
-            f"{RADIAL_SPEED_SLACK_M_S:g} m/s")
 
 
 @value("inplane-critical-fraction")

@@ -143,12 +143,9 @@ def test_the_readme_fmpy_example_runs_without_warnings(tmp_path):
     import subprocess
     import sys
 
-    from tire_fmu.fmu.builder import build_fmu
-
     readme = (ROOT / "README.md").read_text()
     (block,) = [b for b in re.findall(r"```bash\n(.*?)```", readme, re.S)
                 if "docs/examples/" in b]
-    build_fmu(tmp_path / "dist")
     out = ""
     for line in block.strip().splitlines():
         words = shlex.split(line.split("#")[0])

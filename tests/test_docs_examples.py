@@ -1,4 +1,4 @@
-"""docs/fmu.md's examples, one per FMU, run as a user runs them: the road commands their
+"""docs/fmu.md's examples, run as a user runs them: the road commands their
 docstrings give, then the script on the FMU it is written for; what each prints is checked
 against what the tire must do there."""
 
@@ -19,8 +19,8 @@ pytestmark = pytest.mark.fmu
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "docs" / "examples"
 #: each example's script and the FMU it is written for
-SCRIPTS = {"tire_modal_cleat.py": "TireModal",
-           "tire_modal_native_quarter_car.py": "TireModalNative",
+SCRIPTS = {"cleat_road_file.py": "TireInPlane",
+           "quarter_car_road_file.py": "TireInPlaneNative",
            "tire_inplane_braking.py": "TireInPlane",
            "tire_inplane_native_host_road.py": "TireInPlaneNative"}
 NUMBER = r"(-?[\d.]+)"
@@ -62,15 +62,15 @@ def test_every_example_is_in_the_docs_whole():
         assert f"<!-- generated: {name} -->" in fmu_md
 
 
-def test_the_radial_tire_over_a_cleat_file(tmp_path):
-    out = _run("tire_modal_cleat.py", tmp_path)
+def test_the_tire_over_a_cleat_file(tmp_path):
+    out = _run("cleat_road_file.py", tmp_path)
     start, peak = map(float, re.search(rf"rim_Fz from {NUMBER} N to a peak of {NUMBER} N",
                                        out).groups())
     # wheel_z's start value carries the default load; the 20 mm cleat is more than the
     # tire's static deflection, so the force over it rises far above that
-    from tire_fmu.fmu.interface import fmu_variables
+    from tire_fmu.fmu.interface import inplane_fmu_variables
 
-    load = next(v.start for v in fmu_variables() if v.name == "load")
+    load = next(v.start for v in inplane_fmu_variables() if v.name == "load")
     assert start == pytest.approx(load, rel=1e-3)
     assert peak > 1.5 * load
     radius = float(re.search(rf"loaded radius {NUMBER} m", out).group(1))
@@ -78,7 +78,7 @@ def test_the_radial_tire_over_a_cleat_file(tmp_path):
 
 
 def test_the_quarter_car_on_a_road_file(tmp_path):
-    out = _run("tire_modal_native_quarter_car.py", tmp_path)
+    out = _run("quarter_car_road_file.py", tmp_path)
     peak, share = map(float, re.search(rf"was {NUMBER} N \({NUMBER} %", out).groups())
     # a class C road at 15 m/s loads the tire dynamically by a tenth of its load or so,
     # never by more than the load (it would leave the road)

@@ -22,9 +22,9 @@ from vehicle_demo.truck import (
     truck_matrices,
 )
 
-#: The FMU these runs use: the native in-plane tire, the fastest of the four to build and step
-#: at this length (the FMUs share their interface: docs/fmu.md).
-FMU = "TireInPlane"
+#: The FMU these runs use: the native in-plane tire, the faster of the two on the wheel-centre
+#: interface to build and step.
+FMU = "TireInPlaneNative"
 #: N = 50 points and a coarse zone: the truck's loop and hosts are what is tested here.
 TIRE = {"n_elements": 50}
 SPEED_M_S = 10.0

@@ -1,8 +1,8 @@
 """A two-axle truck on four tire FMUs over an OpenCRG road: the vehicle example to copy.
 
 The truck is a rigid body (heave, pitch, roll) on four suspension corners, each an unsprung
-mass on a spring and damper, each on its own tire FMU (any of the four: they share the
-wheel-centre interface, docs/fmu.md). Every FMU reads the same OpenCRG road file at its own
+mass on a spring and damper, each on its own tire FMU (either in-plane FMU: they take the
+wheel centre, docs/fmu.md). Every FMU reads the same OpenCRG road file at its own
 lateral offset (left wheels at ``+track/2``, right at ``-track/2``, ISO 8855: x forward, y
 left, z up), so the two tracks differ and the body rolls.
 
@@ -424,8 +424,9 @@ class TruckError(ValueError):
     """A truck demo setting that cannot be run; the message names the option."""
 
 
-#: The tire FMUs the demo builds: the native radial first (the fastest), then the others.
-TIRE_FMUS = ("TireModalNative", "TireInPlaneNative", "TireModal", "TireInPlane")
+#: The tire FMUs on the wheel-centre interface the truck drives: the native one first (the
+#: faster). The radial FMUs join when they take the wheel centre too.
+TIRE_FMUS = ("TireInPlaneNative", "TireInPlane")
 #: What the demo writes into OUT.
 TRUCK_OUTPUTS = ("fmus", "truck_road.crg", "truck.png", "summary.json")
 

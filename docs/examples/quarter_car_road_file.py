@@ -1,8 +1,8 @@
-"""TireModalNative.fmu under a quarter car on an ISO 8608 road file, in a hand-written loop.
+"""A tire FMU under a quarter car on an ISO 8608 road file, in a hand-written loop.
 
-    tire-fmu build-fmu dist --native                   # dist/TireModalNative.fmu
+    tire-fmu build-fmu dist --inplane --native         # dist/TireInPlaneNative.fmu
     tire-fmu road iso8608 --class C --length 60 --out road.crg
-    python docs/examples/tire_modal_native_quarter_car.py dist/TireModalNative.fmu road.crg
+    python docs/examples/quarter_car_road_file.py dist/TireInPlaneNative.fmu road.crg
 
 A co-simulation master as a vehicle simulator writes it: over each step t -> t + h the tire
 gets the wheel centre's state at t, steps, and its force at t + h moves the car's two masses
@@ -15,7 +15,8 @@ import sys
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave
 
-fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireModalNative.fmu", "road.crg")
+fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireInPlaneNative.fmu",
+                                                         "road.crg")
 body_kg, wheel_kg, spring_n_m, damper_n_s_m = 2500.0, 300.0, 3.0e5, 1.5e4
 load = (body_kg + wheel_kg) * 9.81                     # the corner's static load, N
 speed, h = 15.0, 1e-3

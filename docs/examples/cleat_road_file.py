@@ -1,8 +1,8 @@
-"""TireModal.fmu over a cleat in a road file, through fmpy's simulate_fmu.
+"""A tire FMU over a cleat in a road file, through fmpy's simulate_fmu.
 
-    python build_fmu.py -o dist                        # dist/TireModal.fmu
+    tire-fmu build-fmu dist --inplane                  # dist/TireInPlane.fmu
     tire-fmu road cleat --out cleat.crg --lead-in 2    # 20 mm x 20 mm, 2 m along the road
-    python docs/examples/tire_modal_cleat.py dist/TireModal.fmu cleat.crg
+    python docs/examples/cleat_road_file.py dist/TireInPlane.fmu cleat.crg
 
 The cleat test of SAE J2730: the wheel centre held at the tire's loaded radius, rolling at
 10 m/s. wheel_z is left at its start value, the default tire's loaded radius at the default
@@ -14,7 +14,7 @@ import sys
 import numpy as np
 from fmpy import simulate_fmu
 
-fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireModal.fmu", "cleat.crg")
+fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireInPlane.fmu", "cleat.crg")
 speed, h = 10.0, 1e-3                                  # m/s; the host's step, s
 t = np.arange(0.0, 0.4, h)
 signals = np.zeros(t.size, dtype=[("time", float), ("wheel_x", float), ("wheel_vx", float)])
