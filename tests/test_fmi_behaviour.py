@@ -39,6 +39,7 @@ from tire_fmu.fmu.spec import (
     PYTHONFMU_ANSWERS,
     STATE_MAGIC,
     STATE_MODEL_FLAGS,
+    STATE_VERSION,
     Phase,
     fmu_message,
     phase_refusal,
@@ -666,7 +667,7 @@ def test_the_state_layout_is_the_specs_in_both_fmus(both):
         run_on(instance, 0.0, 100)
         data = state_bytes(instance)
         f = state_unpack(data, N_VALUES)
-        assert (f["magic"], f["version"], f["phase"]) == (STATE_MAGIC.encode(), 3,
+        assert (f["magic"], f["version"], f["phase"]) == (STATE_MAGIC.encode(), STATE_VERSION,
                                                           Phase.RUNNING)
         assert f["guid"] == fmu.model_description.guid and f["size"] == len(data)
         assert f["checksum"] == state_checksum(data[:-4]) and f["reason"] == b""
@@ -782,7 +783,7 @@ def _bad_states(fmu, data: bytes) -> dict[str, tuple[bytes, str]]:
         "cut short": (data[:-100], M["STATE_SIZE"] % (len(data), len(data) - 100)),
         "one bit flipped": (bytes(flipped), M["STATE_DAMAGED"]),
         "another version": (state_reseal(data[:8] + struct.pack("<I", 2) + data[12:]),
-                            M["STATE_VERSION"] % (2, 3)),
+                            M["STATE_VERSION"] % (2, STATE_VERSION)),
         "another FMU": (_forge(data, guid="{another}"), M["STATE_GUID"] % ("{another}",
                                                                            "<guid>")),
         # a model part and a reason whose sizes add up, modulo 2**64, to what follows
@@ -1127,8 +1128,9 @@ def test_every_limit_of_the_spec_that_limits_a_call_has_a_test_here():
              "INPLANE_MAX_SET_PASSES", "INPLANE_SETTLE_PASSES", "INPLANE_MIN_ENTERING_FRACTION",
              "INPLANE_STATE_SPIN_FACTOR",
              # the wheel centre's (core/wheel_centre.py, both tires): what slip reads at rest,
-             # how the road's query points decide a tie
-             "SLIP_SPEED_FLOOR_M_S", "ROAD_QUERY_SLACK_M"}
+             # how the road's query points decide a tie, how many there are and how close
+             "SLIP_SPEED_FLOOR_M_S", "ROAD_QUERY_SLACK_M", "ROAD_QUERIES",
+             "ROAD_QUERY_FLOOR_SHARE"}
     assert set(CONSTANTS) == set(tested) | rules, set(CONSTANTS) ^ (set(tested) | rules)
 
 

@@ -110,8 +110,10 @@ class Master:
                       "wheel_vz": inputs.get("rim_vz", 0.0)}
             heights = (road or level)(np.array(self.fmu.getReal(self.asked)))
             self.fmu.setReal(self.heights, list(heights))
-        elif road is not None:  # the radial FMUs: the road at the zone's front (at 0.15 m)
-            inputs = inputs | road_at_front(road, self.speed * (self.t - self.start_time))
+        else:  # the radial FMUs: no fore-aft input; the road at the zone's front (at 0.15 m)
+            inputs = {n: v for n, v in inputs.items() if n not in ("rim_x", "rim_vx")}
+            if road is not None:
+                inputs |= road_at_front(road, self.speed * (self.t - self.start_time))
         names = [n for n in inputs if n in self.vr]
         assert len(names) == len(inputs), set(inputs) - set(names)
         self.fmu.setReal([self.vr[n] for n in names], [inputs[n] for n in names])

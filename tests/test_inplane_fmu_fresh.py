@@ -36,9 +36,11 @@ fmu.setupExperiment(startTime=0.0)
 fmu.enterInitializationMode()
 fmu.setReal([vr["speed"]], [10.0])
 fmu.exitInitializationMode()
+radius = fmu.getReal([vr["loaded_radius"]])[0]
 outputs = []
-for k in range(20):
-    fmu.setReal([vr["wheel_torque"]], [-2000.0])
+for k in range(20):  # rolling at 10 m/s at the loaded radius, braked
+    fmu.setReal([vr[n] for n in ("wheel_x", "wheel_vx", "wheel_z", "wheel_torque")],
+                [10.0 * k * 1e-3, 10.0, radius, -2000.0])
     fmu.doStep(k * 1e-3, 1e-3)
     outputs.append(fmu.getReal([vr["rim_Fz"], vr["rim_Fx"], vr["wheel_spin"]]))
 with open(f"{folder}/resources/slavemodule.txt") as module:

@@ -1,7 +1,7 @@
 """A tire FMU over a cleat in a road file, through fmpy's simulate_fmu.
 
     tire-fmu build-fmu dist --inplane                  # dist/TireInPlane.fmu
-    tire-fmu road cleat --out cleat.crg --lead-in 2    # 20 mm x 20 mm, 2 m along the road
+    tire-fmu road cleat --out cleat.crg --lead-in 2 --lead-out 3  # 20 x 20 mm, 2 m along
     python docs/examples/cleat_road_file.py dist/TireInPlane.fmu cleat.crg
 
 The cleat test of SAE J2730: the wheel centre held at the tire's loaded radius, rolling at
@@ -12,12 +12,16 @@ load, so the axle is where the tire carries that load.
 import sys
 
 import numpy as np
-from fmpy import simulate_fmu
+from fmpy import read_model_description, simulate_fmu
 
 fmu, road = sys.argv[1:3] if len(sys.argv) > 2 else ("dist/TireInPlane.fmu", "cleat.crg")
 speed, h = 10.0, 1e-3                                  # m/s; the host's step, s
 t = np.arange(0.0, 0.4, h)
-signals = np.zeros(t.size, dtype=[("time", float), ("wheel_x", float), ("wheel_vx", float)])
+# every input at its start value (simulate_fmu wants them all), the wheel's travel given
+inputs = [v for v in read_model_description(fmu).modelVariables if v.causality == "input"]
+signals = np.zeros(t.size, dtype=[("time", float)] + [(v.name, float) for v in inputs])
+for v in inputs:
+    signals[v.name] = float(v.start)
 signals["time"] = t
 signals["wheel_x"] = 0.5 + speed * t                   # the wheel centre along the road, m
 signals["wheel_vx"] = speed
