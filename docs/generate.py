@@ -161,6 +161,21 @@ for _name, _file in EXAMPLES.items():
     generator(_name)(functools.partial(_example, _file))
 
 
+@generator("truck-real-time")
+def truck_real_time_table() -> str:
+    data = record("bench_truck")
+    r = data["results"]
+    lines = ["| tires | host | real-time factor (wall / simulated time) | body heave "
+             "acceleration, rms |", "|---|---|---|---|"]
+    for row in r["rows"]:
+        lines.append(f"| four {row['fmu']} | {row['host']} | {row['real_time_factor']:.3g} | "
+                     f"{row['body_az_rms_m_s2']:.3g} m/s² |")
+    return ("\n".join(lines) + f"\n\n{r['duration_s']:g} s of the truck at "
+            f"{r['speed_m_s']:g} m/s on an ISO 8608 class C road, host step "
+            f"{r['step_s'] * 1e3:g} ms, the median of {r['repeats']} runs; CPU: "
+            f"{data['machine']['cpu']}. " + provenance(data))
+
+
 @value("road-queries")
 def _road_queries() -> str:
     from tire_fmu.fmu.interface import ROAD_QUERIES
