@@ -490,22 +490,13 @@ def pothole(depth_m: float, length_m: float, shape: str = "rectangular") -> Obst
     return Obstacle(-float(depth_m), float(length_m), shape)
 
 
-class PositionRoad(_WindowMeans):
-    """A road a host gives by samples at positions along it (m), linear between them, level at
-    the first sample before it and at the newest beyond it: the FMUs' host road, sampled where
-    they ask (their ``road_x_i`` outputs) at the contact points' resolution. A sample at a
-    position already held replaces its height (at rest the host's road moves under a still tire
-    so: a shaker plate); one between held positions is inserted. Samples further behind the
-    newest than ``keep_m`` are forgotten (the one just before that reach is kept)."""
+class _SampledRoad(_WindowMeans):
+    """A road held as samples (positions, heights and the running integral of the height, the
+    trapezoids from the first sample kept), linear between them and level beyond them; the
+    samples live in columns [lo, hi) of a buffer that grows by doubling (samples a step: no
+    copy of the history per sample). Subclasses add and forget samples."""
 
-    label = "the host's road"
-    #: Positions closer than this (relative to their magnitude, or 1e-12 m) are one position.
-    SAME_POSITION = 1e-12
-
-    def __init__(self, keep_m: float):
-        self.keep_m = float(keep_m)
-        # positions, heights and the running integral, live in columns [lo, hi) of a buffer
-        # that grows by doubling (samples a step: no copy of the history per sample)
+    def __init__(self):
         self._buffer = np.zeros((3, 64))
         self._lo = self._hi = 0
 
@@ -520,6 +511,55 @@ class PositionRoad(_WindowMeans):
     @property
     def _at(self) -> np.ndarray:
         return self._buffer[2, self._lo:self._hi]
+
+    def state(self) -> np.ndarray:
+        """(samples, 3): positions, heights and the running integral, what :meth:`restore`
+        takes back (the integral too, so that a restored road reads the same bits)."""
+        return self._buffer[:, self._lo:self._hi].T.copy()
+
+    def restore(self, samples: np.ndarray) -> None:
+        samples = np.asarray(samples, dtype=float).reshape(-1, 3)
+        n = samples.shape[0]
+        self._buffer = np.zeros((3, max(64, 2 * n + 2)))
+        self._buffer[:, :n] = samples.T
+        self._lo, self._hi = 0, n
+
+    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
+        ``speed_m_s`` (:func:`sampled_window_reads`)."""
+        return sampled_window_reads(self.s, self.z, self._at, s_lo, s_hi, speed_m_s)
+
+    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
+        """(height, slope dz/ds) at ``s`` (m)."""
+        x = np.asarray(s, dtype=float)
+        height, _ = sampled_reads(self.s, self.z, self._at, x)
+        if self.s.size < 2:
+            return height, np.zeros(x.shape)
+        gap = np.diff(self.s)
+        k = np.clip(np.searchsorted(self.s, x, side="right") - 1, 0, self.s.size - 2)
+        inside = (x >= self.s[0]) & (x <= self.s[-1])
+        return height, np.where(inside, np.diff(self.z)[k] / gap[k], 0.0)
+
+    def integral(self, s) -> np.ndarray:
+        """∫ of the height from the first sample kept to ``s`` (m²; level outside)."""
+        return sampled_reads(self.s, self.z, self._at, np.asarray(s, dtype=float))[1]
+
+
+class PositionRoad(_SampledRoad):
+    """A road a host gives by samples at positions along it (m), linear between them, level at
+    the first sample before it and at the newest beyond it: the FMUs' host road, sampled where
+    they ask (their ``road_x_i`` outputs) at the contact points' resolution. A sample at a
+    position already held replaces its height (at rest the host's road moves under a still tire
+    so: a shaker plate); one between held positions is inserted. Samples further behind the
+    newest than ``keep_m`` are forgotten (the one just before that reach is kept)."""
+
+    label = "the host's road"
+    #: Positions closer than this (relative to their magnitude, or 1e-12 m) are one position.
+    SAME_POSITION = 1e-12
+
+    def __init__(self, keep_m: float):
+        super().__init__()
+        self.keep_m = float(keep_m)
 
     def set_samples(self, positions, heights) -> None:
         """The host's heights at these positions (m, any order): appended beyond the newest,
@@ -570,40 +610,9 @@ class PositionRoad(_WindowMeans):
         reach = b[0, hi - 1] - self.keep_m
         self._lo = max(int(np.searchsorted(b[0, lo:hi], reach, side="right")) - 1, 0) + lo
 
-    def state(self) -> np.ndarray:
-        """(samples, 3): positions, heights and the running integral, what :meth:`restore`
-        takes back (the integral too, so that a restored road reads the same bits)."""
-        return self._buffer[:, self._lo:self._hi].T.copy()
-
-    def restore(self, samples: np.ndarray) -> None:
-        samples = np.asarray(samples, dtype=float).reshape(-1, 3)
-        n = samples.shape[0]
-        self._buffer = np.zeros((3, max(64, 2 * n + 2)))
-        self._buffer[:, :n] = samples.T
-        self._lo, self._hi = 0, n
-
-    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
-        ``speed_m_s`` (:func:`sampled_window_reads`)."""
-        return sampled_window_reads(self.s, self.z, self._at, s_lo, s_hi, speed_m_s)
-
-    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
-        """(height, slope dz/ds) at ``s`` (m)."""
-        x = np.asarray(s, dtype=float)
-        height, _ = sampled_reads(self.s, self.z, self._at, x)
-        if self.s.size < 2:
-            return height, np.zeros(x.shape)
-        gap = np.diff(self.s)
-        k = np.clip(np.searchsorted(self.s, x, side="right") - 1, 0, self.s.size - 2)
-        inside = (x >= self.s[0]) & (x <= self.s[-1])
-        return height, np.where(inside, np.diff(self.z)[k] / gap[k], 0.0)
-
-    def integral(self, s) -> np.ndarray:
-        """∫ of the height from the first sample kept to ``s`` (m²; level outside)."""
-        return sampled_reads(self.s, self.z, self._at, np.asarray(s, dtype=float))[1]
 
 
-class HostRoad(_WindowMeans):
+class HostRoad(_SampledRoad):
     """The road a host gives at one place ahead of the tire, kept along the road as it passes.
 
     The host gives the height at ``front_m`` ahead of the contact centre (the contact zone's
@@ -619,23 +628,8 @@ class HostRoad(_WindowMeans):
     label = "the host's road"
 
     def __init__(self, front_m: float, keep_m: float):
+        super().__init__()
         self.front_m, self.keep_m = float(front_m), float(keep_m)
-        # distances, heights and the running integral, live in rows [lo, hi) of a buffer
-        # that grows by doubling (a sample a step: no copy of the history per sample)
-        self._buffer = np.zeros((3, 64))
-        self._lo = self._hi = 0
-
-    @property
-    def s(self) -> np.ndarray:
-        return self._buffer[0, self._lo:self._hi]
-
-    @property
-    def z(self) -> np.ndarray:
-        return self._buffer[1, self._lo:self._hi]
-
-    @property
-    def _at(self) -> np.ndarray:
-        return self._buffer[2, self._lo:self._hi]
 
     def record(self, distance_m: float, height_m: float) -> None:
         """The host's height at the front when the tire has travelled ``distance_m``."""
@@ -659,44 +653,4 @@ class HostRoad(_WindowMeans):
             if hi > lo else 0.0
         self._lo, self._hi = lo, hi + 1
 
-    def state(self) -> np.ndarray:
-        """(samples, 3): distances, heights and the running integral, what :meth:`restore`
-        takes back (the integral too, so that a restored road reads the same bits)."""
-        return self._buffer[:, self._lo:self._hi].T.copy()
 
-    def restore(self, samples: np.ndarray) -> None:
-        samples = np.asarray(samples, dtype=float).reshape(-1, 3)
-        n = samples.shape[0]
-        self._buffer = np.zeros((3, max(64, 2 * n + 2)))
-        self._buffer[:, :n] = samples.T
-        self._lo, self._hi = 0, n
-
-    def _reads(self, x):
-        """(height, integral) at each x: one search for both."""
-        return sampled_reads(self.s, self.z, self._at, x)
-
-    def window_reads(self, s_lo, s_hi, speed_m_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """(mean height, its rate) over each window [s_lo, s_hi] as the road passes at
-        ``speed_m_s``: the rate of a window mean is the speed times the difference of the
-        heights at its ends over its width (the profile is continuous, so this is exact)."""
-        n = len(s_lo)
-        height, at = self._reads(np.concatenate([s_lo, s_hi]))
-        width = np.asarray(s_hi) - np.asarray(s_lo)
-        safe = np.where(width > 0, width, 1.0)
-        mean = np.where(width > 0, (at[n:] - at[:n]) / safe, height[:n])
-        return mean, speed_m_s * (height[n:] - height[:n]) / safe
-
-    def profile(self, s) -> tuple[np.ndarray, np.ndarray]:
-        """(height, slope dz/ds) at ``s`` (m)."""
-        x = np.asarray(s, dtype=float)
-        height, _ = self._reads(x)
-        if self.s.size < 2:
-            return height, np.zeros(x.shape)
-        gap = np.diff(self.s)
-        k = np.clip(np.searchsorted(self.s, x, side="right") - 1, 0, self.s.size - 2)
-        inside = (x >= self.s[0]) & (x <= self.s[-1])
-        return height, np.where(inside, np.diff(self.z)[k] / gap[k], 0.0)
-
-    def integral(self, s) -> np.ndarray:
-        """∫ of the height from the first sample kept to ``s`` (m²; level outside)."""
-        return self._reads(np.asarray(s, dtype=float))[1]
